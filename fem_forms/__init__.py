@@ -1,0 +1,20 @@
+"""fem_forms: hyperelastic solids on FEniCSx, from UFL energies to PETSc solves.
+
+Python API::
+
+    import fem_forms as ff
+    scene = ff.Scene.from_file("demos/scenes/sagging_beam.toml")
+    result = ff.solve_static(scene)            # or solve_static(scene, material=my_psi)
+    print(result.summary()["max_displacement"])
+"""
+from .errors import InputError, SolveError
+from .logs import quiet_jit
+from .scene import Scene
+from .materials import (LinearElastic, MooneyRivlin, NeoHookean, StVenantKirchhoff, UserMaterial,
+                        cauchy_stress, first_piola_kirchhoff, make_material, von_mises)
+from .analyses.static import StaticResult, solve_static, write_static_outputs
+
+__all__ = ["quiet_jit", "InputError", "SolveError", "Scene", "LinearElastic", "StVenantKirchhoff", "NeoHookean",
+           "MooneyRivlin", "UserMaterial", "make_material", "first_piola_kirchhoff", "cauchy_stress",
+           "von_mises", "StaticResult", "solve_static", "write_static_outputs"]
+__version__ = "0.1.0"

@@ -1,0 +1,1 @@
+"""Thin drivers, one per analysis, on the shared path in fem_forms.model."""

@@ -1,0 +1,82 @@
+"""Command line: `fem-forms run SCENE.toml --out DIR [-snes_monitor ...]`.
+
+Exit status: 0 solved, 2 bad input (one line on stderr naming the key), 3 no convergence."""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from .errors import InputError, SolveError
+from .logs import quiet_jit
+
+
+def _petsc_options(extra: list[str]) -> dict:
+    """PETSc-style trailing options (`-snes_rtol 1e-8 -snes_monitor`) as a dict."""
+    opts, i = {}, 0
+    while i < len(extra):
+        tok = extra[i]
+        if not (tok.startswith("-") and len(tok) > 1 and tok[1:].replace("_", "").isalnum()):
+            raise InputError(f"command line: {tok!r} is not an option (PETSc options look like -snes_rtol 1e-8)")
+        key = tok.lstrip("-")
+        if i + 1 < len(extra) and not (extra[i + 1].startswith("-") and extra[i + 1][1:2].isalpha()):
+            opts[key] = extra[i + 1]
+            i += 2
+        else:
+            opts[key] = ""
+            i += 1
+    return opts
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="fem-forms", description="Hyperelastic solids from scene files.")
+    sub = p.add_subparsers(dest="command", required=True)
+    run = sub.add_parser("run", help="solve a scene file and write results to --out",
+                         epilog="Trailing -key value pairs are passed to PETSc (e.g. -snes_monitor).")
+    run.add_argument("scene", help="scene file (TOML)")
+    run.add_argument("--out", required=True, help="output folder (created)")
+    run.add_argument("-v", "--verbose", action="store_true", help="show FFCx/UFL compilation logs")
+    return p
+
+
+def _run(args, petsc: dict) -> int:
+    from mpi4py import MPI
+    from .scene import Scene
+    from .analyses.static import solve_static, write_static_outputs
+
+    comm = MPI.COMM_WORLD
+    scene = Scene.from_file(args.scene)
+    scene.solver.petsc.update(petsc)
+    result = solve_static(scene)
+    summary = write_static_outputs(result, Path(args.out))
+    if comm.rank == 0:
+        if summary["converged"]:
+            print(f"{scene.title}: {summary['dofs']} dofs, {summary['newton_iterations']} Newton iterations "
+                  f"in {summary['load_steps']} load steps, max |u| = {summary['max_displacement']:.6g} m, "
+                  f"{summary['wall_time_s']:.2f} s -> {args.out}")
+            for name, pr in summary["probes"].items():
+                print(f"  probe {name} {pr['point']}: u = [{', '.join(f'{v:.6g}' for v in pr['displacement'])}]")
+    if not summary["converged"]:
+        raise SolveError(f"{scene.title}: did not converge: {summary['message']}")
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    parser = _parser()
+    args, extra = parser.parse_known_args(argv)
+    quiet_jit(args.verbose)
+    rank = 0
+    try:
+        from mpi4py import MPI
+        rank = MPI.COMM_WORLD.rank
+        petsc = _petsc_options(extra)
+        return _run(args, petsc)
+    except (InputError, SolveError) as e:
+        if rank == 0:
+            print(f"fem-forms: error: {e}", file=sys.stderr)
+        return e.exit_status
+
+
+def entry() -> None:
+    sys.exit(main())

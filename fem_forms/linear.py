@@ -1,0 +1,52 @@
+"""Linear solver choice for Newton steps: MUMPS LU by default, CG + GAMG with the rigid-body
+near-nullspace for large, mildly nonlinear problems (see STACK.md for the measured crossover)."""
+from __future__ import annotations
+
+import numpy as np
+from dolfinx import fem
+from petsc4py import PETSc
+
+# Above this many dofs "auto" picks the iterative path (sparse direct cost grows ~N^2 in 3D;
+# measured crossover ~10k dofs on a cube, ~100k on a slender beam).
+ITERATIVE_ABOVE_DOFS = 150_000
+
+DIRECT = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
+ITERATIVE = {"ksp_type": "cg", "ksp_rtol": 1e-8, "ksp_max_it": 1000, "pc_type": "gamg",
+             "pc_gamg_type": "agg", "pc_gamg_square_graph": 2, "pc_gamg_threshold": 0.02,
+             "mg_levels_ksp_type": "chebyshev", "mg_levels_pc_type": "jacobi",
+             "mg_levels_esteig_ksp_type": "cg"}
+
+
+def choose(kind: str, dofs: int) -> str:
+    """'direct' or 'iterative' from the scene's choice ('auto' decides by size)."""
+    if kind != "auto":
+        return kind
+    return "iterative" if dofs > ITERATIVE_ABOVE_DOFS else "direct"
+
+
+def options(kind: str) -> dict:
+    return dict(DIRECT if kind == "direct" else ITERATIVE)
+
+
+def rigid_body_modes(V: fem.FunctionSpace) -> PETSc.NullSpace:
+    """The six rigid-body modes (3 translations, 3 rotations) of a vector P_k space, orthonormalised,
+    as the near-nullspace GAMG needs to coarsen elasticity well."""
+    index_map = V.dofmap.index_map
+    bs = V.dofmap.index_map_bs
+    n = index_map.size_local
+    x = V.tabulate_dof_coordinates()[:n]
+    basis = [np.zeros((n, bs)) for _ in range(6)]
+    for i in range(3):
+        basis[i][:, i] = 1.0
+    basis[3][:, 0], basis[3][:, 1] = -x[:, 1], x[:, 0]
+    basis[4][:, 1], basis[4][:, 2] = -x[:, 2], x[:, 1]
+    basis[5][:, 0], basis[5][:, 2] = x[:, 2], -x[:, 0]
+    vecs = []
+    for b in basis:
+        v = PETSc.Vec().createMPI((n * bs, PETSc.DECIDE), bsize=bs, comm=V.mesh.comm)
+        v.array[:] = b.ravel()
+        for w in vecs:                      # Gram-Schmidt
+            v.axpy(-v.dot(w), w)
+        v.normalize()
+        vecs.append(v)
+    return PETSc.NullSpace().create(vectors=vecs, comm=V.mesh.comm)

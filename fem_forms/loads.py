@@ -1,0 +1,122 @@
+"""Boundary selectors, supports (Dirichlet conditions) and external loads as UFL terms."""
+from __future__ import annotations
+
+import numpy as np
+import ufl
+from dolfinx import fem, mesh as dmesh
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from .errors import InputError
+from .meshes import LoadedMesh, bounding_box, mesh_size
+from .scene import Fix, Load, Selector
+
+
+def locate_facets(loaded: LoadedMesh, sel: Selector) -> np.ndarray:
+    """Local indices of the boundary facets a selector picks; an error if it picks none anywhere."""
+    mesh = loaded.mesh
+    fdim = mesh.topology.dim - 1
+    tol = 1e-6 * mesh_size(mesh)
+    if sel.kind == "plane":
+        facets = dmesh.locate_entities_boundary(mesh, fdim, lambda x: np.abs(x[sel.axis] - sel.at) <= tol)
+    elif sel.kind == "box":
+        lo, hi = np.array(sel.lo)[:, None] - tol, np.array(sel.hi)[:, None] + tol
+        facets = dmesh.locate_entities_boundary(
+            mesh, fdim, lambda x: np.all((x >= lo) & (x <= hi), axis=0))
+    else:
+        if sel.group not in loaded.groups:
+            known = ", ".join(sorted(loaded.groups)) or "none"
+            raise InputError(f"{sel.key}.group = {sel.group!r}: no such boundary group (the mesh has: {known})")
+        facets = loaded.facet_tags.indices[loaded.facet_tags.values == loaded.groups[sel.group]]
+    if mesh.comm.allreduce(len(facets), op=MPI.SUM) == 0:
+        lo, hi = bounding_box(mesh)
+        raise InputError(f"{sel.key}: matches no boundary facet (mesh spans {np.round(lo, 6).tolist()} "
+                         f"to {np.round(hi, 6).tolist()})")
+    return np.asarray(facets, dtype=np.int32)
+
+
+class LoadFactor:
+    """The continuation parameter lambda in [0, 1]: scales every load and prescribed displacement."""
+
+    def __init__(self, mesh: dmesh.Mesh):
+        self.constant = fem.Constant(mesh, PETSc.ScalarType(1.0))
+        self._scaled: list[tuple[fem.Constant, float]] = []
+
+    def scaled(self, mesh: dmesh.Mesh, value: float) -> fem.Constant:
+        """A Constant that equals lambda * value."""
+        c = fem.Constant(mesh, PETSc.ScalarType(value))
+        self._scaled.append((c, value))
+        return c
+
+    @property
+    def value(self) -> float:
+        return float(self.constant.value)
+
+    def set(self, lam: float) -> None:
+        self.constant.value = lam
+        for c, v in self._scaled:
+            c.value = lam * v
+
+
+def supports(V: fem.FunctionSpace, loaded: LoadedMesh, fixes: list[Fix], load: LoadFactor) -> list:
+    """Dirichlet conditions u_i = lambda * value_i on each fix's facets and components."""
+    fdim = loaded.mesh.topology.dim - 1
+    bcs = []
+    for fix in fixes:
+        facets = locate_facets(loaded, fix.where)
+        for c in fix.components:
+            dofs = fem.locate_dofs_topological(V.sub(c), fdim, facets)
+            value = load.scaled(loaded.mesh, fix.value[c])
+            bcs.append(fem.dirichletbc(value, dofs, V.sub(c)))
+    return bcs
+
+
+def external_work(u, loaded: LoadedMesh, loads: list[Load], rho: float, load: LoadFactor,
+                  dx: ufl.Measure) -> tuple:
+    """(W, pressure_residual): the work of conservative loads (gravity, dead traction) as an energy
+    term, and the virtual work of follower pressure, which has no energy, as a residual term."""
+    mesh = loaded.mesh
+    tags, ids = _load_regions(loaded, loads)
+    ds = ufl.Measure("ds", domain=mesh, subdomain_data=tags, metadata=dx.metadata())
+    W = 0
+    pressure_terms = []
+    for i, spec in enumerate(loads):
+        if spec.type == "gravity":
+            W = W + rho * ufl.dot(fem.Constant(mesh, PETSc.ScalarType(spec.g)), u) * dx
+        elif spec.type == "traction":
+            t = fem.Constant(mesh, PETSc.ScalarType(spec.value))
+            W = W + sum(ufl.dot(t, u) * ds(k) for k in ids[i])
+        else:
+            pressure_terms.append((spec.pressure, ids[i]))
+    W = load.constant * W if not isinstance(W, int) else None
+
+    def pressure_residual(v, F):
+        """Virtual work of pressure p on the deformed surface: int p J F^-T N . v dA."""
+        if not pressure_terms:
+            return None
+        N = ufl.FacetNormal(mesh)
+        J = ufl.det(F)
+        return load.constant * sum(p * J * ufl.dot(ufl.inv(F).T * N, v) * ds(k)
+                                 for p, ks in pressure_terms for k in ks)
+
+    return W, pressure_residual
+
+
+def _load_regions(loaded: LoadedMesh, loads: list[Load]):
+    """One facet MeshTags for all surface loads: each distinct set of loads sharing a facet gets an id."""
+    mesh = loaded.mesh
+    fdim = mesh.topology.dim - 1
+    owner: dict[int, frozenset] = {}
+    for i, spec in enumerate(loads):
+        if spec.where is None:
+            continue
+        for f in locate_facets(loaded, spec.where):
+            owner[int(f)] = owner.get(int(f), frozenset()) | {i}
+    combos = sorted({c for c in owner.values()}, key=sorted)
+    # the same set of combinations on every rank, so ids agree
+    combos = sorted({c for cs in mesh.comm.allgather(combos) for c in cs}, key=sorted)
+    cid = {c: k + 1 for k, c in enumerate(combos)}
+    ids = {i: [cid[c] for c in combos if i in c] for i in range(len(loads))}
+    facets = np.array(sorted(owner), dtype=np.int32)
+    values = np.array([cid[owner[f]] for f in facets], dtype=np.int32)
+    return dmesh.meshtags(mesh, fdim, facets, values), ids

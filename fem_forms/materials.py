@@ -1,0 +1,168 @@
+"""Hyperelastic energy densities psi(F) as UFL expressions, and the stresses derived from them.
+
+A material is anything with a method ``psi(F)``; a plain function of F is wrapped by
+``as_material``. Stresses come from the energy with ``ufl.diff``, never written by hand.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable, Protocol
+
+import ufl
+
+from .errors import InputError
+from .kinematics import green_strain, invariants, small_strain
+
+
+class Material(Protocol):
+    def psi(self, F) -> ufl.core.expr.Expr: ...
+
+
+def lame_from_young_poisson(E: float, nu: float) -> tuple[float, float]:
+    """(mu, lambda) from Young's modulus E and Poisson's ratio nu."""
+    return E / (2.0 * (1.0 + nu)), E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))
+
+
+def _check_lame(mu: float, lmbda: float) -> None:
+    if not (math.isfinite(mu) and mu > 0):
+        raise InputError(f"material.mu = {mu}: must be a positive finite number")
+    if not (math.isfinite(lmbda) and 3 * lmbda + 2 * mu > 0):
+        raise InputError(f"material.lambda = {lmbda}: the bulk modulus lambda + 2 mu/3 must be positive")
+
+
+@dataclass(frozen=True)
+class LinearElastic:
+    """Small-strain elasticity: psi = mu eps:eps + lambda/2 (tr eps)^2."""
+    mu: float
+    lmbda: float
+
+    def __post_init__(self):
+        _check_lame(self.mu, self.lmbda)
+
+    def psi(self, F):
+        eps = small_strain(F)
+        return self.mu * ufl.inner(eps, eps) + 0.5 * self.lmbda * ufl.tr(eps) ** 2
+
+
+@dataclass(frozen=True)
+class StVenantKirchhoff:
+    """St. Venant-Kirchhoff: psi = mu E:E + lambda/2 (tr E)^2 with E the Green strain."""
+    mu: float
+    lmbda: float
+
+    def __post_init__(self):
+        _check_lame(self.mu, self.lmbda)
+
+    def psi(self, F):
+        E = green_strain(F)
+        return self.mu * ufl.inner(E, E) + 0.5 * self.lmbda * ufl.tr(E) ** 2
+
+
+@dataclass(frozen=True)
+class NeoHookean:
+    """Compressible neo-Hookean: psi = mu/2 (I1 - 3) - mu ln J + lambda/2 (ln J)^2."""
+    mu: float
+    lmbda: float
+
+    def __post_init__(self):
+        _check_lame(self.mu, self.lmbda)
+
+    def psi(self, F):
+        I1, _, J = invariants(F)
+        lnJ = ufl.ln(J)
+        return 0.5 * self.mu * (I1 - 3) - self.mu * lnJ + 0.5 * self.lmbda * lnJ**2
+
+
+@dataclass(frozen=True)
+class MooneyRivlin:
+    """Compressible Mooney-Rivlin:
+    psi = C10 (I1 - 3) + C01 (I2 - 3) - 2 (C10 + 2 C01) ln J + lambda/2 (ln J)^2.
+    Stress-free at F = I; small-strain shear modulus mu = 2 (C10 + C01)."""
+    C10: float
+    C01: float
+    lmbda: float
+
+    def __post_init__(self):
+        if not (self.C10 >= 0 and self.C01 >= 0 and self.C10 + self.C01 > 0):
+            raise InputError(f"material.C10/C01 = {self.C10}/{self.C01}: must be non-negative with a positive sum")
+        _check_lame(2 * (self.C10 + self.C01), self.lmbda)
+
+    def psi(self, F):
+        I1, I2, J = invariants(F)
+        lnJ = ufl.ln(J)
+        return (self.C10 * (I1 - 3) + self.C01 * (I2 - 3)
+                - 2 * (self.C10 + 2 * self.C01) * lnJ + 0.5 * self.lmbda * lnJ**2)
+
+
+@dataclass(frozen=True)
+class UserMaterial:
+    """Wraps a user's own energy density function psi(F) -> UFL expression."""
+    function: Callable
+    name: str = "user"
+
+    def psi(self, F):
+        return self.function(F)
+
+
+MODELS = {
+    "linear": LinearElastic,
+    "stvk": StVenantKirchhoff,
+    "neo-hookean": NeoHookean,
+    "mooney-rivlin": MooneyRivlin,
+}
+
+
+def make_material(model: str, *, E: float | None = None, nu: float | None = None,
+                  mu: float | None = None, lmbda: float | None = None,
+                  C10: float | None = None, C01: float | None = None) -> Material:
+    """Build a named model from (E, nu) or (mu, lambda); Mooney-Rivlin also takes C10, C01
+    (default split C01 = mu/8, C10 = 3 mu/8 of mu = 2 (C10 + C01) when only E, nu are given)."""
+    if model not in MODELS:
+        raise InputError(f"material.model = {model!r}: unknown model (choose from {', '.join(MODELS)})")
+    if E is not None or nu is not None:
+        if E is None or nu is None:
+            raise InputError("material: give both E and nu (or mu and lambda)")
+        if not (math.isfinite(E) and E > 0):
+            raise InputError(f"material.E = {E}: Young's modulus must be positive")
+        if not (-1.0 < nu < 0.5):
+            raise InputError(f"material.nu = {nu}: Poisson's ratio must lie in (-1, 0.5) "
+                             f"for the compressible model {model!r}")
+        mu, lmbda = lame_from_young_poisson(E, nu)
+    if model == "mooney-rivlin":
+        if C10 is None and C01 is None:
+            if mu is None:
+                raise InputError("material: mooney-rivlin needs E and nu, or C10, C01 and lambda")
+            C10, C01 = 0.375 * mu, 0.125 * mu
+        if lmbda is None or C10 is None or C01 is None:
+            raise InputError("material: mooney-rivlin needs C10, C01 and lambda (or E and nu)")
+        return MooneyRivlin(float(C10), float(C01), float(lmbda))
+    if mu is None or lmbda is None:
+        raise InputError(f"material: {model!r} needs E and nu, or mu and lambda")
+    return MODELS[model](float(mu), float(lmbda))
+
+
+def as_material(material) -> Material:
+    """Accept a Material or a plain function psi(F)."""
+    if hasattr(material, "psi"):
+        return material
+    if callable(material):
+        return UserMaterial(material, getattr(material, "__name__", "user"))
+    raise InputError(f"material: {material!r} is neither a material nor a function psi(F)")
+
+
+def first_piola_kirchhoff(material: Material, F) -> ufl.core.expr.Expr:
+    """P = d psi / d F."""
+    F = ufl.variable(F)
+    return ufl.diff(material.psi(F), F)
+
+
+def cauchy_stress(material: Material, F) -> ufl.core.expr.Expr:
+    """sigma = P F^T / J."""
+    return first_piola_kirchhoff(material, F) * F.T / ufl.det(F)
+
+
+def von_mises(sigma) -> ufl.core.expr.Expr:
+    """sqrt(3/2 s:s) with s the deviator of sigma."""
+    s = ufl.dev(sigma)
+    return ufl.sqrt(1.5 * ufl.inner(s, s))

@@ -1,0 +1,305 @@
+"""Meshes: the built-in box, gmsh-generated solids, and volume-mesh files, all on one loader.
+
+Non-box meshes are built on rank 0 as plain arrays (points, cells, named facet groups), checked
+for degenerate and inverted cells, and then distributed by ``dolfinx.mesh.create_mesh``.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import ufl
+from dolfinx import cpp, mesh as dmesh
+from dolfinx.io import gmshio
+from mpi4py import MPI
+
+from .errors import InputError
+from .scene import MeshSpec
+
+
+@dataclass
+class MeshArrays:
+    """A volume mesh on one rank: points (n, 3), cells (m, k) in gmsh/VTK vertex order."""
+    points: np.ndarray
+    cells: np.ndarray
+    cell_type: str                                     # "tetrahedron" | "hexahedron"
+    facet_groups: dict = field(default_factory=dict)   # name -> (f, 3|4) vertex indices
+
+
+@dataclass
+class LoadedMesh:
+    mesh: dmesh.Mesh
+    facet_tags: object | None      # MeshTags of the named groups, or None
+    groups: dict                   # group name -> tag value
+
+
+# ----------------------------------------------------------------------------- quality checks
+def cell_volumes(points: np.ndarray, cells: np.ndarray, cell_type: str) -> np.ndarray:
+    """Signed volume of tetrahedra; for hexahedra the smallest corner Jacobian times the cell volume
+    scale, so a negative value means an inverted (or self-crossing) hexahedron."""
+    p = points[cells]
+    if cell_type == "tetrahedron":
+        a, b, c = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0], p[:, 3] - p[:, 0]
+        return np.einsum("ij,ij->i", a, np.cross(b, c)) / 6.0
+    # hexahedron, VTK order: bottom 0-1-2-3, top 4-5-6-7; three edges at each corner, right-handed
+    corners = [(0, 1, 3, 4), (1, 2, 0, 5), (2, 3, 1, 6), (3, 0, 2, 7),
+               (4, 7, 5, 0), (5, 4, 6, 1), (6, 5, 7, 2), (7, 6, 4, 3)]
+    dets = []
+    for o, i, j, k in corners:
+        a, b, c = p[:, i] - p[:, o], p[:, j] - p[:, o], p[:, k] - p[:, o]
+        dets.append(np.einsum("ij,ij->i", a, np.cross(b, c)))
+    d = np.array(dets)
+    return np.where(d.min(axis=0) < 0, d.min(axis=0), d.mean(axis=0))
+
+
+def check_cells(arrays: MeshArrays, key: str) -> None:
+    """Reject meshes with degenerate (zero-volume) or inverted cells, naming how many and where."""
+    if len(arrays.cells) == 0:
+        raise InputError(f"{key}: the mesh has no cells")
+    vol = cell_volumes(arrays.points, arrays.cells, arrays.cell_type)
+    p = arrays.points[arrays.cells]
+    edge = np.linalg.norm(p[:, 1] - p[:, 0], axis=1)
+    scale = max(float(np.mean(edge)), 1e-300) ** 3
+    if np.mean(vol) < 0:   # consistently reversed orientation: flip to the convention
+        vol = -vol
+        arrays.cells = arrays.cells[:, _flip(arrays.cell_type)]
+    degenerate = np.abs(vol) <= 1e-10 * scale
+    inverted = (vol < 0) & ~degenerate
+    if degenerate.any():
+        i = int(np.argmax(degenerate))
+        raise InputError(f"{key}: {int(degenerate.sum())} degenerate (zero-volume) cells, the first is "
+                         f"cell {i} at {np.round(p[i].mean(axis=0), 6).tolist()}")
+    if inverted.any():
+        i = int(np.argmax(inverted))
+        raise InputError(f"{key}: {int(inverted.sum())} inverted cells, the first is cell {i} at "
+                         f"{np.round(p[i].mean(axis=0), 6).tolist()}")
+
+
+def _flip(cell_type: str) -> list:
+    return [0, 2, 1, 3] if cell_type == "tetrahedron" else [4, 5, 6, 7, 0, 1, 2, 3]
+
+
+# ----------------------------------------------------------------------------- gmsh generators
+def _gmsh_session():
+    import gmsh
+    gmsh.initialize()
+    gmsh.option.setNumber("General.Terminal", 0)
+    gmsh.model.add("fem_forms")
+    return gmsh
+
+
+def _gmsh_arrays(gmsh) -> MeshArrays:
+    """Linear tetrahedra or hexahedra of the current gmsh model, with its named surface groups."""
+    tags, coords, _ = gmsh.model.mesh.getNodes()
+    order = np.argsort(tags)
+    tags, points = tags[order], coords.reshape(-1, 3)[order]
+    index = np.full(int(tags.max()) + 1, -1, dtype=np.int64)
+    index[tags] = np.arange(len(tags))
+    types, _, nodes = gmsh.model.mesh.getElements(3)
+    kinds = {4: ("tetrahedron", 4), 5: ("hexahedron", 8), 11: ("tetrahedron", 4), 12: ("hexahedron", 8)}
+    found = [gmsh.model.mesh.getElementProperties(t)[0] for t in types]
+    usable = [(t, n) for t, n in zip(types, nodes) if t in kinds]
+    if not usable or len({kinds[t][0] for t, _ in usable}) != 1 or len(usable) != len(types):
+        raise InputError(f"mesh: needs volume cells all tetrahedra or all hexahedra (found: "
+                         f"{', '.join(found) or 'no volume cells'})")
+    cell_type = kinds[usable[0][0]][0]
+    nv = kinds[usable[0][0]][1]
+    per = [gmsh.model.mesh.getElementProperties(t)[3] for t, _ in usable]
+    cells = np.vstack([index[n.reshape(-1, k)[:, :nv]] for (t, n), k in zip(usable, per)])
+    groups = {}
+    for dim, tag in gmsh.model.getPhysicalGroups(2):
+        name = gmsh.model.getPhysicalName(dim, tag) or str(tag)
+        facets = []
+        for ent in gmsh.model.getEntitiesForPhysicalGroup(dim, tag):
+            ftypes, _, fnodes = gmsh.model.mesh.getElements(2, ent)
+            for ft, fn in zip(ftypes, fnodes):
+                k = gmsh.model.mesh.getElementProperties(ft)[3]
+                corner = 3 if cell_type == "tetrahedron" else 4
+                facets.append(index[fn.reshape(-1, k)[:, :corner]])
+        if facets:
+            groups[name] = np.vstack(facets)
+    return _compact(MeshArrays(points, cells, cell_type, groups))
+
+
+def _compact(a: MeshArrays) -> MeshArrays:
+    """Drop points no cell uses (geometry points, midside nodes) and renumber."""
+    used = np.unique(a.cells)
+    if len(used) == len(a.points):
+        return a
+    new = np.full(len(a.points), -1, dtype=np.int64)
+    new[used] = np.arange(len(used))
+    groups = {n: new[f] for n, f in a.facet_groups.items()}
+    return MeshArrays(a.points[used], new[a.cells], a.cell_type, groups)
+
+
+def _generate(spec: MeshSpec) -> MeshArrays:
+    gmsh = _gmsh_session()
+    try:
+        occ = gmsh.model.occ
+        ox, oy, oz = spec.origin
+        if spec.generator == "cylinder":
+            vol = occ.addCylinder(ox, oy, oz, 0, 0, spec.height, spec.radius)
+        elif spec.generator == "sphere":
+            vol = occ.addSphere(ox, oy, oz, spec.radius)
+        else:
+            vol = _revolved_profile(occ, spec)
+        occ.synchronize()
+        gmsh.model.addPhysicalGroup(3, [vol], 1)
+        _name_surfaces(gmsh, spec)
+        gmsh.option.setNumber("Mesh.CharacteristicLengthMax", spec.h)
+        gmsh.option.setNumber("Mesh.CharacteristicLengthMin", spec.h / 4)
+        gmsh.option.setNumber("Mesh.Optimize", 1)
+        gmsh.model.mesh.generate(3)
+        return _gmsh_arrays(gmsh)
+    finally:
+        gmsh.finalize()
+
+
+def _revolved_profile(occ, spec: MeshSpec) -> int:
+    """Revolve a closed r-z outline about the z axis through the origin into a solid."""
+    pts = spec.profile
+    if pts[0] == pts[-1]:
+        pts = pts[:-1]
+    ox, oy, oz = spec.origin
+    tags = [occ.addPoint(ox + r, oy, oz + z) for r, z in pts]
+    lines = [occ.addLine(tags[i], tags[(i + 1) % len(tags)]) for i in range(len(tags))]
+    surf = occ.addPlaneSurface([occ.addCurveLoop(lines)])
+    out = occ.revolve([(2, surf)], ox, oy, oz, 0, 0, 1, 2 * math.pi)
+    vols = [t for d, t in out if d == 3]
+    if len(vols) != 1:
+        raise InputError("mesh.profile: revolving the outline did not give one solid")
+    return vols[0]
+
+
+def _name_surfaces(gmsh, spec: MeshSpec) -> None:
+    """Physical groups for the generated surfaces: cylinder bottom/top/side, else 'surface'."""
+    surfaces = [t for _, t in gmsh.model.getEntities(2)]
+    if spec.generator == "cylinder":
+        z0 = spec.origin[2]
+        named = {"bottom": [], "top": [], "side": []}
+        for s in surfaces:
+            zmin, zmax = gmsh.model.getBoundingBox(2, s)[2::3]
+            if abs(zmax - zmin) < 1e-9 * spec.height:
+                named["bottom" if abs(zmin - z0) < 1e-9 * spec.height else "top"].append(s)
+            else:
+                named["side"].append(s)
+        for i, (n, ss) in enumerate(named.items()):
+            gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, ss, 10 + i), n)
+    else:
+        gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, surfaces, 10), "surface")
+
+
+# ----------------------------------------------------------------------------- files
+def read_mesh_file(path: Path) -> MeshArrays:
+    """A gmsh .msh (with its named surface groups) or any meshio-readable volume mesh."""
+    if path.suffix == ".msh":
+        gmsh = _gmsh_session()
+        try:
+            try:
+                gmsh.merge(str(path))
+            except Exception as e:
+                raise InputError(f"mesh.file = {str(path)!r}: gmsh cannot read it ({e})") from None
+            return _gmsh_arrays(gmsh)
+        finally:
+            gmsh.finalize()
+    import meshio
+    try:
+        m = meshio.read(path)
+    except Exception as e:
+        raise InputError(f"mesh.file = {str(path)!r}: cannot read it ({type(e).__name__}: {e})") from None
+    kinds = {"tetra": ("tetrahedron", 4), "tetra10": ("tetrahedron", 4),
+             "hexahedron": ("hexahedron", 8), "hexahedron20": ("hexahedron", 8),
+             "hexahedron27": ("hexahedron", 8)}
+    blocks = [(kinds[b.type], b.data) for b in m.cells if b.type in kinds]
+    if not blocks or len({k[0] for k, _ in blocks}) != 1:
+        found = ", ".join(sorted({b.type for b in m.cells})) or "nothing"
+        raise InputError(f"mesh.file = {str(path)!r}: needs volume cells all tetrahedra or all "
+                         f"hexahedra (found: {found})")
+    (cell_type, nv), _ = blocks[0]
+    cells = np.vstack([d[:, :nv] for _, d in blocks]).astype(np.int64)
+    pts = np.asarray(m.points, dtype=np.float64)
+    if pts.shape[1] != 3:
+        raise InputError(f"mesh.file = {str(path)!r}: points must have 3 coordinates")
+    return _compact(MeshArrays(pts, cells, cell_type, {}))
+
+
+# ----------------------------------------------------------------------------- distribution
+def _on_root(comm: MPI.Comm, build):
+    """Run build() on rank 0; an InputError there is raised on every rank."""
+    result, error = None, None
+    if comm.rank == 0:
+        try:
+            result = build()
+        except InputError as e:
+            error = str(e)
+    error = comm.bcast(error, root=0)
+    if error is not None:
+        raise InputError(error)
+    return result
+
+
+def distribute(comm: MPI.Comm, arrays: MeshArrays | None) -> LoadedMesh:
+    """Create a distributed dolfinx mesh (and facet tags of the named groups) from rank-0 arrays."""
+    cell_type, names = comm.bcast((arrays.cell_type, list(arrays.facet_groups)) if comm.rank == 0
+                                  else None, root=0)
+    nv = 4 if cell_type == "tetrahedron" else 8
+    domain = ufl.Mesh(ufl.VectorElement("Lagrange", ufl.Cell(cell_type), 1))
+    dtype = dmesh.to_type(cell_type)
+    perm = gmshio.cell_perm_array(dtype, nv)
+    if comm.rank == 0:
+        cells, x = arrays.cells[:, perm], arrays.points
+    else:
+        cells, x = np.empty((0, nv), dtype=np.int64), np.empty((0, 3))
+    mesh = dmesh.create_mesh(comm, cells, x, domain)
+    if not names:
+        return LoadedMesh(mesh, None, {})
+    fdim = mesh.topology.dim - 1
+    fnv = 3 if cell_type == "tetrahedron" else 4
+    fperm = gmshio.cell_perm_array(cpp.mesh.cell_entity_type(dtype, fdim, 0), fnv)
+    if comm.rank == 0:
+        facets = np.vstack([arrays.facet_groups[n] for n in names])[:, fperm]
+        values = np.concatenate([np.full(len(arrays.facet_groups[n]), i + 1, dtype=np.int32)
+                                 for i, n in enumerate(names)])
+    else:
+        facets, values = np.empty((0, fnv), dtype=np.int64), np.empty(0, dtype=np.int32)
+    ents, vals = cpp.io.distribute_entity_data(mesh._mesh, fdim, facets.astype(np.int64), values)
+    mesh.topology.create_connectivity(fdim, mesh.topology.dim)
+    tags = dmesh.meshtags_from_entities(mesh, fdim, cpp.graph.AdjacencyList_int32(ents),
+                                        vals.astype(np.int32))
+    return LoadedMesh(mesh, tags, {n: i + 1 for i, n in enumerate(names)})
+
+
+def load_mesh(spec: MeshSpec, comm: MPI.Comm = MPI.COMM_WORLD) -> LoadedMesh:
+    """The one mesh loader every analysis uses."""
+    if spec.generator == "box":
+        lo = np.array(spec.origin, dtype=float)
+        hi = lo + np.array(spec.size, dtype=float)
+        ct = dmesh.CellType.tetrahedron if spec.cell == "tetrahedron" else dmesh.CellType.hexahedron
+        return LoadedMesh(dmesh.create_box(comm, [lo, hi], list(spec.cells), cell_type=ct), None, {})
+    key = "mesh.file" if spec.generator == "file" else f"mesh ({spec.generator})"
+
+    def build():
+        arrays = read_mesh_file(spec.file) if spec.generator == "file" else _generate(spec)
+        check_cells(arrays, key)
+        return arrays
+
+    return distribute(comm, _on_root(comm, build))
+
+
+def mesh_size(mesh: dmesh.Mesh) -> float:
+    """The diagonal of the mesh's bounding box (a length scale for tolerances)."""
+    lo, hi = bounding_box(mesh)
+    return float(np.linalg.norm(hi - lo))
+
+
+def bounding_box(mesh: dmesh.Mesh) -> tuple[np.ndarray, np.ndarray]:
+    """Global (lower, upper) corners of the mesh."""
+    x = mesh.geometry.x
+    lo = x.min(axis=0) if len(x) else np.full(3, np.inf)
+    hi = x.max(axis=0) if len(x) else np.full(3, -np.inf)
+    glo, ghi = np.empty(3), np.empty(3)
+    mesh.comm.Allreduce(np.ascontiguousarray(lo), glo, op=MPI.MIN)
+    mesh.comm.Allreduce(np.ascontiguousarray(hi), ghi, op=MPI.MAX)
+    return glo, ghi

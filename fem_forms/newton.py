@@ -1,0 +1,244 @@
+"""The one nonlinear solver: PETSc SNES on UFL residual/Jacobian forms, with the energy as line-search
+objective where one exists, load continuation with cut-back, and independent acceptance checks."""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+import ufl
+from dolfinx import fem
+from dolfinx.fem import petsc as fpetsc
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from . import linear
+from .errors import SolveError
+
+_REASONS = {getattr(PETSc.SNES.ConvergedReason, n): n for n in dir(PETSc.SNES.ConvergedReason)
+            if not n.startswith("_")}
+
+
+@dataclass
+class NonlinearProblem:
+    """Residual R(u) = 0 (and tangent dR/du) with optional energy whose gradient R is."""
+    u: fem.Function
+    residual: ufl.Form
+    jacobian: ufl.Form
+    bcs: list
+    energy: ufl.Form | None = None
+    set_load: Callable[[float], None] | None = None     # continuation parameter setter
+    inadmissible: Callable[[], str | None] | None = None  # why a state is unphysical, or None
+
+
+@dataclass
+class StepRecord:
+    load: float
+    iterations: int
+    residuals: list
+    reason: str
+    accepted: bool
+
+
+@dataclass
+class SolveReport:
+    converged: bool
+    load_reached: float
+    newton_iterations: int
+    residual_norm: float
+    steps: list = field(default_factory=list)
+    linear_solver: str = "direct"
+    assembly_time: float = 0.0
+    solve_time: float = 0.0
+    message: str = ""
+
+    @property
+    def load_steps(self) -> int:
+        return sum(1 for s in self.steps if s.accepted)
+
+
+class SNESDriver:
+    """Compiled forms, PETSc objects and callbacks for one problem, reused across load steps."""
+
+    DEFAULTS = {"snes_type": "newtonls", "snes_max_it": 50, "snes_rtol": 1e-9, "snes_atol": 0.0,
+                "snes_stol": 1e-11, "snes_linesearch_max_it": 40}
+
+    def __init__(self, problem: NonlinearProblem, options: dict | None = None, linear_kind: str = "auto",
+                 prefix: str = "fem_forms_", near_nullspace: Callable[[], PETSc.NullSpace] | None = None):
+        self.p = problem
+        self.comm = problem.u.function_space.mesh.comm
+        V = problem.u.function_space
+        self.dofs = V.dofmap.index_map.size_global * V.dofmap.index_map_bs
+        self.linear_kind = linear.choose(linear_kind, self.dofs)
+        self.user_options = dict(options or {})
+        self.prefix = prefix
+        self.near_nullspace = near_nullspace
+        self.L = fem.form(problem.residual)
+        self.a = fem.form(problem.jacobian)
+        self.E = fem.form(problem.energy) if problem.energy is not None else None
+        self.b = fpetsc.create_vector(self.L)
+        self.x = self.b.copy()
+        self.assembly_time = 0.0
+        self._build_snes()
+
+    # -- PETSc objects -------------------------------------------------------------------------
+    def _build_snes(self) -> None:
+        """(Re)create matrix and SNES: done at start, after a failed step and on solver switch."""
+        direct = self.linear_kind == "direct"
+        self.A = fpetsc.create_matrix(self.a, "baij" if direct else "aij")
+        if not direct and self.near_nullspace is not None:
+            self.A.setNearNullSpace(self.near_nullspace())
+        merged = dict(self.DEFAULTS)
+        merged["snes_linesearch_type"] = "bt" if self.E is not None else "basic"
+        merged.update(linear.options(self.linear_kind))
+        merged.update(self.user_options)
+        opts = PETSc.Options()
+        for k, v in merged.items():
+            opts[self.prefix + k] = v
+        snes = PETSc.SNES().create(self.comm)
+        snes.setOptionsPrefix(self.prefix)
+        snes.setFunction(self._residual, self.b)
+        snes.setJacobian(self._jacobian, self.A)
+        if self.E is not None:
+            snes.setObjective(self._objective)
+        snes.setMonitor(self._monitor)
+        snes.setFromOptions()
+        for k in merged:
+            opts.delValue(self.prefix + k)
+        self.options = merged
+        if getattr(self, "snes", None) is not None:
+            self.snes.destroy()
+        self.snes = snes
+
+    def _set_state(self, x: PETSc.Vec) -> None:
+        x.copy(self.p.u.vector)
+        self.p.u.vector.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+
+    def _residual(self, snes, x, b) -> None:
+        t = time.perf_counter()
+        self._set_state(x)
+        with b.localForm() as bl:
+            bl.set(0.0)
+        fpetsc.assemble_vector(b, self.L)
+        fpetsc.apply_lifting(b, [self.a], bcs=[self.p.bcs], x0=[x], scale=-1.0)
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        fpetsc.set_bc(b, self.p.bcs, x, -1.0)
+        self.assembly_time += time.perf_counter() - t
+
+    def _jacobian(self, snes, x, A, P) -> None:
+        t = time.perf_counter()
+        A.zeroEntries()
+        fpetsc.assemble_matrix(A, self.a, bcs=self.p.bcs)
+        A.assemble()
+        self.assembly_time += time.perf_counter() - t
+
+    def _objective(self, snes, x) -> float:
+        t = time.perf_counter()
+        self._set_state(x)
+        value = self.comm.allreduce(fem.assemble_scalar(self.E), op=MPI.SUM)
+        self.assembly_time += time.perf_counter() - t
+        return value if math.isfinite(value) else 1e300   # NaN (e.g. ln J, J<0): reject the step
+
+    def _monitor(self, snes, it, fnorm) -> None:
+        self._history.append(float(fnorm))
+
+    # -- public ----------------------------------------------------------------------------------
+    def residual_norm(self) -> float:
+        """Assemble the residual at the current u, independently of SNES, and return its norm."""
+        x = self.p.u.vector.copy()
+        r = self.b.duplicate()
+        self._residual(None, x, r)
+        n = r.norm()
+        x.destroy()
+        r.destroy()
+        return n
+
+    def solve_step(self) -> StepRecord:
+        """One SNES solve from the current u at the current load."""
+        self._history: list[float] = []
+        self.p.u.vector.copy(self.x)
+        self.snes.solve(None, self.x)
+        reason = self.snes.getConvergedReason()
+        self._set_state(self.x)
+        return StepRecord(0.0, self.snes.getIterationNumber(), self._history,
+                          _REASONS.get(reason, str(reason)), reason > 0)
+
+
+def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1,
+          max_cutbacks: int = 12, linear_kind: str = "auto",
+          near_nullspace: Callable[[], PETSc.NullSpace] | None = None,
+          prefix: str = "fem_forms_") -> SolveReport:
+    """Continuation lambda: 0 -> 1 in `steps` increments, the increment grown 1.5x after a success and
+    halved after a failure (at most `max_cutbacks` halvings in a row). A step is accepted only when
+    SNES converged AND an independent re-assembly of the residual is small AND the state is finite
+    and admissible (no inverted elements)."""
+    t0 = time.perf_counter()
+    drv = SNESDriver(problem, options, linear_kind, prefix, near_nullspace)
+    u = problem.u
+    set_load = problem.set_load or (lambda lam: None)
+
+    # reference scale: residual of the undeformed state under full load
+    saved = u.x.array.copy()
+    set_load(1.0)
+    r_full = drv.residual_norm()
+
+    report = SolveReport(False, 0.0, 0, math.nan, linear_solver=drv.linear_kind)
+    lam, dlam, cuts = 0.0, 1.0 / steps, 0
+    if problem.set_load is None:
+        lam, dlam = 0.0, 1.0
+    while lam < 1.0 - 1e-12:
+        trial = min(1.0, lam + dlam)
+        set_load(trial)
+        rec = drv.solve_step()
+        rec.load = trial
+        why = None
+        if not rec.accepted:
+            why = f"SNES {rec.reason}"
+            if rec.reason == "DIVERGED_LINEAR_SOLVE" and drv.linear_kind == "iterative" and linear_kind == "auto":
+                drv.linear_kind = "direct"           # indefinite tangent: fall back to LU
+                report.linear_solver = "iterative->direct"
+        else:
+            arr = u.x.array
+            if not np.all(np.isfinite(arr)):
+                why = "NaN or Inf in the solution"
+            elif problem.inadmissible is not None and (bad := problem.inadmissible()):
+                why = bad
+            else:
+                rn = drv.residual_norm()
+                r0 = rec.residuals[0] if rec.residuals else 0.0
+                if rn > 1e-6 * max(r_full, r0) and rn > 1e-13:
+                    why = f"residual {rn:.3e} after SNES reported convergence (scale {max(r_full, r0):.3e})"
+                else:
+                    report.residual_norm = rn
+        rec.accepted = why is None
+        report.steps.append(rec)
+        report.newton_iterations += rec.iterations
+        if rec.accepted:
+            lam, saved, cuts = trial, u.x.array.copy(), 0
+            dlam = min(1.0 - lam, 1.5 * dlam) if lam < 1.0 else dlam
+            report.load_reached = lam
+        else:
+            u.x.array[:] = saved                     # restore the last accepted state
+            u.x.scatter_forward()
+            cuts += 1
+            dlam *= 0.5
+            drv._build_snes()                        # fresh solver state after a failure
+            if cuts > max_cutbacks:
+                report.message = (f"no convergence: load factor {lam:.4g} reached, the step to "
+                                  f"{trial:.4g} failed ({why}) after {cuts - 1} cut-backs")
+                break
+            report.message = why
+    else:
+        report.converged = True
+        report.message = "converged"
+    report.assembly_time = drv.assembly_time
+    report.solve_time = time.perf_counter() - t0 - drv.assembly_time
+    drv.snes.destroy()
+    return report
+
+
+def require_converged(report: SolveReport) -> None:
+    if not report.converged:
+        raise SolveError(report.message)

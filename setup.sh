@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# Install what fem_forms needs on Debian 12 and make a venv (.venv) that sees Debian's FEniCSx stack.
+# Idempotent: a second run installs nothing and takes a second.
+set -euo pipefail
+cd "$(dirname "$0")"
+pkgs="python3-dolfinx python3-dolfinx-real python3-ufl python3-petsc4py python3-slepc4py python3-gmsh
+python3-meshio python3-pytest python3-mpi4py openmpi-bin libopenblas0-pthread python3-matplotlib
+python3-scipy python3-venv python3-setuptools python3-pip"
+missing=""
+for p in $pkgs; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing="$missing $p"
+done
+if [ -n "$missing" ]; then
+  echo "setup: installing$missing"
+  SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO="sudo"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends $missing >/dev/null
+fi
+if [ ! -x .venv/bin/fem-forms ]; then
+  /usr/bin/python3 -m venv --system-site-packages .venv
+  .venv/bin/python -m pip install -q --no-build-isolation --no-deps -e . >/dev/null
+fi
+echo "setup: ready ($(.venv/bin/python -c 'import dolfinx; print("dolfinx", dolfinx.__version__)'))"
