@@ -40,24 +40,12 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _run(args, petsc: dict) -> int:
-    from mpi4py import MPI
     from .scene import Scene
-    from .analyses.static import solve_static, write_static_outputs
+    from .analyses import run_analysis
 
-    comm = MPI.COMM_WORLD
     scene = Scene.from_file(args.scene)
     scene.solver.petsc.update(petsc)
-    result = solve_static(scene)
-    summary = write_static_outputs(result, Path(args.out))
-    if comm.rank == 0:
-        if summary["converged"]:
-            print(f"{scene.title}: {summary['dofs']} dofs, {summary['newton_iterations']} Newton iterations "
-                  f"in {summary['load_steps']} load steps, max |u| = {summary['max_displacement']:.6g} m, "
-                  f"{summary['wall_time_s']:.2f} s -> {args.out}")
-            for name, pr in summary["probes"].items():
-                print(f"  probe {name} {pr['point']}: u = [{', '.join(f'{v:.6g}' for v in pr['displacement'])}]")
-    if not summary["converged"]:
-        raise SolveError(f"{scene.title}: did not converge: {summary['message']}")
+    run_analysis(scene, Path(args.out), echo=True)
     return 0
 
 

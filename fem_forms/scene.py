@@ -13,7 +13,7 @@ from typing import Any
 
 from .errors import InputError
 
-ANALYSES = ("static",)
+ANALYSES = ("static",)   # extended as analyses register (see analyses/__init__.py)
 GENERATORS = ("box", "cylinder", "sphere", "revolve", "file")
 CELLS = ("tetrahedron", "hexahedron")
 AXES = {"x": 0, "y": 1, "z": 2}

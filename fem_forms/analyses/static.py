@@ -117,3 +117,19 @@ def write_static_outputs(result: StaticResult, out: "Path") -> dict:
     summary["files"] = files
     output.write_json_atomic(out / "results.json", summary, comm)
     return summary
+
+
+def run(scene: Scene, out, echo: bool = False) -> dict:
+    """CLI entry: solve, write outputs, print a summary; SolveError if not converged."""
+    from ..errors import SolveError
+    result = solve_static(scene)
+    summary = write_static_outputs(result, out)
+    if echo and result.model.mesh.comm.rank == 0 and summary["converged"]:
+        print(f"{scene.title}: {summary['dofs']} dofs, {summary['newton_iterations']} Newton iterations "
+              f"in {summary['load_steps']} load steps, max |u| = {summary['max_displacement']:.6g} m, "
+              f"{summary['wall_time_s']:.2f} s -> {out}")
+        for name, pr in summary["probes"].items():
+            print(f"  probe {name} {pr['point']}: u = [{', '.join(f'{v:.6g}' for v in pr['displacement'])}]")
+    if not summary["converged"]:
+        raise SolveError(f"{scene.title}: did not converge: {summary['message']}")
+    return summary
