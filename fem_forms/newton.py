@@ -159,6 +159,10 @@ class SNESDriver:
         """One SNES solve from the current u at the current load."""
         self._history: list[float] = []
         self.p.u.vector.copy(self.x)
+        # start from a state that satisfies the (current) Dirichlet values, so Newton directions are
+        # zero on constrained dofs and descend the energy the line search measures
+        fpetsc.set_bc(self.x, self.p.bcs)
+        self.x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         self.snes.solve(None, self.x)
         reason = self.snes.getConvergedReason()
         self._set_state(self.x)
@@ -186,8 +190,8 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
 
     report = SolveReport(False, 0.0, 0, math.nan, linear_solver=drv.linear_kind)
     lam, dlam, cuts = 0.0, 1.0 / steps, 0
-    if problem.set_load is None:
-        lam, dlam = 0.0, 1.0
+    if problem.set_load is None:                     # nothing to continue in: one attempt
+        lam, dlam, max_cutbacks = 0.0, 1.0, 0
     while lam < 1.0 - 1e-12:
         trial = min(1.0, lam + dlam)
         set_load(trial)

@@ -1,0 +1,159 @@
+"""System tests of static equilibrium against independent references: patch test, uniaxial tension and
+hydrostatic pressure (closed-form neo-Hookean solutions), Euler-Bernoulli cantilever, Taylor tests."""
+import numpy as np
+import pytest
+import ufl
+from dolfinx import fem, mesh as dmesh
+from dolfinx.fem import petsc as fpetsc
+from mpi4py import MPI
+from scipy.optimize import brentq, fsolve
+
+import fem_forms as ff
+from fem_forms import newton
+from fem_forms.materials import lame_from_young_poisson
+from fem_forms.model import build_model
+from conftest import beam_scene
+
+E, NU = 1.0e6, 0.3
+MU, LMBDA = lame_from_young_poisson(E, NU)
+
+
+def block_scene(cell, degree, loads, size=(1.0, 1.0, 1.0), cells=(2, 2, 2)):
+    """A block with rollers on x=0, y=0, z=0 (symmetry planes) and the given loads."""
+    return ff.Scene.from_dict({
+        "mesh": {"generator": "box", "size": list(size), "cells": list(cells), "cell": cell},
+        "material": {"model": "neo-hookean", "E": E, "nu": NU},
+        "discretization": {"degree": degree},
+        "fix": [{"where": {"axis": a, "at": 0.0}, "components": [a]} for a in "xyz"],
+        "load": loads,
+        "output": {"probes": {"corner": list(size)}},
+    })
+
+
+@pytest.mark.parametrize("cell, degree", [("tetrahedron", 1), ("tetrahedron", 2), ("hexahedron", 1),
+                                          ("hexahedron", 2)])
+def test_patch_test_reproduces_homogeneous_deformation(cell, degree):
+    """Affine displacement on the whole boundary of a distorted mesh: the solution is affine, exactly."""
+    scene = block_scene(cell, degree, [], cells=(3, 3, 3))
+    scene.fix = []
+    model = build_model(scene)
+    x = model.mesh.geometry.x
+    interior = np.all((x > 1e-9) & (x < 1 - 1e-9), axis=1)
+    rng = np.random.default_rng(0)
+    x[interior] += rng.uniform(-0.08, 0.08, size=(interior.sum(), 3))     # distort interior nodes
+    A = np.array([[0.15, 0.05, -0.02], [0.03, -0.10, 0.04], [0.00, 0.06, 0.08]])  # F = I + A
+    g = fem.Function(model.V)
+    g.interpolate(lambda X: A @ X)
+    tdim = model.mesh.topology.dim
+    model.mesh.topology.create_connectivity(tdim - 1, tdim)
+    facets = dmesh.exterior_facet_indices(model.mesh.topology)
+    bcs = [fem.dirichletbc(g, fem.locate_dofs_topological(model.V, tdim - 1, facets))]
+    problem = newton.NonlinearProblem(model.u, model.residual, model.jacobian, bcs, energy=model.energy)
+    report = newton.solve(problem, {"snes_rtol": 1e-12})
+    assert report.converged
+    err = np.abs(model.u.x.array - g.x.array).max()
+    assert err < 1e-10
+
+
+def uniaxial_stretches(T):
+    """Neo-Hookean uniaxial dead-load tension T (first Piola-Kirchhoff): stretches (l1, l2) with
+    zero lateral stress, solved independently of the FE code."""
+    def eqs(v):
+        l1, l2 = v
+        lnJ = np.log(l1 * l2**2)
+        return [MU * (l1 - 1 / l1) + LMBDA * lnJ / l1 - T, MU * (l2 - 1 / l2) + LMBDA * lnJ / l2]
+    return fsolve(eqs, [1.1, 0.95], xtol=1e-12)
+
+
+@pytest.mark.parametrize("cell, degree", [("tetrahedron", 1), ("hexahedron", 2)])
+def test_uniaxial_tension_matches_analytic_neo_hookean(cell, degree):
+    T = 0.4 * E                               # large: stretch about 1.35
+    size = (2.0, 1.0, 0.5)
+    scene = block_scene(cell, degree, [{"type": "traction", "where": {"axis": "x", "at": 2.0},
+                                        "value": [T, 0.0, 0.0]}], size=size)
+    scene.solver.steps = 2
+    res = ff.solve_static(scene)
+    assert res.report.converged
+    l1, l2 = uniaxial_stretches(T)
+    assert l1 > 1.3
+    expect = [(l1 - 1) * size[0], (l2 - 1) * size[1], (l2 - 1) * size[2]]
+    np.testing.assert_allclose(res.probes["corner"], expect, rtol=1e-8)
+
+
+def test_follower_pressure_gives_analytic_hydrostatic_compression():
+    """Pressure p on the deformed faces x=1, y=1, z=1 of a unit cube on rollers: F = l I with
+    Cauchy stress -p I, i.e. (mu (l^2 - 1) + 3 lambda ln l) / l^3 = -p. A dead load would differ."""
+    p = 0.5 * E
+    loads = [{"type": "pressure", "where": {"axis": a, "at": 1.0}, "value": p} for a in "xyz"]
+    scene = block_scene("tetrahedron", 1, loads)
+    scene.solver.steps = 2
+    res = ff.solve_static(scene)
+    assert res.report.converged
+    lam = brentq(lambda s: (MU * (s**2 - 1) + 3 * LMBDA * np.log(s)) / s**3 + p, 0.3, 1.0, xtol=1e-15)
+    np.testing.assert_allclose(res.probes["corner"], [lam - 1] * 3, rtol=1e-8)
+    dead_lam = brentq(lambda s: (MU * (s**2 - 1) + 3 * LMBDA * np.log(s)) / s**3 + p / s**2, 0.3, 1.0)
+    assert abs(dead_lam - lam) > 1e-2          # the test can tell follower from dead load
+
+
+def test_cantilever_under_gravity_matches_euler_bernoulli_with_p2():
+    """Small load, slender beam (1 x 0.05 x 0.05, nu = 0): tip sag w L^4 / (8 E I), with the
+    Timoshenko shear correction (0.2 % here) added to the reference."""
+    L, h, Eb, rho, g = 1.0, 0.05, 1.0e9, 1000.0, 9.81
+    scene = ff.Scene.from_dict(beam_scene(
+        mesh={"generator": "box", "size": [L, h, h], "cells": [20, 2, 2]},
+        material={"model": "neo-hookean", "E": Eb, "nu": 0.0, "rho": rho},
+        discretization={"degree": 2},
+        output={"probes": {"tip": [L, h / 2, h / 2]}}))
+    res = ff.solve_static(scene)
+    assert res.report.converged
+    A, I = h * h, h**4 / 12
+    w = rho * g * A
+    eb = w * L**4 / (8 * Eb * I)
+    timoshenko = eb + w * L**2 / (2 * (5 / 6) * (Eb / 2) * A)
+    sag = -res.probes["tip"][2]
+    assert sag == pytest.approx(timoshenko, rel=0.01)
+    assert sag == pytest.approx(eb, rel=0.01)
+
+
+def _vector(form):
+    b = fpetsc.assemble_vector(fem.form(form))
+    b.ghostUpdate(addv=1, mode=1)   # ADD, REVERSE
+    return b
+
+
+@pytest.mark.parametrize("model_name", ["neo-hookean", "mooney-rivlin", "stvk"])
+def test_taylor_residual_is_gradient_of_energy_and_jacobian_its_derivative(model_name):
+    """|Pi(u + h du) - Pi(u) - h R(u).du| = O(h^2) and |R(u + h du) - R(u) - h K(u) du| = O(h^2)."""
+    scene = ff.Scene.from_dict(beam_scene(material={"model": model_name, "E": 1e6, "nu": 0.3, "rho": 1000}))
+    m = build_model(scene)
+    rng = np.random.default_rng(1)
+    m.u.interpolate(lambda X: np.vstack([0.05 * X[0] ** 2, 0.02 * X[1], -0.1 * X[0] ** 2]))
+    u0 = m.u.x.array.copy()
+    du = fem.Function(m.V)
+    du.x.array[:] = rng.uniform(-0.01, 0.01, du.x.array.shape)
+    du.x.scatter_forward()
+    comm = MPI.COMM_WORLD
+    energy = fem.form(m.energy)
+
+    def Pi():
+        return comm.allreduce(fem.assemble_scalar(energy), op=MPI.SUM)
+
+    R0 = _vector(m.residual)
+    K = fpetsc.assemble_matrix(fem.form(m.jacobian))
+    K.assemble()
+    Kdu = R0.duplicate()
+    K.mult(du.vector, Kdu)
+    dPi = R0.dot(du.vector)
+    Pi0 = Pi()
+    e_energy, e_res = [], []
+    for h in [1e-1, 5e-2, 2.5e-2, 1.25e-2]:
+        m.u.x.array[:] = u0 + h * du.x.array
+        e_energy.append(abs(Pi() - Pi0 - h * dPi))
+        R = _vector(m.residual)
+        R.axpy(-1.0, R0)
+        R.axpy(-h, Kdu)
+        e_res.append(R.norm())
+    rates_e = np.log2(np.array(e_energy[:-1]) / np.array(e_energy[1:]))
+    rates_r = np.log2(np.array(e_res[:-1]) / np.array(e_res[1:]))
+    assert np.all(rates_e > 1.9), rates_e
+    assert np.all(rates_r > 1.9), rates_r
