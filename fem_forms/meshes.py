@@ -130,8 +130,9 @@ def _compact(a: MeshArrays) -> MeshArrays:
         return a
     new = np.full(len(a.points), -1, dtype=np.int64)
     new[used] = np.arange(len(used))
-    groups = {n: new[f] for n, f in a.facet_groups.items()}
-    return MeshArrays(a.points[used], new[a.cells], a.cell_type, groups)
+    # facets touching unused nodes (degenerate surfaces, e.g. the revolution axis) are dropped
+    groups = {n: new[f][np.all(new[f] >= 0, axis=1)] for n, f in a.facet_groups.items()}
+    return MeshArrays(a.points[used], new[a.cells], a.cell_type, {n: f for n, f in groups.items() if len(f)})
 
 
 def _generate(spec: MeshSpec) -> MeshArrays:
@@ -174,21 +175,28 @@ def _revolved_profile(occ, spec: MeshSpec) -> int:
 
 
 def _name_surfaces(gmsh, spec: MeshSpec) -> None:
-    """Physical groups for the generated surfaces: cylinder bottom/top/side, else 'surface'."""
+    """Physical groups for generated surfaces: flat horizontal faces at the lowest/highest z are
+    'bottom'/'top' and the rest 'side' (cylinder, revolve); a sphere has one group 'surface'."""
     surfaces = [t for _, t in gmsh.model.getEntities(2)]
-    if spec.generator == "cylinder":
-        z0 = spec.origin[2]
-        named = {"bottom": [], "top": [], "side": []}
-        for s in surfaces:
-            zmin, zmax = gmsh.model.getBoundingBox(2, s)[2::3]
-            if abs(zmax - zmin) < 1e-9 * spec.height:
-                named["bottom" if abs(zmin - z0) < 1e-9 * spec.height else "top"].append(s)
-            else:
-                named["side"].append(s)
-        for i, (n, ss) in enumerate(named.items()):
-            gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, ss, 10 + i), n)
-    else:
+    if spec.generator == "sphere":
         gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, surfaces, 10), "surface")
+        return
+    boxes = {s: gmsh.model.getBoundingBox(2, s) for s in surfaces}
+    zlo = min(b[2] for b in boxes.values())
+    zhi = max(b[5] for b in boxes.values())
+    tol = 1e-4 * (zhi - zlo)              # OCC pads bounding boxes by its tolerance
+    named = {"bottom": [], "top": [], "side": []}
+    for s, b in boxes.items():
+        flat = b[5] - b[2] < tol
+        if flat and abs(b[2] - zlo) < tol:
+            named["bottom"].append(s)
+        elif flat and abs(b[5] - zhi) < tol:
+            named["top"].append(s)
+        else:
+            named["side"].append(s)
+    for i, (n, ss) in enumerate(named.items()):
+        if ss:
+            gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, ss, 10 + i), n)
 
 
 # ----------------------------------------------------------------------------- files
