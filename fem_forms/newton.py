@@ -40,6 +40,7 @@ class StepRecord:
     residuals: list
     reason: str
     accepted: bool
+    note: str = ""            # why an SNES-converged step was still rejected
 
 
 @dataclass
@@ -217,6 +218,7 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
                 else:
                     report.residual_norm = rn
         rec.accepted = why is None
+        rec.note = why or ""
         report.steps.append(rec)
         report.newton_iterations += rec.iterations
         if rec.accepted:
@@ -230,8 +232,9 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
             dlam *= 0.5
             drv._build_snes()                        # fresh solver state after a failure
             if cuts > max_cutbacks:
-                report.message = (f"no convergence: load factor {lam:.4g} reached, the step to "
-                                  f"{trial:.4g} failed ({why}) after {cuts - 1} cut-backs")
+                report.message = (f"no convergence: load factor {lam:.6g} reached, the step to "
+                                  f"{trial:.6g} failed after {cuts - 1} cut-backs (failures seen: "
+                                  f"{'; '.join(_distinct(s.note for s in report.steps if s.note))})")
                 break
             report.message = why
     else:
@@ -241,6 +244,15 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
     report.solve_time = time.perf_counter() - t0 - drv.assembly_time
     drv.snes.destroy()
     return report
+
+
+def _distinct(notes) -> list:
+    """The first note of each kind (kinds differ in their words, not their numbers)."""
+    import re
+    first = {}
+    for n in notes:
+        first.setdefault(re.sub(r"[-+]?[0-9][0-9.e+-]*", "#", n), n)
+    return list(first.values())
 
 
 def require_converged(report: SolveReport) -> None:

@@ -157,3 +157,19 @@ def test_taylor_residual_is_gradient_of_energy_and_jacobian_its_derivative(model
     rates_r = np.log2(np.array(e_res[:-1]) / np.array(e_res[1:]))
     assert np.all(rates_e > 1.9), rates_e
     assert np.all(rates_r > 1.9), rates_r
+
+
+def test_crushing_a_stvk_block_past_its_limit_load_is_reported_not_answered():
+    """StVK in uniaxial compression (nu = 0) carries at most |P| = E / (3 sqrt 3) (at stretch 1/sqrt 3).
+    Asking for twice E must fail (inverted elements seen, no answer), having reached the limit load."""
+    scene = block_scene("tetrahedron", 1, [{"type": "traction", "where": {"axis": "x", "at": 1.0},
+                                            "value": [-2 * E, 0.0, 0.0]}])
+    scene.material.model, scene.material.nu = "stvk", 0.0
+    scene.solver.max_cutbacks = 8
+    res = ff.solve_static(scene)
+    assert not res.report.converged
+    assert "inverted elements" in res.report.message
+    limit = E / (3 * np.sqrt(3))
+    reached = res.report.load_reached * 2 * E
+    assert 0.97 * limit < reached <= limit * (1 + 1e-5)      # equilibrium accepted at 1e-6 residual
+    assert np.isnan(res.max_displacement) and res.probes == {}
