@@ -58,15 +58,17 @@ class LoadFactor:
             c.value = lam * v
 
 
-def supports(V: fem.FunctionSpace, loaded: LoadedMesh, fixes: list[Fix], load: LoadFactor) -> list:
-    """Dirichlet conditions u_i = lambda * value_i on each fix's facets and components."""
+def supports(V: fem.FunctionSpace, loaded: LoadedMesh, fixes: list[Fix], load: LoadFactor,
+             sign: float = 1.0) -> list:
+    """Dirichlet conditions u_i = sign * lambda * value_i on each fix's facets and components
+    (sign -1 for the inverse problem, whose unknown is rest minus deformed position)."""
     fdim = loaded.mesh.topology.dim - 1
     bcs = []
     for fix in fixes:
         facets = locate_facets(loaded, fix.where)
         for c in fix.components:
             dofs = fem.locate_dofs_topological(V.sub(c), fdim, facets)
-            value = load.scaled(loaded.mesh, fix.value[c])
+            value = load.scaled(loaded.mesh, sign * fix.value[c])
             bcs.append(fem.dirichletbc(value, dofs, V.sub(c)))
     return bcs
 
@@ -76,7 +78,7 @@ def external_work(u, loaded: LoadedMesh, loads: list[Load], rho: float, load: Lo
     """(W, pressure_residual): the work of conservative loads (gravity, dead traction) as an energy
     term, and the virtual work of follower pressure, which has no energy, as a residual term."""
     mesh = loaded.mesh
-    tags, ids = _load_regions(loaded, loads)
+    tags, ids = load_regions(loaded, loads)
     ds = ufl.Measure("ds", domain=mesh, subdomain_data=tags, metadata=dx.metadata())
     W = 0
     pressure_terms = []
@@ -102,7 +104,7 @@ def external_work(u, loaded: LoadedMesh, loads: list[Load], rho: float, load: Lo
     return W, pressure_residual
 
 
-def _load_regions(loaded: LoadedMesh, loads: list[Load]):
+def load_regions(loaded: LoadedMesh, loads: list[Load]):
     """One facet MeshTags for all surface loads: each distinct set of loads sharing a facet gets an id."""
     mesh = loaded.mesh
     fdim = mesh.topology.dim - 1

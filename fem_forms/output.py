@@ -80,6 +80,41 @@ def write_fields(path: Path, mesh, functions: list) -> None:
             xdmf.write_function(f)
 
 
+def node_values(f: fem.Function) -> np.ndarray:
+    """Values of f (through its P1 interpolant) at this rank's geometry nodes, shape (nodes, bs)."""
+    mesh = f.function_space.mesh
+    f1 = p1_interpolant(f) if f.function_space.ufl_element().degree() != 1 else f
+    gdofs = mesh.geometry.dofmap.array.reshape(-1, len(mesh.geometry.dofmap.links(0)))
+    vdofs = f1.function_space.dofmap.list.array.reshape(gdofs.shape)
+    node_to_dof = np.empty(len(mesh.geometry.x), dtype=np.int64)
+    node_to_dof[gdofs.ravel()] = vdofs.ravel()
+    bs = f1.function_space.dofmap.index_map_bs
+    return f1.x.array.reshape(-1, bs)[node_to_dof]
+
+
+def gather_mesh(mesh, point_shift: np.ndarray | None = None):
+    """The whole mesh on rank 0 as (points, cells in VTK/gmsh vertex order, cell type name), with
+    points moved by point_shift (per local geometry node) if given; None on other ranks."""
+    imap = mesh.geometry.index_map()
+    nown = imap.size_local
+    x = mesh.geometry.x + (0.0 if point_shift is None else point_shift)
+    glob = imap.local_to_global(np.arange(len(x), dtype=np.int32))
+    tdim = mesh.topology.dim
+    ncells = mesh.topology.index_map(tdim).size_local
+    gdofs = mesh.geometry.dofmap.array.reshape(-1, len(mesh.geometry.dofmap.links(0)))[:ncells]
+    cells = glob[gdofs]
+    name = mesh.topology.cell_name()
+    if name == "hexahedron":
+        cells = cells[:, [0, 1, 3, 2, 4, 5, 7, 6]]            # dolfinx tensor order -> VTK order
+    parts = mesh.comm.gather((glob[:nown], x[:nown], cells), root=0)
+    if mesh.comm.rank != 0:
+        return None
+    points = np.empty((imap.size_global, 3))
+    for g, p, _ in parts:
+        points[g] = p
+    return points, np.vstack([c for _, _, c in parts]), name
+
+
 def boundary_surface(u: fem.Function):
     """Rank 0 gets (points, triangles-or-quads, displacement at points) of the mesh's boundary;
     other ranks get None. Gathering is for the picture only."""
@@ -92,14 +127,9 @@ def boundary_surface(u: fem.Function):
     geom = cpp.mesh.entities_to_geometry(mesh._mesh, tdim - 1, facets, False)
     if mesh.topology.cell_name() == "hexahedron" and len(geom):
         geom = geom[:, [0, 1, 3, 2]]                 # tensor-product order -> polygon order
-    u1 = p1_interpolant(u)
-    gdofs = mesh.geometry.dofmap.array.reshape(-1, len(mesh.geometry.dofmap.links(0)))
-    vdofs = u1.function_space.dofmap.list.array.reshape(gdofs.shape)
-    node_to_dof = np.empty(len(mesh.geometry.x), dtype=np.int64)
-    node_to_dof[gdofs.ravel()] = vdofs.ravel()
+    values = node_values(u)
     nodes = np.unique(geom)
-    local = (mesh.geometry.x[nodes], u1.x.array.reshape(-1, 3)[node_to_dof[nodes]],
-             np.searchsorted(nodes, geom))
+    local = (mesh.geometry.x[nodes], values[nodes], np.searchsorted(nodes, geom))
     parts = mesh.comm.gather(local, root=0)
     if mesh.comm.rank != 0:
         return None
@@ -110,6 +140,18 @@ def boundary_surface(u: fem.Function):
         polys.append(p + off)
         off += len(x)
     return np.vstack(pts), np.vstack([p for p in polys if len(p)]), np.vstack(disp)
+
+
+def style_axes(ax, lo: np.ndarray, hi: np.ndarray) -> None:
+    """True-proportion 3D axes spanning [lo, hi], with few ticks on short axes, seen from the side."""
+    import matplotlib.ticker
+    ax.set_xlim(lo[0], hi[0]), ax.set_ylim(lo[1], hi[1]), ax.set_zlim(lo[2], hi[2])
+    span = np.maximum(hi - lo, 1e-3 * (hi - lo).max())
+    ax.set_box_aspect(span)
+    for axis, s in zip((ax.xaxis, ax.yaxis, ax.zaxis), span):
+        axis.set_major_locator(matplotlib.ticker.MaxNLocator(max(2, int(6 * s / span.max()))))
+    ax.set_xlabel("x [m]"), ax.set_ylabel("y [m]"), ax.set_zlabel("z [m]")
+    ax.view_init(elev=15, azim=-75)
 
 
 def picture(path: Path, u: fem.Function, title: str, scale: float = 1.0) -> None:
@@ -136,16 +178,10 @@ def picture(path: Path, u: fem.Function, title: str, scale: float = 1.0) -> None
                              edgecolor=(0, 0, 0, 0.15), linewidths=0.2)
     ax.add_collection3d(faces)
     allp = np.vstack([X, x])
-    lo, hi = allp.min(axis=0), allp.max(axis=0)
-    ax.set_xlim(lo[0], hi[0]), ax.set_ylim(lo[1], hi[1]), ax.set_zlim(lo[2], hi[2])
-    ax.set_box_aspect(np.maximum(hi - lo, 1e-3 * (hi - lo).max()))
-    ax.set_xlabel("x [m]"), ax.set_ylabel("y [m]"), ax.set_zlabel("z [m]")
+    style_axes(ax, allp.min(axis=0), allp.max(axis=0))
     sm = plt.cm.ScalarMappable(cmap=cmap, norm=plt.Normalize(0, vmax))
     fig.colorbar(sm, ax=ax, shrink=0.6, label="|u| [m]")
     ax.set_title(title + ("" if scale == 1.0 else f" (displacement x{scale:g})"))
-    for axis, a, b in zip((ax.xaxis, ax.yaxis, ax.zaxis), lo, hi):
-        axis.set_major_locator(matplotlib.ticker.MaxNLocator(max(2, int(6 * (b - a) / (hi - lo).max()))))
-    ax.view_init(elev=15, azim=-75)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)

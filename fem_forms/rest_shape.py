@@ -1,0 +1,108 @@
+"""The designed rest shape as a fabricable object: volume mesh and STL files, and the checks that a
+mathematically valid rest shape is also a usable one (no crossing of a support plane, no
+self-intersection of its surface)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+FACES = {"tetrahedron": [(0, 2, 1), (0, 1, 3), (1, 2, 3), (0, 3, 2)],
+         "hexahedron": [(0, 3, 2, 1), (4, 5, 6, 7), (0, 1, 5, 4), (1, 2, 6, 5), (2, 3, 7, 6), (3, 0, 4, 7)]}
+
+
+def boundary_faces(cells: np.ndarray, cell_type: str) -> np.ndarray:
+    """Faces (VTK/gmsh vertex order, outward for positively oriented cells) used by one cell only."""
+    faces = np.vstack([cells[:, list(f)] for f in FACES[cell_type]])
+    key = np.sort(faces, axis=1)
+    _, index, counts = np.unique(key, axis=0, return_index=True, return_counts=True)
+    return faces[np.sort(index[counts == 1])]
+
+
+def triangles(faces: np.ndarray) -> np.ndarray:
+    """Quads split into two triangles; triangles unchanged."""
+    if faces.shape[1] == 3:
+        return faces
+    return np.vstack([faces[:, [0, 1, 2]], faces[:, [0, 2, 3]]])
+
+
+def write_volume_mesh(path: Path, points: np.ndarray, cells: np.ndarray, cell_type: str) -> None:
+    """A gmsh .msh (format 2.2) that `generator = "file"` reads back."""
+    import meshio
+    kind = {"tetrahedron": "tetra", "hexahedron": "hexahedron"}[cell_type]
+    tags = np.ones(len(cells), dtype=np.int32)
+    m = meshio.Mesh(points, [(kind, cells)], cell_data={"gmsh:physical": [tags], "gmsh:geometrical": [tags]})
+    meshio.write(str(path), m, file_format="gmsh22", binary=False)
+
+
+def write_stl(path: Path, points: np.ndarray, tris: np.ndarray, name: str = "rest_shape") -> None:
+    """ASCII STL of a closed triangulated surface (outward normals), for slicers and mould makers."""
+    p = points[tris]
+    n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    lines = [f"solid {name}"]
+    for k in range(len(tris)):
+        lines.append(f"  facet normal {n[k, 0]:.9e} {n[k, 1]:.9e} {n[k, 2]:.9e}\n    outer loop")
+        lines.extend(f"      vertex {v[0]:.9e} {v[1]:.9e} {v[2]:.9e}" for v in p[k])
+        lines.append("    endloop\n  endfacet")
+    lines.append(f"endsolid {name}")
+    Path(path).write_text("\n".join(lines) + "\n")
+
+
+def crosses_support_plane(rest: np.ndarray, target: np.ndarray, axis: int, at: float, tol: float) -> float:
+    """How far (>= 0) rest vertices reach through a support plane to the side the target body is not on."""
+    side = np.sign(np.mean(target[:, axis]) - at) or 1.0
+    depth = -side * (rest[:, axis] - at)
+    return float(max(depth.max() - tol, 0.0))
+
+
+def _tri_segment_hits(t0, t1, t2, s0, s1, eps=1e-12) -> np.ndarray:
+    """Vectorised: does segment s0-s1 cross triangle (t0, t1, t2) at an interior point?"""
+    e1, e2, d = t1 - t0, t2 - t0, s1 - s0
+    h = np.cross(d, e2)
+    a = np.einsum("ij,ij->i", e1, h)
+    ok = np.abs(a) > eps * np.linalg.norm(e1, axis=1) * np.linalg.norm(e2, axis=1) * np.linalg.norm(d, axis=1)
+    f = np.where(ok, 1.0 / np.where(ok, a, 1.0), 0.0)
+    s = s0 - t0
+    u = f * np.einsum("ij,ij->i", s, h)
+    q = np.cross(s, e1)
+    v = f * np.einsum("ij,ij->i", d, q)
+    t = f * np.einsum("ij,ij->i", e2, q)
+    m = 1e-9
+    return ok & (u > m) & (v > m) & (u + v < 1 - m) & (t > m) & (t < 1 - m)
+
+
+def self_intersections(points: np.ndarray, tris: np.ndarray, max_pairs: int = 20_000_000) -> int:
+    """Number of pairs of surface triangles sharing no vertex that cross each other (an edge of one
+    passes through the other). Candidate pairs come from a uniform grid of triangle bounding boxes."""
+    p = points[tris]
+    lo, hi = p.min(axis=1), p.max(axis=1)
+    size = np.median(hi - lo, axis=0).max() * 2 + 1e-300
+    cell_lo = np.floor(lo / size).astype(np.int64)
+    cell_hi = np.floor(hi / size).astype(np.int64)
+    buckets: dict = {}
+    for k in range(len(tris)):
+        for i in range(cell_lo[k, 0], cell_hi[k, 0] + 1):
+            for j in range(cell_lo[k, 1], cell_hi[k, 1] + 1):
+                for m in range(cell_lo[k, 2], cell_hi[k, 2] + 1):
+                    buckets.setdefault((i, j, m), []).append(k)
+    pairs = set()
+    for members in buckets.values():
+        if len(members) > 1:
+            arr = np.array(members)
+            a, b = np.triu_indices(len(arr), 1)
+            pairs.update(zip(arr[a].tolist(), arr[b].tolist()))
+            if len(pairs) > max_pairs:
+                break
+    if not pairs:
+        return 0
+    pa = np.array(sorted(pairs))
+    A, B = pa[:, 0], pa[:, 1]
+    overlap = np.all((lo[A] <= hi[B]) & (lo[B] <= hi[A]), axis=1)
+    share = (tris[A][:, :, None] == tris[B][:, None, :]).any(axis=(1, 2))
+    A, B = A[overlap & ~share], B[overlap & ~share]
+    hit = np.zeros(len(A), dtype=bool)
+    for X, Y in ((A, B), (B, A)):
+        for e in ((0, 1), (1, 2), (2, 0)):
+            hit |= _tri_segment_hits(p[Y, 0], p[Y, 1], p[Y, 2], p[X, e[0]], p[X, e[1]])
+    return int(hit.sum())
