@@ -13,7 +13,7 @@ from typing import Any
 
 from .errors import InputError
 
-ANALYSES = ("static",)   # extended as analyses register (see analyses/__init__.py)
+ANALYSES = ("static", "modal", "inverse")   # extended as analyses register (see analyses/__init__.py)
 GENERATORS = ("box", "cylinder", "sphere", "revolve", "file")
 CELLS = ("tetrahedron", "hexahedron")
 AXES = {"x": 0, "y": 1, "z": 2}
@@ -210,6 +210,41 @@ class OutputSpec:
 
 
 @dataclass
+class ModalSpec:
+    """[modal]: how many elastic modes, about which state, with which mass matrix."""
+    count: int = 6
+    prestress: bool = False        # True: tangent at the static equilibrium under the scene's loads
+    mass: str = "consistent"       # "consistent" | "lumped"
+
+
+@dataclass
+class SoundSpec:
+    """[sound]: a modal impulse response at a struck point, written as a WAV."""
+    point: list = field(default_factory=lambda: [0.0, 0.0, 0.0])
+    direction: list = field(default_factory=lambda: [0.0, 0.0, 1.0])   # unit length after parsing
+    duration: float = 2.0
+    alpha: float = 1.0             # Rayleigh damping zeta = alpha / (2 omega) + beta omega / 2
+    beta: float = 1e-7
+    sample_rate: int = 44100
+
+
+@dataclass
+class InverseSpec:
+    """[inverse]: how to find the rest shape that deforms into the target under the scene's loads."""
+    method: str = "direct"                 # "direct" | "adjoint" | "fixed-point"
+    target: Path | None = None             # another mesh file as target (default: the scene's mesh)
+    check_tolerance: float | None = None   # forward check must land within this (m); default 1e-3 x size
+    iterations: int = 200                  # adjoint / fixed-point iteration limit
+    tolerance: float = 1e-9                # adjoint: gradient norm; fixed point: update size (relative)
+    match_points: list | None = None       # adjoint: match only these points (snapped to vertices)
+    match_region: Selector | None = None   # adjoint: match only inside this box
+    smoothness: float = 0.0                # adjoint: weight of int |grad d|^2 (d = rest - target)
+    stay_close: float = 0.0                # adjoint: weight of int |d|^2 (shape preservation)
+    max_move: float | None = None          # adjoint: bound on each component of d
+    optimizer: str = "gauss-newton"        # adjoint: "gauss-newton" | "lbfgs" (PETSc TAO BLMVM)
+
+
+@dataclass
 class Scene:
     title: str = "untitled"
     analysis: str = "static"
@@ -220,6 +255,9 @@ class Scene:
     load: list = field(default_factory=list)
     solver: SolverSpec = field(default_factory=SolverSpec)
     output: OutputSpec = field(default_factory=OutputSpec)
+    modal: ModalSpec = field(default_factory=ModalSpec)
+    sound: SoundSpec | None = None     # None: no sound
+    inverse: InverseSpec = field(default_factory=InverseSpec)
     source: Path | None = None
 
     @classmethod
@@ -295,6 +333,40 @@ def _parse_components(v: Any, key: str) -> list:
     return [AXES[c] for c in v]
 
 
+def _parse_modal(t: _Table) -> ModalSpec:
+    m = ModalSpec(count=t.number("count", 6, integer=True, positive=True),
+                  prestress=t.boolean("prestress", False),
+                  mass=t.string("mass", "consistent", choices=("consistent", "lumped")))
+    if m.count > 500:
+        raise InputError(f"{t.key('count')} = {m.count}: at most 500 modes")
+    t.done()
+    return m
+
+
+def _parse_sound(t: _Table) -> SoundSpec:
+    s = SoundSpec()
+    strike = t.table("strike", required=True)
+    s.point = strike.vector("point", 3, required=True)
+    s.direction = strike.vector("direction", 3, required=True)
+    norm = math.sqrt(sum(c * c for c in s.direction))
+    if norm == 0:
+        raise InputError(f"{strike.key('direction')} = {s.direction}: must not be the zero vector")
+    s.direction = [c / norm for c in s.direction]
+    strike.done()
+    s.duration = t.number("duration", 2.0, positive=True)
+    s.sample_rate = t.number("sample_rate", 44100, integer=True, positive=True)
+    if not 1000 <= s.sample_rate <= 384000:
+        raise InputError(f"{t.key('sample_rate')} = {s.sample_rate}: must lie in 1000..384000 Hz")
+    if s.duration * s.sample_rate > 2**26:
+        raise InputError(f"{t.key('duration')} = {s.duration}: too long (at most {2**26} samples)")
+    damping = t.table("damping")
+    s.alpha = damping.number("alpha", s.alpha, nonneg=True)
+    s.beta = damping.number("beta", s.beta, nonneg=True)
+    damping.done()
+    t.done()
+    return s
+
+
 def _parse_scene(data: dict, base_dir: Path, source: Path | None) -> Scene:
     t = _Table(data, "")
     sc = Scene(source=source)
@@ -368,5 +440,50 @@ def _parse_scene(data: dict, base_dir: Path, source: Path | None) -> Scene:
         probes={n: check_vector(p, f"output.probes.{n}") for n, p in probes.items()},
         picture=o.boolean("picture", True), fields=o.boolean("fields", True))
     o.done()
+
+    for name in ("modal", "sound"):
+        if t.has(name) and sc.analysis != "modal":
+            raise InputError(f"{name}: only for analysis = 'modal' (this scene's analysis is {sc.analysis!r})")
+    sc.modal = _parse_modal(t.table("modal"))
+    sc.sound = _parse_sound(t.table("sound")) if t.has("sound") else None
+    if sc.analysis == "modal" and sc.material.rho <= 0:
+        raise InputError("material.rho: modal analysis needs a positive density")
+    if t.has("inverse") and sc.analysis != "inverse":
+        raise InputError(f"inverse: only for analysis = 'inverse' (this scene's analysis is {sc.analysis!r})")
+    sc.inverse = _parse_inverse(t.table("inverse"), base_dir)
     t.done()
     return sc
+
+
+def _parse_inverse(t: _Table, base_dir: Path) -> InverseSpec:
+    s = InverseSpec(method=t.string("method", "direct", choices=("direct", "adjoint", "fixed-point")))
+    if t.has("target"):
+        f = t.string("target")
+        s.target = Path(f) if Path(f).is_absolute() else base_dir / f
+        if not s.target.is_file():
+            raise InputError(f"inverse.target = {f!r}: file not found")
+    s.check_tolerance = t.number("check_tolerance", None, positive=True)
+    s.iterations = t.number("iterations", 200, integer=True, positive=True)
+    s.tolerance = t.number("tolerance", 1e-9, positive=True)
+    adjoint_only = ("match_points", "match_region", "smoothness", "stay_close", "max_move", "optimizer")
+    if s.method != "adjoint":
+        for k in adjoint_only:
+            if t.has(k):
+                raise InputError(f"{t.key(k)}: only for method = 'adjoint' (method is {s.method!r})")
+    if t.has("match_points"):
+        pts = t.raw("match_points")
+        if not isinstance(pts, list) or not pts:
+            raise InputError(f"{t.key('match_points')}: must be a non-empty list of [x, y, z] points")
+        s.match_points = [check_vector(p, f"{t.key('match_points')}[{i}]") for i, p in enumerate(pts)]
+    if t.has("match_region"):
+        s.match_region = Selector.parse(t.raw("match_region"), t.key("match_region"))
+        if s.match_region.kind != "box":
+            raise InputError(f"{t.key('match_region')}: must be a box = [[x0, y0, z0], [x1, y1, z1]]")
+    if s.match_points is not None and s.match_region is not None:
+        raise InputError(f"{t.path}: give match_points or match_region, not both")
+    s.smoothness = t.number("smoothness", 0.0, nonneg=True)
+    s.stay_close = t.number("stay_close", 0.0, nonneg=True)
+    s.max_move = t.number("max_move", None, positive=True)
+    s.optimizer = t.string("optimizer", "gauss-newton", choices=("gauss-newton", "lbfgs"))
+    t.done()
+    return s

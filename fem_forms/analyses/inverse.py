@@ -193,191 +193,280 @@ class ForwardOnRest:
 
 # --------------------------------------------------------------------------------- adjoint method
 class AdjointDesign:
-    """J(d) = 1/2 mismatch^2 (mean over the matched volume or points) + smoothness/2 int |grad d|^2
-    + stay_close/2 int |d|^2; mismatch = deformed position - target = d + u(d)."""
+    """J(d) = 1/2 m^T W m + 1/2 d^T R d with m = d + u(d) the mismatch (deformed minus target
+    position), W the matching weight (mass matrix of the matched volume over its volume, or 1/n at
+    the matched points' dofs) and R the regularisation (smoothness * stiffness of grad d, stay_close *
+    mass). The gradient needs one adjoint solve K mu = W m: dJ/dd = W m - B^T mu + R d, with
+    B = dR_u/dd. Gauss-Newton products H p = A^T W A p + R p, A = I - K^-1 B, reuse K's factors."""
 
     def __init__(self, fwd: ForwardOnRest):
         self.fwd = fwd
         spec = fwd.scene.inverse
-        mesh, V, d, u = fwd.mesh, fwd.V, fwd.d, fwd.u
+        mesh, V = fwd.mesh, fwd.V
         comm = mesh.comm
         dx = fwd.dx
-        self.point_dofs = None
+        trial, test = ufl.TrialFunction(V), ufl.TestFunction(V)
+        self.n = V.dofmap.index_map.size_local * V.dofmap.index_map_bs
         if spec.match_points is not None:
-            self.point_dofs = _snap_points(V, spec.match_points)
-            self.J_match = None
+            _, owned = _snap_points(V, spec.match_points)
+            diag = fpetsc.create_vector(fem.form(ufl.dot(fem.Constant(mesh, PETSc.ScalarType((0, 0, 0))), test) * dx))
+            diag.set(0.0)
+            diag.array[owned] = 1.0 / len(spec.match_points)
+            W = PETSc.Mat().createAIJ(((self.n, None), (self.n, None)), nnz=1, comm=comm)
+            W.setDiagonal(diag)
+            W.assemble()
+            self.W = W
         else:
+            dxm = dx
             if spec.match_region is not None:
                 from dolfinx import mesh as dmesh
                 lo = np.array(spec.match_region.lo)[:, None]
                 hi = np.array(spec.match_region.hi)[:, None]
                 tol = 1e-9 * mesh_size(mesh)
                 cells = dmesh.locate_entities(mesh, 3, lambda x: np.all((x >= lo - tol) & (x <= hi + tol), axis=0))
-                ncell = comm.allreduce(len(cells), op=MPI.SUM)
-                if ncell == 0:
+                if comm.allreduce(len(cells), op=MPI.SUM) == 0:
                     raise InputError("inverse.match_region: contains no cell of the mesh")
                 tags = dmesh.meshtags(mesh, 3, np.sort(cells).astype(np.int32), 1)
                 dxm = ufl.Measure("dx", domain=mesh, subdomain_data=tags, metadata=dx.metadata())(1)
-            else:
-                dxm = dx
             vol = comm.allreduce(fem.assemble_scalar(fem.form(fem.Constant(mesh, 1.0) * dxm)), op=MPI.SUM)
-            self.J_match = 0.5 / vol * ufl.dot(d + u, d + u) * dxm
-        J_reg = 0
+            self.W = fpetsc.assemble_matrix(fem.form(ufl.dot(trial, test) / vol * dxm))
+            self.W.assemble()
+        reg = fem.Constant(mesh, 0.0) * ufl.dot(trial, test) * dx
         if spec.smoothness > 0:
-            J_reg = J_reg + 0.5 * spec.smoothness * ufl.inner(ufl.grad(d), ufl.grad(d)) * dx
+            reg = reg + spec.smoothness * ufl.inner(ufl.grad(trial), ufl.grad(test)) * dx
         if spec.stay_close > 0:
-            J_reg = J_reg + 0.5 * spec.stay_close * ufl.dot(d, d) * dx
-        self.J_reg = J_reg if not isinstance(J_reg, int) else None
-        w = ufl.TestFunction(V)
-        parts = [p for p in (self.J_match, self.J_reg) if p is not None]
-        self.J_form = fem.form(sum(parts)) if parts else None
-        self.dJdu = fem.form(ufl.derivative(self.J_match, u, w)) if self.J_match is not None else None
-        self.dJdd = fem.form(ufl.derivative(sum(parts), d, w)) if parts else None
-        self.K = fem.form(fwd.jacobian)
-        self.B = fem.form(fwd.dres_dd)
-        self.evaluations = 0
-        # adjoint linear solver: MUMPS LU on the (symmetric) tangent
+            reg = reg + spec.stay_close * ufl.dot(trial, test) * dx
+        self.R = fpetsc.assemble_matrix(fem.form(reg))
+        self.R.assemble()
+        self.K_form = fem.form(fwd.jacobian)
+        self.B_form = fem.form(fwd.dres_dd)
+        self.K = fpetsc.create_matrix(self.K_form)
+        self.B = fpetsc.create_matrix(self.B_form)
         self.ksp = PETSc.KSP().create(comm)
         self.ksp.setOptionsPrefix("fem_forms_adjoint_")
         opts = PETSc.Options()
         for k, val in {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}.items():
             opts["fem_forms_adjoint_" + k] = val
         self.ksp.setFromOptions()
-        # fixed dofs of d: the rest shape stays attached where the body is supported
-        self.fixed = np.unique(np.concatenate([bc.dof_indices()[0] for bc in fwd.bcs])) if fwd.bcs else \
-            np.empty(0, dtype=np.int32)
+        # the rest shape stays attached where the body is supported: d is fixed (0) on supported dofs
+        fixed = [bc.dof_indices()[0] for bc in fwd.bcs]
+        self.fixed = np.unique(np.concatenate(fixed)) if fixed else np.empty(0, dtype=np.int32)
+        self.fixed = self.fixed[self.fixed < self.n]
+        self.vec = lambda: self.W.createVecLeft()
+        self.evaluations = 0
 
-    def _assemble_vec(self, form) -> PETSc.Vec:
-        b = fpetsc.assemble_vector(form)
-        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        return b
+    def _solve_K(self, rhs: PETSc.Vec) -> PETSc.Vec:
+        """K x = rhs with homogeneous conditions on supported dofs (K was assembled with them)."""
+        fpetsc.set_bc(rhs, self.fwd.bcs, scale=0.0)
+        x = rhs.duplicate()
+        self.ksp.solve(rhs, x)
+        if self.ksp.getConvergedReason() < 0:
+            raise SolveError(f"adjoint: linear solve failed ({self.ksp.getConvergedReason()})")
+        return x
 
-    def value_and_gradient(self, dvec: np.ndarray):
-        """J and dJ/dd (owned dofs) for d given on owned dofs; None if the forward solve fails."""
+    def evaluate(self, dvec: np.ndarray, gradient: bool = True):
+        """(J, gradient on owned dofs) at d; None if there is no forward equilibrium at d. Leaves K
+        assembled and factorised at that state for Gauss-Newton products."""
         fwd = self.fwd
-        n = len(dvec)
-        fwd.d.x.array[:n] = dvec
+        fwd.d.x.array[:self.n] = dvec
         fwd.d.x.scatter_forward()
         rep = fwd.solve()
         self.evaluations += 1
         if not rep.converged:
             return None
-        comm = fwd.mesh.comm
-        J = comm.allreduce(fem.assemble_scalar(self.J_form), op=MPI.SUM) if self.J_form else 0.0
-        # dJ/du
-        if self.point_dofs is not None:
-            mis = fwd.d.x.array + fwd.u.x.array
-            npts = comm.allreduce(len(self.point_dofs[0]), op=MPI.SUM) // 3 or 1
-            J += 0.5 / npts * float(comm.allreduce(np.sum(mis[self.point_dofs[0]] ** 2), op=MPI.SUM))
-            rhs = fpetsc.create_vector(fem.form(fwd.residual))
-            rhs.set(0.0)
-            owned = self.point_dofs[1]
-            rhs.array[owned] = mis[owned] / npts
-        else:
-            rhs = self._assemble_vec(self.dJdu)
-        # adjoint: K mu = dJ/du with homogeneous conditions on supported dofs (K is symmetric)
-        K = fpetsc.assemble_matrix(self.K, bcs=fwd.bcs)
-        K.assemble()
-        fpetsc.set_bc(rhs, fwd.bcs, scale=0.0)
-        mu = rhs.duplicate()
-        self.ksp.setOperators(K)
-        self.ksp.solve(rhs, mu)
-        if self.ksp.getConvergedReason() < 0:
-            return None
-        B = fpetsc.assemble_matrix(self.B)
-        B.assemble()
-        grad = self._assemble_vec(self.dJdd) if self.dJdd is not None else rhs.duplicate()
-        if self.dJdd is None:
-            grad.set(0.0)
-        if self.point_dofs is not None:            # the point mismatch depends on d directly too
-            grad.array[self.point_dofs[1]] += rhs.array[self.point_dofs[1]]
-        Btmu = grad.duplicate()
-        B.multTranspose(mu, Btmu)                  # mu is zero on supported dofs
-        grad.axpy(-1.0, Btmu)
-        g = grad.array.copy()
-        g[self.fixed[self.fixed < n]] = 0.0
-        for obj in (K, B, mu, rhs, grad, Btmu):
-            obj.destroy()
-        return J, g
+        m, d = self.vec(), self.vec()
+        d.array[:] = dvec
+        m.array[:] = dvec + fwd.u.x.array[:self.n]
+        Wm, Rd = self.W * m, self.R * d
+        J = 0.5 * m.dot(Wm) + 0.5 * d.dot(Rd)
+        if not gradient:
+            return J, None
+        self.K.zeroEntries()
+        fpetsc.assemble_matrix(self.K, self.K_form, bcs=fwd.bcs)
+        self.K.assemble()
+        self.B.zeroEntries()
+        fpetsc.assemble_matrix(self.B, self.B_form)
+        self.B.assemble()
+        self.ksp.setOperators(self.K)
+        mu = self._solve_K(Wm.copy())
+        g = Wm + Rd
+        g.axpy(-1.0, self.B.createVecRight().duplicate() if False else self._BT(mu))
+        out = g.array.copy()
+        out[self.fixed] = 0.0
+        return J, out
+
+    def _BT(self, y: PETSc.Vec) -> PETSc.Vec:
+        z = self.vec()
+        self.B.multTranspose(y, z)
+        return z
+
+    def gauss_newton_product(self, p: PETSc.Vec, out: PETSc.Vec) -> None:
+        """out = (A^T W A + R) p on free dofs, A = I - K^-1 B, at the last evaluated state."""
+        q = p.copy()
+        q.array[self.fixed] = 0.0
+        Bq = self.vec()
+        self.B.mult(q, Bq)
+        a = q - self._solve_K(Bq)
+        b = self.W * a
+        r = b - self._BT(self._solve_K(b.copy())) + self.R * q
+        r.array[self.fixed] = 0.0
+        r.copy(out)
+
+
+class _GaussNewtonOperator:
+    """A PETSc shell-matrix context for the Gauss-Newton Hessian."""
+
+    def __init__(self, design: AdjointDesign):
+        self.design = design
+
+    def mult(self, mat, x, y):
+        self.design.gauss_newton_product(x, y)
 
 
 def _snap_points(V: fem.FunctionSpace, points: list):
-    """Dofs of the mesh vertices nearest each point: (all local dof indices incl. ghosts, owned only)."""
+    """Dofs of the mesh vertices nearest each point: (all local dof indices, owned only)."""
     bs = V.dofmap.index_map_bs
     nown = V.dofmap.index_map.size_local
-    X = V.tabulate_dof_coordinates()
+    X = V.tabulate_dof_coordinates()[:nown]
     comm = V.mesh.comm
-    idx_all, idx_own = [], []
+    own = []
     for p in points:
         dist = np.linalg.norm(X - np.asarray(p), axis=1) if len(X) else np.array([np.inf])
         k = int(np.argmin(dist))
         best = comm.allreduce(float(dist[k]), op=MPI.MIN)
-        if dist[k] <= best and len(X):
-            # the lowest rank holding an owned node at that distance owns the match
-            rank = comm.allreduce(comm.rank if (dist[k] <= best and k < nown) else comm.size, op=MPI.MIN)
-        else:
-            rank = comm.allreduce(comm.size, op=MPI.MIN)
+        rank = comm.allreduce(comm.rank if dist[k] <= best else comm.size, op=MPI.MIN)
         if comm.rank == rank:
-            dofs = [k * bs + c for c in range(bs)]
-            idx_all += dofs
-            idx_own += dofs
-    return np.array(idx_all, dtype=np.int32), np.array(idx_own, dtype=np.int32)
+            own += [k * bs + c for c in range(bs)]
+    own = np.array(own, dtype=np.int32)
+    return own, own
+
+
+def _gauss_newton(design: AdjointDesign, spec, J_stop: float, history: list, scale_len: float):
+    """Projected Gauss-Newton with backtracking on J: each step solves H delta = -g by CG (matrix-free
+    products through K's factors), then halves the step until J decreases."""
+    comm = design.fwd.mesh.comm
+    n = design.n
+    d = np.zeros(n)
+    bound = spec.max_move
+    H = PETSc.Mat().createPython(((n, None), (n, None)), _GaussNewtonOperator(design), comm=comm)
+    H.setUp()
+    cg = PETSc.KSP().create(comm)
+    cg.setOptionsPrefix("fem_forms_gn_")
+    cg.setType("cg")
+    cg.getPC().setType("none")
+    cg.setTolerances(rtol=1e-3, max_it=200)
+    cg.setOperators(H)
+    cg.setFromOptions()
+    out = design.evaluate(d)
+    if out is None:
+        return d, False, "no forward equilibrium at the target shape itself", 0
+    J, g = out
+    history.append({"J": J, "cg": 0})
+    for it in range(1, spec.iterations + 1):
+        gv, step = design.vec(), design.vec()
+        gv.array[:] = -g
+        cg.solve(gv, step)
+        delta = step.array.copy()
+        t, accepted = 1.0, False
+        while t > 1e-4:
+            trial = d + t * delta
+            if bound is not None:
+                trial = np.clip(trial, -bound, bound)
+            trial[design.fixed] = 0.0
+            o = design.evaluate(trial)
+            if o is not None and o[0] < J:
+                d, (J, g), accepted = trial, o, True
+                break
+            t *= 0.5
+        if not accepted:
+            design.evaluate(d)
+            return d, J <= J_stop, f"line search failed at iteration {it}, J = {J:.3e}", it
+        gnorm = np.sqrt(comm.allreduce(float(g @ g), op=MPI.SUM))
+        history.append({"J": J, "cg": cg.getIterationNumber(), "step": t})
+        if J <= J_stop:
+            return d, True, f"mismatch below tolerance, J = {J:.3e}", it
+        if gnorm <= spec.tolerance * abs(J):
+            return d, True, f"relative gradient below tolerance, J = {J:.3e}", it
+        if t * comm.allreduce(float(np.abs(delta).max()) if n else 0.0, op=MPI.MAX) <= 1e-14 * scale_len:
+            return d, True, f"step below round-off, J = {J:.3e}", it
+    return d, False, f"no convergence in {spec.iterations} iterations, J = {J:.3e}", spec.iterations
+
+
+def _lbfgs(design: AdjointDesign, spec, J_stop: float, history: list, mesh):
+    """PETSc TAO bounded L-BFGS (BLMVM) on z = sqrt(m) d, m the lumped mass: steps then approximate
+    the L2 inner product and do not degrade as the mesh is refined."""
+    fwd, n, comm = design.fwd, design.n, design.fwd.mesh.comm
+    w = ufl.TestFunction(fwd.V)
+    one = fem.Constant(mesh, PETSc.ScalarType((1.0, 1.0, 1.0)))
+    lumped = fpetsc.assemble_vector(fem.form(ufl.dot(w, one) * fwd.dx))
+    lumped.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    scale = np.sqrt(np.abs(lumped.array[:n]))
+    x = design.vec()
+    x.set(0.0)
+
+    def objgrad(tao, xv, gv):
+        out = design.evaluate(xv.array / scale)
+        if out is None:                          # no equilibrium there: a line-search step too far
+            gv.set(0.0)
+            return 1e30
+        gv.array[:] = out[1] / scale
+        history.append({"J": out[0]})
+        return out[0]
+
+    def converged(tao):
+        its, f, gnorm = tao.getSolutionStatus()[:3]
+        if f <= J_stop:
+            tao.setConvergedReason(8)            # TAO_CONVERGED_USER: mismatch small enough
+        elif gnorm <= spec.tolerance * abs(f):
+            tao.setConvergedReason(4)            # TAO_CONVERGED_GRTOL
+        elif its >= spec.iterations:
+            tao.setConvergedReason(-2)           # TAO_DIVERGED_MAXITS
+        else:
+            tao.setConvergedReason(0)
+
+    tao = PETSc.TAO().create(comm)
+    tao.setOptionsPrefix("fem_forms_tao_")
+    tao.setType("blmvm")
+    tao.setObjectiveGradient(objgrad, x.duplicate())
+    lb, ub = x.duplicate(), x.duplicate()
+    big = 1e20 if spec.max_move is None else spec.max_move
+    lb.array[:] = -big * scale
+    ub.array[:] = big * scale
+    lb.array[design.fixed] = 0.0
+    ub.array[design.fixed] = 0.0
+    tao.setVariableBounds(lb, ub)
+    tao.setConvergenceTest(converged)
+    tao.setFromOptions()
+    tao.solve(x)
+    reason, its = tao.getConvergedReason(), tao.getIterationNumber()
+    d = x.array / scale
+    tao.destroy()
+    return d, reason > 0, f"TAO BLMVM reason {reason} after {its} iterations", its
 
 
 def solve_adjoint(scene: Scene, material=None, loaded: LoadedMesh | None = None) -> InverseResult:
-    """Minimise J over rest shapes with PETSc TAO (bounded L-BFGS, BLMVM)."""
+    """Minimise J over rest shapes mesh + d subject to forward equilibrium. Converged when the
+    mismatch J falls below 1/2 (tolerance x mesh size)^2, or the gradient below tolerance x J."""
     t0 = time.perf_counter()
     loaded = loaded or load_mesh(target_scene(scene))
     V = fem.VectorFunctionSpace(loaded.mesh, ("Lagrange", scene.discretization.degree))
     fwd = ForwardOnRest(scene, material, loaded, V)
     design = AdjointDesign(fwd)
     spec = scene.inverse
-    comm = loaded.mesh.comm
-    x = fpetsc.create_vector(fem.form(fwd.residual))
-    x.set(0.0)
+    size = mesh_size(loaded.mesh)
+    J_stop = 0.5 * (spec.tolerance * size) ** 2
     history: list = []
-    failed = {"flag": False}
-
-    def objgrad(tao, xv, gv):
-        out = design.value_and_gradient(xv.array.copy())
-        if out is None:
-            failed["flag"] = True
-            gv.set(0.0)
-            return 1e30
-        J, g = out
-        gv.array[:] = g
-        history.append(J)
-        return J
-
-    tao = PETSc.TAO().create(comm)
-    tao.setOptionsPrefix("fem_forms_tao_")
-    tao.setType("blmvm")
-    tao.setObjectiveGradient(objgrad, x.duplicate())
-    big = 1e20 if spec.max_move is None else spec.max_move
-    lb, ub = x.duplicate(), x.duplicate()
-    lb.set(-big)
-    ub.set(big)
-    n = V.dofmap.index_map.size_local * V.dofmap.index_map_bs
-    fixed = design.fixed[design.fixed < n]
-    lb.array[fixed] = 0.0
-    ub.array[fixed] = 0.0
-    tao.setVariableBounds(lb, ub)
-    tao.setTolerances(gatol=spec.tolerance, grtol=0.0, gttol=0.0)
-    tao.setMaximumIterations(spec.iterations)
-    tao.setFromOptions()
-    tao.solve(x)
-    reason = tao.getConvergedReason()
+    if spec.optimizer == "lbfgs":
+        d, ok, msg, its = _lbfgs(design, spec, J_stop, history, loaded.mesh)
+    else:
+        d, ok, msg, its = _gauss_newton(design, spec, J_stop, history, size)
+    final = design.evaluate(d, gradient=False)            # the forward state at the answer
+    ok = ok and final is not None
     v = fem.Function(V, name="rest_minus_target")
-    v.x.array[:n] = x.array
+    v.x.array[:design.n] = d
     v.x.scatter_forward()
-    ok = reason > 0 and not failed["flag"]
-    msg = f"TAO reason {reason}, J = {history[-1] if history else float('nan'):.3e}"
-    if failed["flag"]:
-        msg = "a forward solve failed during the optimisation (" + msg + ")"
-    res = InverseResult("adjoint", v, loaded, ok, tao.getIterationNumber(), msg,
-                        history=[{"J": J} for J in history], forward_solves=fwd.solves)
+    res = InverseResult("adjoint", v, loaded, ok, its, msg, history=history, forward_solves=fwd.solves)
     res.solve_time = time.perf_counter() - t0
-    tao.destroy()
     return res
 
 
