@@ -9,7 +9,7 @@ from __future__ import annotations
 import importlib
 from pathlib import Path
 
-RUNNERS = {"static": "static"}      # scene.analysis -> module in this package
+RUNNERS = {"static": "static", "modal": "modal", "inverse": "inverse"}      # scene.analysis -> module in this package
 
 
 def run_analysis(scene, out: Path, echo: bool = False) -> dict:
