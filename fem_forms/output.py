@@ -92,6 +92,28 @@ def node_values(f: fem.Function) -> np.ndarray:
     return f1.x.array.reshape(-1, bs)[node_to_dof]
 
 
+def gather_facet_groups(loaded) -> dict | None:
+    """Named facet groups of a LoadedMesh on rank 0 as {name: faces (global node indices, gmsh order)}."""
+    mesh = loaded.mesh
+    groups = {}
+    if loaded.facet_tags is not None:
+        imap = mesh.geometry.index_map()
+        fdim = mesh.topology.dim - 1
+        nown = mesh.topology.index_map(fdim).size_local
+        for name, tag in loaded.groups.items():
+            facets = loaded.facet_tags.indices[loaded.facet_tags.values == tag]
+            facets = facets[facets < nown]
+            nodes = cpp.mesh.entities_to_geometry(mesh._mesh, fdim, facets, False)
+            if mesh.topology.cell_name() == "hexahedron" and len(nodes):
+                nodes = nodes[:, [0, 1, 3, 2]]
+            groups[name] = imap.local_to_global(nodes.ravel()).reshape(nodes.shape) if len(nodes) \
+                else np.empty((0, nodes.shape[1] if nodes.ndim == 2 else 3), dtype=np.int64)
+    parts = mesh.comm.gather(groups, root=0)
+    if mesh.comm.rank != 0:
+        return None
+    return {n: np.vstack([p[n] for p in parts if len(p[n])]) for n in loaded.groups}
+
+
 def gather_mesh(mesh, point_shift: np.ndarray | None = None):
     """The whole mesh on rank 0 as (points, cells in VTK/gmsh vertex order, cell type name), with
     points moved by point_shift (per local geometry node) if given; None on other ranks."""

@@ -26,12 +26,21 @@ def triangles(faces: np.ndarray) -> np.ndarray:
     return np.vstack([faces[:, [0, 1, 2]], faces[:, [0, 2, 3]]])
 
 
-def write_volume_mesh(path: Path, points: np.ndarray, cells: np.ndarray, cell_type: str) -> None:
-    """A gmsh .msh (format 2.2) that `generator = "file"` reads back."""
+def write_volume_mesh(path: Path, points: np.ndarray, cells: np.ndarray, cell_type: str,
+                      facet_groups: dict | None = None) -> None:
+    """A gmsh .msh (format 2.2) with named boundary groups, that `generator = "file"` reads back."""
     import meshio
     kind = {"tetrahedron": "tetra", "hexahedron": "hexahedron"}[cell_type]
-    tags = np.ones(len(cells), dtype=np.int32)
-    m = meshio.Mesh(points, [(kind, cells)], cell_data={"gmsh:physical": [tags], "gmsh:geometrical": [tags]})
+    face = {"tetrahedron": "triangle", "hexahedron": "quad"}[cell_type]
+    blocks = [(kind, cells)]
+    physical = [np.full(len(cells), 1, dtype=np.int32)]
+    field_data = {}
+    for k, (name, faces) in enumerate((facet_groups or {}).items()):
+        blocks.append((face, faces))
+        physical.append(np.full(len(faces), 10 + k, dtype=np.int32))
+        field_data[name] = np.array([10 + k, 2])
+    m = meshio.Mesh(points, blocks, cell_data={"gmsh:physical": physical, "gmsh:geometrical": physical},
+                    field_data=field_data)
     meshio.write(str(path), m, file_format="gmsh22", binary=False)
 
 

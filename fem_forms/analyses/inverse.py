@@ -25,7 +25,7 @@ from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from .. import newton, output, rest_shape
+from .. import newton, output, probes, rest_shape
 from ..errors import InputError, SolveError
 from ..linear import rigid_body_modes
 from ..loads import LoadFactor, load_regions, locate_facets, supports
@@ -393,14 +393,15 @@ def _gauss_newton(design: AdjointDesign, spec, J_stop: float, history: list, sca
 
 
 def _lbfgs(design: AdjointDesign, spec, J_stop: float, history: list, mesh):
-    """PETSc TAO bounded L-BFGS (BLMVM) on z = sqrt(m) d, m the lumped mass: steps then approximate
-    the L2 inner product and do not degrade as the mesh is refined."""
+    """PETSc TAO bounded L-BFGS (BLMVM) on z = sqrt(m / V) d, m the lumped mass, V the volume: steps
+    then approximate the L2 inner product and do not degrade as the mesh is refined."""
     fwd, n, comm = design.fwd, design.n, design.fwd.mesh.comm
     w = ufl.TestFunction(fwd.V)
     one = fem.Constant(mesh, PETSc.ScalarType((1.0, 1.0, 1.0)))
     lumped = fpetsc.assemble_vector(fem.form(ufl.dot(w, one) * fwd.dx))
     lumped.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-    scale = np.sqrt(np.abs(lumped.array[:n]))
+    volume = comm.allreduce(float(lumped.array[:n].sum()) / 3, op=MPI.SUM)
+    scale = np.sqrt(np.abs(lumped.array[:n]) / volume)    # a first step d -= mismatch, as fixed point
     x = design.vec()
     x.set(0.0)
 
@@ -527,12 +528,13 @@ def check_rest_shape(scene: Scene, res: InverseResult, out: Path) -> ForwardChec
     shift = output.node_values(res.v)
     gathered = output.gather_mesh(mesh, shift)
     target = output.gather_mesh(mesh)
+    groups = output.gather_facet_groups(res.loaded)
     problems = []
     if comm.rank == 0:
         points, cells, ctype = gathered
         write_ok = True
         try:
-            rest_shape.write_volume_mesh(out / "rest_shape.msh", points, cells, ctype)
+            rest_shape.write_volume_mesh(out / "rest_shape.msh", points, cells, ctype, groups)
             faces = rest_shape.boundary_faces(cells, ctype)
             tris = rest_shape.triangles(faces)
             rest_shape.write_stl(out / "rest_shape.stl", points, tris)
@@ -622,7 +624,10 @@ def picture(path: Path, res: InverseResult, check: ForwardCheck, title: str) -> 
 def design_rest_shape(scene: Scene, material=None) -> InverseResult:
     """Run the scene's inverse method (mesh loading and compilation included in solve_time)."""
     t0 = time.perf_counter()
-    res = METHODS[scene.inverse.method](scene, material)
+    loaded = load_mesh(target_scene(scene))
+    V = fem.VectorFunctionSpace(loaded.mesh, ("Lagrange", scene.discretization.degree))
+    probes.evaluate(fem.Function(V), scene.output.probes)       # a probe outside the target: bad input
+    res = METHODS[scene.inverse.method](scene, material, loaded)
     res.solve_time = time.perf_counter() - t0
     return res
 
@@ -649,6 +654,9 @@ def run(scene: Scene, out: Path, echo: bool = False) -> dict:
         summary["rest_surface"] = str((out / "rest_shape.stl"))
         from .static import max_norm
         summary["max_rest_offset"] = max_norm(res.v)
+        offsets = probes.evaluate(res.v, scene.output.probes)
+        summary["probes"] = {n: {"point": p, "rest_position": (np.array(p) + offsets[n]).tolist()}
+                             for n, p in scene.output.probes.items()}
         output.write_fields(out / "fields.xdmf", res.loaded.mesh,
                             [output.p1_interpolant(res.v, "rest_minus_target")])
         picture(out / "inverse.png", res, check, scene.title)
