@@ -24,8 +24,13 @@ def choose(kind: str, dofs: int) -> str:
     return "iterative" if dofs > ITERATIVE_ABOVE_DOFS else "direct"
 
 
-def options(kind: str) -> dict:
-    return dict(DIRECT if kind == "direct" else ITERATIVE)
+def options(kind: str, symmetric: bool = True) -> dict:
+    """PETSc KSP/PC defaults for a Newton step; GMRES replaces CG for non-symmetric tangents
+    (inverse elastostatics, follower pressure)."""
+    opts = dict(DIRECT if kind == "direct" else ITERATIVE)
+    if kind != "direct" and not symmetric:
+        opts["ksp_type"] = "gmres"
+    return opts
 
 
 def rigid_body_modes(V: fem.FunctionSpace) -> PETSc.NullSpace:

@@ -87,14 +87,15 @@ class SNESDriver:
     # -- PETSc objects -------------------------------------------------------------------------
     def _build_snes(self) -> None:
         """(Re)create matrix and SNES: done at start, after a failed step and on solver switch."""
-        direct = self.linear_kind == "direct"
-        self.A = fpetsc.create_matrix(self.a, "baij" if direct else "aij")
-        if not direct and self.near_nullspace is not None:
-            self.A.setNearNullSpace(self.near_nullspace())
         merged = dict(self.DEFAULTS)
         merged["snes_linesearch_type"] = "bt" if self.E is not None else "basic"
-        merged.update(linear.options(self.linear_kind))
+        merged.update(linear.options(self.linear_kind, symmetric=self.E is not None))
         merged.update(self.user_options)
+        # block (BAIJ) matrices assemble 2.5-3x faster and MUMPS takes them; other solvers need AIJ
+        mumps = merged.get("pc_type") in ("lu", "cholesky") and merged.get("pc_factor_mat_solver_type") == "mumps"
+        self.A = fpetsc.create_matrix(self.a, "baij" if mumps else "aij")
+        if merged.get("pc_type") == "gamg" and self.near_nullspace is not None:
+            self.A.setNearNullSpace(self.near_nullspace())
         opts = PETSc.Options()
         for k, v in merged.items():
             opts[self.prefix + k] = v
