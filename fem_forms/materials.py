@@ -44,6 +44,10 @@ class LinearElastic:
         eps = small_strain(F)
         return self.mu * ufl.inner(eps, eps) + 0.5 * self.lmbda * ufl.tr(eps) ** 2
 
+    def volumetric(self, F):
+        """theta with psi = psi|_(lambda=0) + lambda/2 theta^2 (for the mixed u-p formulation)."""
+        return ufl.tr(small_strain(F))
+
 
 @dataclass(frozen=True)
 class StVenantKirchhoff:
@@ -57,6 +61,9 @@ class StVenantKirchhoff:
     def psi(self, F):
         E = green_strain(F)
         return self.mu * ufl.inner(E, E) + 0.5 * self.lmbda * ufl.tr(E) ** 2
+
+    def volumetric(self, F):
+        return ufl.tr(green_strain(F))
 
 
 @dataclass(frozen=True)
@@ -72,6 +79,9 @@ class NeoHookean:
         I1, _, J = invariants(F)
         lnJ = ufl.ln(J)
         return 0.5 * self.mu * (I1 - 3) - self.mu * lnJ + 0.5 * self.lmbda * lnJ**2
+
+    def volumetric(self, F):
+        return ufl.ln(ufl.det(F))
 
 
 @dataclass(frozen=True)
@@ -93,6 +103,9 @@ class MooneyRivlin:
         lnJ = ufl.ln(J)
         return (self.C10 * (I1 - 3) + self.C01 * (I2 - 3)
                 - 2 * (self.C10 + 2 * self.C01) * lnJ + 0.5 * self.lmbda * lnJ**2)
+
+    def volumetric(self, F):
+        return ufl.ln(ufl.det(F))
 
 
 @dataclass(frozen=True)
@@ -140,6 +153,21 @@ def make_material(model: str, *, E: float | None = None, nu: float | None = None
     if mu is None or lmbda is None:
         raise InputError(f"material: {model!r} needs E and nu, or mu and lambda")
     return MODELS[model](float(mu), float(lmbda))
+
+
+def mixed_energy(material: Material, F, p):
+    """Perturbed-Lagrangian energy of the u-p formulation: psi|_(lambda=0)(F) + p theta(F) - p^2/(2 lambda).
+    Stationary in p at p = lambda theta, where it equals psi(F); finite as lambda grows (nu -> 1/2),
+    so nearly incompressible parts neither lock nor fail."""
+    import dataclasses
+    if not hasattr(material, "volumetric") or not hasattr(material, "lmbda"):
+        raise InputError("discretization.formulation = 'mixed': needs a built-in material model "
+                         "(a user psi(F) has no volumetric part to split off)")
+    if material.lmbda <= 0:
+        raise InputError("discretization.formulation = 'mixed': needs lambda > 0 (nu > 0); it is meant "
+                         "for nearly incompressible materials")
+    deviatoric = dataclasses.replace(material, lmbda=0.0)
+    return deviatoric.psi(F) + p * material.volumetric(F) - p**2 / (2 * material.lmbda)
 
 
 def as_material(material) -> Material:

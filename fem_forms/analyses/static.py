@@ -44,9 +44,12 @@ class StaticResult:
             "wall_time_s": self.wall_time_s,
             "assembly_time_s": r.assembly_time,
             "linear_solver": r.linear_solver,
-            "element": f"P{self.model.scene.discretization.degree} {self.model.mesh.topology.cell_name()}",
+            "element": ("P2-P1 (Taylor-Hood) " if self.model.scene.discretization.formulation == "mixed" else
+                        f"P{self.model.scene.discretization.degree} ") + self.model.mesh.topology.cell_name(),
             "quadrature_degree": self.model.scene.discretization.quadrature,
             "mpi_ranks": self.model.mesh.comm.size,
+            "formulation": self.model.scene.discretization.formulation,
+            "warnings": self.model.warnings,
             "probes": {n: {"point": self.model.scene.output.probes[n], "displacement": v}
                        for n, v in self.probes.items()},
             "message": r.message,
@@ -69,14 +72,16 @@ def solve_static(scene: Scene, material=None, model: Model | None = None) -> Sta
     model = model or build_model(scene, material)
     probes.evaluate(model.u, scene.output.probes)          # a probe outside the mesh is bad input
     problem = newton.NonlinearProblem(
-        model.u, model.residual, model.jacobian, model.bcs,
+        model.state, model.residual, model.jacobian, model.bcs,
         energy=model.energy if model.conservative else None,
         set_load=model.load.set, inadmissible=model.inadmissible)
     report = newton.solve(problem, scene.solver.petsc, steps=scene.solver.steps,
-                          max_cutbacks=scene.solver.max_cutbacks, linear_kind=scene.solver.linear,
+                          max_cutbacks=scene.solver.max_cutbacks,
+                          linear_kind="direct" if scene.discretization.formulation == "mixed" else scene.solver.linear,
                           near_nullspace=lambda: rigid_body_modes(model.V))
     result = StaticResult(model, report)
     if report.converged:
+        model.sync_displacement()
         result.energy = model.mesh.comm.allreduce(fem.assemble_scalar(fem.form(model.energy)), op=MPI.SUM)
         result.max_displacement = max_norm(model.u)
         result.probes = probes.evaluate(model.u, scene.output.probes)
@@ -124,6 +129,10 @@ def run(scene: Scene, out, echo: bool = False) -> dict:
     from ..errors import SolveError
     result = solve_static(scene)
     summary = write_static_outputs(result, out)
+    if echo and result.model.mesh.comm.rank == 0:
+        import sys
+        for w in summary["warnings"]:
+            print(f"fem-forms: warning: {w}", file=sys.stderr)
     if echo and result.model.mesh.comm.rank == 0 and summary["converged"]:
         print(f"{scene.title}: {summary['dofs']} dofs, {summary['newton_iterations']} Newton iterations "
               f"in {summary['load_steps']} load steps, max |u| = {summary['max_displacement']:.6g} m, "
