@@ -171,6 +171,7 @@ class MaterialSpec:
 class Discretization:
     degree: int = 2
     quadrature_degree: int | None = None
+    formulation: str = "displacement"      # or "mixed": Taylor-Hood P2 displacement / P1 pressure
 
     @property
     def quadrature(self) -> int:
@@ -378,7 +379,14 @@ def _parse_scene(data: dict, base_dir: Path, source: Path | None) -> Scene:
     d = t.table("discretization")
     sc.discretization = Discretization(
         degree=d.number("degree", 2, integer=True),
-        quadrature_degree=d.number("quadrature_degree", None, integer=True, positive=True))
+        quadrature_degree=d.number("quadrature_degree", None, integer=True, positive=True),
+        formulation=d.string("formulation", "displacement", choices=("displacement", "mixed")))
+    if sc.discretization.formulation == "mixed":
+        if sc.discretization.degree != 2:
+            raise InputError(f"discretization.degree = {sc.discretization.degree}: the mixed formulation "
+                             "is Taylor-Hood, degree 2 displacement with degree 1 pressure")
+        if sc.analysis != "static":
+            raise InputError(f"discretization.formulation = 'mixed': available for analysis = 'static' only")
     if sc.discretization.degree not in (1, 2):
         raise InputError(f"discretization.degree = {sc.discretization.degree}: unsupported element "
                          "(Lagrange degree 1 or 2)")
@@ -443,7 +451,8 @@ def _parse_scene(data: dict, base_dir: Path, source: Path | None) -> Scene:
 
     for name in ("modal", "sound"):
         if t.has(name) and sc.analysis != "modal":
-            raise InputError(f"{name}: only for analysis = 'modal' (this scene's analysis is {sc.analysis!r})")
+            raise InputError(f"{name}: only for analysis = 'modal' "
+                             f"(this scene's analysis is {sc.analysis!r})")
     sc.modal = _parse_modal(t.table("modal"))
     sc.sound = _parse_sound(t.table("sound")) if t.has("sound") else None
     if sc.analysis == "modal" and sc.material.rho <= 0:
