@@ -157,6 +157,34 @@ class SNESDriver:
         r.destroy()
         return n
 
+    def _finite_residual(self, x: PETSc.Vec) -> bool:
+        r = self.b.duplicate()
+        self._residual(None, x, r)
+        ok = bool(np.isfinite(r.norm()))
+        r.destroy()
+        return ok
+
+    def _linear_extension(self, x_old: PETSc.Vec) -> None:
+        """Moving only the constrained dofs inverted some cells (thin or sliver cells at the boundary):
+        start instead from one linear step from the last state, which carries the Dirichlet increment
+        smoothly into the interior (x = x_old - K^-1 R(x_old), R's constrained rows x_old - g)."""
+        x_old = x_old.copy()
+        r = self.b.duplicate()
+        self._residual(None, x_old, r)
+        self._jacobian(None, x_old, self.A, self.A)
+        ksp = PETSc.KSP().create(self.comm)
+        ksp.setOperators(self.A)
+        ksp.setType("preonly")
+        ksp.getPC().setType("lu")
+        ksp.getPC().setFactorSolverType("mumps")
+        dx = r.duplicate()
+        ksp.solve(r, dx)
+        x_old.axpy(-1.0, dx)
+        x_old.copy(self.x)
+        self.x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        for obj in (ksp, dx, r, x_old):
+            obj.destroy()
+
     def roundoff_floor(self) -> float:
         """The residual norm round-off allows at the current state: 1e3 x machine epsilon x |K|_inf
         x |u|_inf x sqrt(n). Stiff (nearly incompressible) materials make it reach 1e-6 relative."""
@@ -168,10 +196,14 @@ class SNESDriver:
         """One SNES solve from the current u at the current load."""
         self._history: list[float] = []
         self.p.u.vector.copy(self.x)
+        x_old = self.x.copy()
         # start from a state that satisfies the (current) Dirichlet values, so Newton directions are
         # zero on constrained dofs and descend the energy the line search measures
         fpetsc.set_bc(self.x, self.p.bcs)
         self.x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        if not self._finite_residual(self.x):
+            self._linear_extension(x_old)
+        x_old.destroy()
         self.snes.solve(None, self.x)
         reason = self.snes.getConvergedReason()
         self._set_state(self.x)
