@@ -35,16 +35,45 @@ def _parser() -> argparse.ArgumentParser:
                          epilog="Trailing -key value pairs are passed to PETSc (e.g. -snes_monitor).")
     run.add_argument("scene", help="scene file (TOML)")
     run.add_argument("--out", required=True, help="output folder (created)")
+    run.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                     help="override a scene key, e.g. --set mesh.cells=[8,1,1] (TOML value)")
+    run.add_argument("--no-adapt", action="store_true",
+                     help="solve the discretization as given, ignoring [discretization] tolerance")
     run.add_argument("-v", "--verbose", action="store_true", help="show FFCx/UFL compilation logs")
+    study = sub.add_parser("study", help="solve a scene on a ladder of meshes and degrees; error vs cost")
+    study.add_argument("scene", help="scene file (TOML); its mesh is the coarsest of the ladder")
+    study.add_argument("--out", required=True, help="output folder (created)")
+    study.add_argument("--degrees", type=int, nargs="+", default=[1, 2], help="element degrees (1, 2)")
+    study.add_argument("--refine", type=int, default=3, help="number of mesh levels (each refined by 2)")
+    study.add_argument("--ranks", type=int, default=1, help="MPI ranks per run")
+    study.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override a scene key")
+    study.add_argument("-v", "--verbose", action="store_true", help="show FFCx/UFL compilation logs")
     return p
 
 
 def _run(args, petsc: dict) -> int:
-    from .scene import Scene
+    from .scene import Scene, parse_assignment
     from .analyses import run_analysis
 
-    scene = Scene.from_file(args.scene)
+    overrides = dict(parse_assignment(a) for a in args.set)
+    if args.command == "study":
+        from .study import run_study
+        if petsc:
+            raise InputError("study: PETSc options go into the scene ([solver] petsc) or --set")
+        run_study(Path(args.scene), Path(args.out), args.degrees, args.refine, overrides, args.ranks)
+        return 0
+    scene = Scene.from_file(args.scene, overrides)
     scene.solver.petsc.update(petsc)
+    if scene.discretization.tolerance is not None and not args.no_adapt:
+        from mpi4py import MPI
+        from .study import solve_to_tolerance
+        if petsc or MPI.COMM_WORLD.size > 1:
+            raise InputError("discretization.tolerance: run serially, with PETSc options in the scene")
+        s = solve_to_tolerance(Path(args.scene), Path(args.out), scene.discretization.tolerance, overrides)
+        print(f"{scene.title}: P{s['chosen']['degree']} at mesh level {s['chosen']['mesh_level']} meets "
+              f"tolerance {s['tolerance']} (estimated error {s['error_estimate']:.2e}), {s['dofs']} dofs "
+              f"-> {args.out}")
+        return 0
     run_analysis(scene, Path(args.out), echo=True)
     return 0
 

@@ -106,6 +106,29 @@ def check_vector(v: Any, key: str, length: int | None = 3, *, positive=False, in
     return [check_number(x, f"{key}[{i}]", positive=positive, integer=integer) for i, x in enumerate(v)]
 
 
+def set_key(data: dict, dotted: str, value: Any) -> None:
+    """data["a"]["b"] = value for dotted = "a.b" (tables are created as needed)."""
+    node = data
+    parts = dotted.split(".")
+    for k in parts[:-1]:
+        node = node.setdefault(k, {})
+        if not isinstance(node, dict):
+            raise InputError(f"--set {dotted}: {k!r} is not a table")
+    node[parts[-1]] = value
+
+
+def parse_assignment(text: str) -> tuple[str, Any]:
+    """'mesh.cells=[8, 1, 1]' -> ("mesh.cells", [8, 1, 1]); the value is read as a TOML value."""
+    key, sep, raw = text.partition("=")
+    if not sep or not key.strip():
+        raise InputError(f"--set {text!r}: must be KEY=VALUE, e.g. --set discretization.degree=1")
+    try:
+        value = tomllib.loads(f"v = {raw.strip()}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = raw.strip()                          # a bare word: a string
+    return key.strip(), value
+
+
 # ---------------------------------------------------------------------------------------------
 @dataclass
 class Selector:
@@ -172,6 +195,7 @@ class Discretization:
     degree: int = 2
     quadrature_degree: int | None = None
     formulation: str = "displacement"      # or "mixed": Taylor-Hood P2 displacement / P1 pressure
+    tolerance: float | None = None         # accuracy on request: pick the cheapest degree/mesh meeting it
 
     @property
     def quadrature(self) -> int:
@@ -262,7 +286,8 @@ class Scene:
     source: Path | None = None
 
     @classmethod
-    def from_file(cls, path: str | Path) -> "Scene":
+    def from_file(cls, path: str | Path, overrides: dict | None = None) -> "Scene":
+        """Read and validate a TOML scene; `overrides` {"mesh.cells": [8, 1, 1], ...} replace keys first."""
         path = Path(path)
         if not path.is_file():
             raise InputError(f"scene file {str(path)!r}: not found")
@@ -270,6 +295,8 @@ class Scene:
             data = tomllib.loads(path.read_text())
         except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
             raise InputError(f"scene file {str(path)!r}: not valid TOML ({e})") from None
+        for key, value in (overrides or {}).items():
+            set_key(data, key, value)
         return cls.from_dict(data, base_dir=path.parent, source=path)
 
     @classmethod
@@ -380,7 +407,10 @@ def _parse_scene(data: dict, base_dir: Path, source: Path | None) -> Scene:
     sc.discretization = Discretization(
         degree=d.number("degree", 2, integer=True),
         quadrature_degree=d.number("quadrature_degree", None, integer=True, positive=True),
-        formulation=d.string("formulation", "displacement", choices=("displacement", "mixed")))
+        formulation=d.string("formulation", "displacement", choices=("displacement", "mixed")),
+        tolerance=d.number("tolerance", None, positive=True))
+    if sc.discretization.tolerance is not None and sc.discretization.tolerance >= 1:
+        raise InputError(f"discretization.tolerance = {sc.discretization.tolerance}: a relative error, below 1")
     if sc.discretization.formulation == "mixed":
         if sc.discretization.degree != 2:
             raise InputError(f"discretization.degree = {sc.discretization.degree}: the mixed formulation "

@@ -1,0 +1,239 @@
+"""Speed against accuracy, measured: solve a scene on a ladder of meshes and element degrees, estimate
+each run's error on the scene's key numbers (probe displacements, rest positions or frequencies)
+against the finest run and by Richardson extrapolation, and show error against wall time.
+
+Each run is a separate `fem-forms run --set ...` process, so its time and peak memory are its own.
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .errors import InputError, SolveError
+from .scene import Scene
+
+
+@dataclass
+class Run:
+    degree: int
+    level: int               # 0 = the scene's own mesh (coarsest); each level refines by 2
+    overrides: dict
+    folder: Path
+    dofs: int = 0
+    wall: float = math.nan
+    memory_mb: float = math.nan
+    values: np.ndarray | None = None
+    error_finest: float = math.nan
+    error_richardson: float = math.nan
+    ok: bool = False
+
+
+def key_numbers(summary: dict) -> np.ndarray | None:
+    """The numbers a study compares: modal frequencies, inverse rest positions or static probes."""
+    if "frequencies_hz" in summary:
+        return np.asarray(summary["frequencies_hz"], dtype=float)
+    probes = summary.get("probes") or {}
+    vals = []
+    for name in sorted(probes):
+        p = probes[name]
+        vals.extend(p.get("rest_position") or p.get("displacement") or [])
+    return np.asarray(vals, dtype=float) if vals else None
+
+
+def mesh_level(scene: Scene, level: int) -> dict:
+    """Scene overrides that refine the mesh by 2^level (box cells doubled, gmsh h halved)."""
+    m = scene.mesh
+    if level == 0:
+        return {}
+    if m.generator == "box":
+        return {"mesh.cells": [c * 2**level for c in m.cells]}
+    if m.generator in ("cylinder", "sphere", "revolve"):
+        return {"mesh.h": m.h / 2**level}
+    raise InputError("study: a mesh file cannot be refined here; use --refine 1 to vary the degree only")
+
+
+def _run_one(scene_path: Path, run: Run, ranks: int) -> None:
+    cmd = [sys.executable, "-m", "fem_forms", "run", str(scene_path), "--out", str(run.folder), "--no-adapt"]
+    for k, v in run.overrides.items():
+        cmd += ["--set", f"{k}={json.dumps(v)}"]
+    env = dict(os.environ)
+    if ranks > 1:
+        env.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1")
+        cmd = [shutil.which("mpirun") or "mpirun", "-n", str(ranks), "--bind-to", "none"] + cmd
+    p = subprocess.run(cmd, capture_output=True, text=True, env=env)
+    res = run.folder / "results.json"
+    if p.returncode in (0, 3) and res.exists():
+        s = json.loads(res.read_text())
+        run.dofs = s.get("dofs", 0)
+        run.wall = s.get("wall_time_s", math.nan)
+        run.memory_mb = s.get("peak_memory_mb", math.nan)
+        run.values = key_numbers(s)
+        run.ok = p.returncode == 0 and run.values is not None
+    elif p.returncode == 2:
+        raise InputError(p.stderr.strip().splitlines()[-1].replace("fem-forms: error: ", ""))
+
+
+def richardson(values: list[np.ndarray]) -> np.ndarray | None:
+    """Extrapolated limit from the three finest values of one degree (h, h/2, h/4 order): observed
+    order p = log2(|Q1 - Q2| / |Q2 - Q3|), limit Q3 + (Q3 - Q2) / (2^p - 1). None if not convergent."""
+    if len(values) < 3:
+        return None
+    q1, q2, q3 = values[-3:]
+    d12, d23 = np.linalg.norm(q1 - q2), np.linalg.norm(q2 - q3)
+    if d23 == 0:
+        return q3
+    ratio = d12 / d23
+    if not np.isfinite(ratio) or ratio <= 1.0:
+        return None
+    p = math.log2(ratio)
+    return q3 + (q3 - q2) / (2**p - 1)
+
+
+def study(scene_path: Path, out: Path, degrees: list[int], refine: int, overrides: dict | None = None,
+          ranks: int = 1, echo: bool = True) -> list[Run]:
+    """Run the ladder (the scene's mesh, then refined by 2 per level) and fill in error estimates."""
+    overrides = dict(overrides or {})
+    scene = Scene.from_file(scene_path, overrides)           # validates once, up front
+    if any(d not in (1, 2) for d in degrees):
+        raise InputError(f"study --degrees {degrees}: element degrees 1 and 2 are available")
+    if refine < 1:
+        raise InputError(f"study --refine {refine}: needs at least 1 level")
+    runs = []
+    for degree in sorted(set(degrees)):
+        # a warm-up run on the coarsest mesh compiles this degree's forms, so no timed run pays JIT
+        _run_one(scene_path, Run(degree, 0, {**overrides, "discretization.degree": degree},
+                                 out / f"P{degree}_warmup"), ranks)
+        shutil.rmtree(out / f"P{degree}_warmup", ignore_errors=True)
+        for level in range(refine):
+            o = {**overrides, "discretization.degree": degree, **mesh_level(scene, level)}
+            run = Run(degree, level, o, out / f"P{degree}_level{level}")
+            _run_one(scene_path, run, ranks)
+            if echo:
+                print(f"  degree {degree}, level {level}: {run.dofs} dofs, {run.wall:.2f} s"
+                      + ("" if run.ok else " (failed)"), flush=True)
+            runs.append(run)
+    good = [r for r in runs if r.ok]
+    if not good:
+        raise SolveError("study: no run of the ladder converged")
+    finest = max(good, key=lambda r: (r.degree, r.level))
+    limits = []
+    for degree in sorted(set(degrees)):
+        series = [r.values for r in sorted((r for r in good if r.degree == degree), key=lambda r: r.level)]
+        lim = richardson(series)
+        if lim is not None:
+            limits.append((degree, lim))
+    reference = limits[-1][1] if limits else None               # highest degree's extrapolation
+    scale = max(np.linalg.norm(finest.values), 1e-300)
+    for r in good:
+        r.error_finest = np.linalg.norm(r.values - finest.values) / scale
+        if reference is not None:
+            r.error_richardson = np.linalg.norm(r.values - reference) / scale
+    return runs
+
+
+def write_report(runs: list[Run], out: Path, title: str) -> str:
+    """Markdown table, CSV and a PNG of error against wall time with the Pareto front."""
+    rows = ["| degree | mesh level | dofs | error vs finest | error vs Richardson | wall time [s] | peak memory [MB] |",
+            "|---|---|---|---|---|---|---|"]
+    csv = ["degree,level,dofs,error_finest,error_richardson,wall_time_s,peak_memory_mb,converged"]
+    for r in runs:
+        rows.append(f"| P{r.degree} | {r.level} | {r.dofs} | {r.error_finest:.2e} | {r.error_richardson:.2e} | "
+                    f"{r.wall:.2f} | {r.memory_mb:.0f} |" if r.ok else
+                    f"| P{r.degree} | {r.level} | {r.dofs} | failed | | | |")
+        csv.append(f"{r.degree},{r.level},{r.dofs},{r.error_finest},{r.error_richardson},{r.wall},"
+                   f"{r.memory_mb},{int(r.ok)}")
+    table = "\n".join(rows) + "\n"
+    (out / "study.md").write_text(f"# {title}\n\n" + table)
+    (out / "study.csv").write_text("\n".join(csv) + "\n")
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(7, 5))
+    good = [r for r in runs if r.ok]
+    for degree, marker in ((1, "o"), (2, "s")):
+        pts = [(r.wall, r.error_richardson if np.isfinite(r.error_richardson) else r.error_finest, r.dofs)
+               for r in good if r.degree == degree]
+        pts = [p for p in pts if p[1] > 0]
+        if pts:
+            ax.loglog([p[0] for p in pts], [p[1] for p in pts], marker=marker, label=f"P{degree}")
+            for t, e, n in pts:
+                ax.annotate(f"{n}", (t, e), textcoords="offset points", xytext=(4, 4), fontsize=7)
+    front = pareto(good)
+    if front:
+        ax.loglog([r.wall for r in front], [_err(r) for r in front], "k--", lw=0.8, label="Pareto front")
+    ax.set_xlabel("wall time [s]")
+    ax.set_ylabel("relative error of the key numbers")
+    ax.set_title(title)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(out / "study.png", dpi=110)
+    plt.close(fig)
+    return table
+
+
+def _err(r: Run) -> float:
+    return r.error_richardson if np.isfinite(r.error_richardson) else r.error_finest
+
+
+def pareto(runs: list[Run]) -> list[Run]:
+    """Runs no other run beats in both time and error, by increasing time."""
+    front, best = [], math.inf
+    for r in sorted(runs, key=lambda r: r.wall):
+        e = _err(r)
+        if e > 0 and e < best:
+            front.append(r)
+            best = e
+    return front
+
+
+def run_study(scene_path: Path, out: Path, degrees: list[int], refine: int, overrides: dict,
+              ranks: int = 1) -> list[Run]:
+    from mpi4py import MPI
+    if MPI.COMM_WORLD.size > 1:
+        raise InputError("study: run it serially; use --ranks N for parallel runs of the ladder")
+    out.mkdir(parents=True, exist_ok=True)
+    title = Scene.from_file(scene_path, overrides).title
+    print(f"study of {title}: degrees {degrees}, {refine} mesh levels")
+    runs = study(scene_path, out, degrees, refine, overrides, ranks)
+    print(write_report(runs, out, title))
+    print(f"-> {out}/study.md, study.csv, study.png")
+    return runs
+
+
+def cheapest_meeting(runs: list[Run], tolerance: float) -> Run | None:
+    """The fastest converged run whose estimated error is within the tolerance."""
+    ok = [r for r in runs if r.ok and np.isfinite(_err(r)) and _err(r) <= tolerance]
+    return min(ok, key=lambda r: r.wall) if ok else None
+
+
+def solve_to_tolerance(scene_path: Path, out: Path, tolerance: float, overrides: dict,
+                       degrees=(1, 2), refine: int = 3) -> dict:
+    """Accuracy on request: run the ladder, pick the cheapest run whose estimated error meets the
+    tolerance, and make its results the answer in `out` (results.json gains "error_estimate")."""
+    from .output import write_json_atomic
+    runs = study(scene_path, out / "study", list(degrees), refine, overrides, echo=False)
+    write_report(runs, out / "study", "accuracy on request")
+    best = cheapest_meeting(runs, tolerance)
+    if best is None:
+        errs = [_err(r) for r in runs if r.ok and np.isfinite(_err(r))]
+        raise SolveError(f"discretization.tolerance = {tolerance}: no run of the ladder meets it (best estimate "
+                         f"{min(errs) if errs else float('nan'):.2e}; refine the scene's mesh)")
+    for f in best.folder.iterdir():
+        if f.name != "results.json":
+            shutil.copy2(f, out / f.name)
+    summary = json.loads((best.folder / "results.json").read_text())
+    summary["error_estimate"] = _err(best)
+    summary["tolerance"] = tolerance
+    summary["chosen"] = {"degree": best.degree, "mesh_level": best.level, "overrides": best.overrides}
+    summary["study"] = "study/study.md"
+    write_json_atomic(out / "results.json", summary)
+    return summary
