@@ -16,7 +16,6 @@ from pathlib import Path
 from mpi4py import MPI
 
 import fem_forms as ff
-from fem_forms.analyses.modal import solve_modal, write_modal_outputs
 
 here = Path(__file__).parent
 out = Path(sys.argv[1]) if len(sys.argv) > 1 else Path("out/loaded_vs_unloaded_modes")
@@ -28,7 +27,7 @@ summaries = {}
 for name, prestress in (("unloaded", False), ("loaded", True)):
     data["modal"] = {"count": 6, "prestress": prestress}
     scene = ff.Scene.from_dict(data, base_dir=here / "scenes")
-    summaries[name] = write_modal_outputs(solve_modal(scene), out / name)
+    summaries[name] = ff.write_modal_outputs(ff.solve_modal(scene), out / name)
 
 if MPI.COMM_WORLD.rank == 0:
     un, lo = summaries["unloaded"], summaries["loaded"]

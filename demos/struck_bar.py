@@ -16,15 +16,14 @@ from pathlib import Path
 from mpi4py import MPI
 
 import fem_forms as ff
-from fem_forms.analyses.modal import solve_modal, write_modal_outputs
 
 here = Path(__file__).parent
 out = Path(sys.argv[1]) if len(sys.argv) > 1 else Path("out/struck_bar")
 
 ff.quiet_jit()
 scene = ff.Scene.from_file(here / "scenes" / "struck_bar.toml")
-result = solve_modal(scene)
-summary = write_modal_outputs(result, out)
+result = ff.solve_modal(scene)
+summary = ff.write_modal_outputs(result, out)
 
 # Euler-Bernoulli, free-free, bending through the 10 mm thickness
 L, t, E, rho = scene.mesh.size[0], scene.mesh.size[2], scene.material.E, scene.material.rho

@@ -13,8 +13,10 @@ from .scene import Scene
 from .materials import (LinearElastic, MooneyRivlin, NeoHookean, StVenantKirchhoff, UserMaterial,
                         cauchy_stress, first_piola_kirchhoff, make_material, von_mises)
 from .analyses.static import StaticResult, solve_static, write_static_outputs
+from .analyses.modal import ModalResult, solve_modal, write_modal_outputs
 
 __all__ = ["quiet_jit", "InputError", "SolveError", "Scene", "LinearElastic", "StVenantKirchhoff", "NeoHookean",
            "MooneyRivlin", "UserMaterial", "make_material", "first_piola_kirchhoff", "cauchy_stress",
-           "von_mises", "StaticResult", "solve_static", "write_static_outputs"]
+           "von_mises", "StaticResult", "solve_static", "write_static_outputs", "ModalResult",
+           "solve_modal", "write_modal_outputs"]
 __version__ = "0.1.0"

@@ -41,6 +41,7 @@ class StepRecord:
     reason: str
     accepted: bool
     note: str = ""            # why an SNES-converged step was still rejected
+    krylov_iterations: int = 0
 
 
 @dataclass
@@ -58,6 +59,10 @@ class SolveReport:
     @property
     def load_steps(self) -> int:
         return sum(1 for s in self.steps if s.accepted)
+
+    @property
+    def krylov_iterations(self) -> int:
+        return sum(s.krylov_iterations for s in self.steps)
 
 
 class SNESDriver:
@@ -208,7 +213,8 @@ class SNESDriver:
         reason = self.snes.getConvergedReason()
         self._set_state(self.x)
         return StepRecord(0.0, self.snes.getIterationNumber(), self._history,
-                          _REASONS.get(reason, str(reason)), reason > 0)
+                          _REASONS.get(reason, str(reason)), reason > 0,
+                          krylov_iterations=self.snes.getLinearSolveIterations())
 
 
 def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1,

@@ -44,6 +44,7 @@ class StaticResult:
             "wall_time_s": self.wall_time_s,
             "assembly_time_s": r.assembly_time,
             "linear_solver": r.linear_solver,
+            "krylov_iterations": r.krylov_iterations,
             "element": ("P2-P1 (Taylor-Hood) " if self.model.scene.discretization.formulation == "mixed" else
                         f"P{self.model.scene.discretization.degree} ") + self.model.mesh.topology.cell_name(),
             "quadrature_degree": self.model.scene.discretization.quadrature,

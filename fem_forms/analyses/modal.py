@@ -1,0 +1,348 @@
+"""Modal analysis: natural frequencies and mode shapes from K phi = omega^2 M phi.
+
+K is the tangent of the scene's energy (model.jacobian, i.e. ufl.derivative twice) either at rest
+(u = 0, loads off: linearised elasticity) or, with `[modal] prestress = true`, at the static
+equilibrium under the scene's loads, found by the static analysis. M is the consistent mass
+rho u.v, or its diagonal (HRZ) lumping. Supported dofs map to infinite eigenvalues (K diagonal 1,
+M diagonal 0). Parts without supports are solved about a small negative shift; their rigid-body
+modes (omega^2 ~ 0) are counted and left out of the reported modes.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import ufl
+from dolfinx import fem
+from dolfinx.fem import petsc as fpetsc
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from .. import eigen, linear, probes
+from ..errors import InputError, SolveError
+from ..meshes import bounding_box
+from ..model import Model, build_model
+from ..scene import Scene
+from .static import StaticResult, max_norm, solve_static
+
+RIGID_EXTRA = 6          # modes requested beyond `count` when rigid-body modes may be present
+SHIFT_FRACTION = 1e-2    # unsupported parts: target = -SHIFT_FRACTION x (estimated first omega^2)
+RIGID_FRACTION = 1e-3    # |omega^2| < RIGID_FRACTION x |that target| counts as rigid-body motion
+# "auto" keeps MUMPS far longer than a Newton step does: one factorisation serves ~50 solves, and
+# it beat CG+GAMG 7-38x at every size to 141k dofs (benchmarks/modal_scaling.md)
+DIRECT_UP_TO_DOFS = 500_000
+
+
+@dataclass
+class Operators:
+    """Assembled stiffness and mass with the supports applied, and what the mode post-processing needs."""
+    K: PETSc.Mat
+    M: PETSc.Mat
+    translations: list             # M r_d for unit translations r_x, r_y, r_z (full mass, no supports)
+    total_mass: float
+    omega2_scale: float            # rough estimate of the first elastic omega^2 (sets shift, threshold)
+
+    def destroy(self) -> None:
+        for obj in (self.K, self.M, *self.translations):
+            obj.destroy()
+
+
+@dataclass
+class ModalResult:
+    """What a modal solve found: the model, the elastic modes and the numbers results.json reports."""
+    model: Model
+    omega2: np.ndarray             # elastic eigenvalues [rad^2/s^2], ascending
+    modes: list                    # one fem.Function per elastic mode, mass-normalised
+    rigid_modes: int
+    total_mass: float
+    effective_mass_fraction: np.ndarray | None   # (modes, 3), only when the part is supported
+    static: StaticResult | None
+    target: float
+    linear_solver: str
+    converged: int
+    iterations: int
+    eigensolve_time_s: float = 0.0     # SLEPc setup + solve (factorisation included)
+    wall_time_s: float = 0.0
+
+    @property
+    def frequencies_hz(self) -> np.ndarray:
+        """f = omega / 2 pi; a negative omega^2 (unstable prestressed state) gives a negative f."""
+        return np.sign(self.omega2) * np.sqrt(np.abs(self.omega2)) / (2 * math.pi)
+
+    def summary(self) -> dict:
+        scene, m = self.model.scene, self.model
+        emf = self.effective_mass_fraction
+        out = {
+            "analysis": "modal",
+            "title": scene.title,
+            "dofs": m.dofs,
+            "element": f"P{scene.discretization.degree} {m.mesh.topology.cell_name()}",
+            "quadrature_degree": scene.discretization.quadrature,
+            "mpi_ranks": m.mesh.comm.size,
+            "mass": scene.modal.mass,
+            "prestress": scene.modal.prestress,
+            "frequencies_hz": self.frequencies_hz.tolist(),
+            "omega2": self.omega2.tolist(),
+            "rigid_modes": self.rigid_modes,
+            "unstable_modes": int(np.sum(self.omega2 < 0)),
+            "total_mass": self.total_mass,
+            "effective_mass_fraction": None if emf is None else emf.tolist(),
+            "effective_mass_fraction_sum": None if emf is None else emf.sum(axis=0).tolist(),
+            "eigensolver": {"type": "krylovschur", "st": "sinvert", "target": self.target,
+                            "inner": "mumps" if self.linear_solver == "direct" else "cg+gamg",
+                            "converged": self.converged, "iterations": self.iterations,
+                            "time_s": self.eigensolve_time_s},
+            "wall_time_s": self.wall_time_s,
+        }
+        if self.static is not None:
+            s = self.static.summary()
+            out["static"] = {k: s[k] for k in ("newton_iterations", "load_steps", "residual_norm",
+                                                "max_displacement")}
+        return out
+
+
+def _owned_constrained(bcs: list) -> np.ndarray:
+    """Owned, unrolled local indices of every supported dof."""
+    idx = [bc.dof_indices()[0][: bc.dof_indices()[1]] for bc in bcs]
+    return np.unique(np.concatenate(idx)) if idx else np.empty(0, dtype=np.int32)
+
+
+def assemble_operators(model: Model, kind: str = "direct", lumped: bool = False) -> Operators:
+    """K (tangent at model.u, supported rows/columns -> diagonal 1) and M (-> diagonal 0)."""
+    mesh, V = model.mesh, model.V
+    mat_type = "baij" if kind == "direct" else "aij"     # GAMG rejects BAIJ
+    a = fem.form(model.jacobian)
+    K = fpetsc.create_matrix(a, mat_type)
+    fpetsc.assemble_matrix(K, a, bcs=model.bcs, diagonal=1.0)
+    K.assemble()
+
+    rho = fem.Constant(mesh, PETSc.ScalarType(model.scene.material.rho))
+    du, v = ufl.TrialFunction(V), ufl.TestFunction(V)
+    m = fem.form(rho * ufl.inner(du, v) * model.dx)
+    e = fem.Constant(mesh, PETSc.ScalarType((0.0, 0.0, 0.0)))
+    L = fem.form(rho * ufl.inner(e, v) * model.dx)
+    translations = []
+    for d in range(3):                                   # M r_d, exactly, as a linear form
+        e.value = np.eye(3)[d]
+        b = fpetsc.assemble_vector(L)
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        translations.append(b)
+    total_mass = translations[0].sum()                   # partition of unity: sum of M r_x = rho V
+
+    constrained = _owned_constrained(model.bcs)
+    M = fpetsc.create_matrix(m, mat_type)                # same sparsity as K: K - sigma M in place
+    if not lumped:
+        fpetsc.assemble_matrix(M, m, bcs=model.bcs, diagonal=0.0)
+        M.assemble()
+    else:
+        # HRZ lumping: the consistent diagonal scaled to keep the total mass. It equals row-sum
+        # lumping for P1 and, unlike row sums (negative at P2 tetrahedron vertices), stays positive.
+        fpetsc.assemble_matrix(M, m)
+        M.assemble()
+        diag = M.getDiagonal()
+        diag.scale(3.0 * total_mass / diag.sum())
+        diag.array[constrained] = 0.0
+        M.zeroEntries()
+        M.setDiagonal(diag)
+        diag.destroy()
+
+    # omega^2 scale: Rayleigh quotient of a uniform shear field (any material, no bulk modulus),
+    # times the squared slenderness of the bounding box (beam/plate bending goes as (t / L)^2).
+    # With supports the field is cut to zero at the supported dofs, which overestimates: this only
+    # sets the free-free shift and the rigid-mode threshold, far below the first elastic mode.
+    lo, hi = bounding_box(mesh)
+    c = 0.5 * (lo + hi)
+    shear = fem.Function(V)
+    shear.interpolate(lambda x: np.vstack([x[1] - c[1] + x[2] - c[2], x[0] - c[0] + x[2] - c[2],
+                                           x[0] - c[0] + x[1] - c[1]]))
+    r = shear.vector.copy()
+    r.array[constrained] = 0.0
+    Kr, Mr = r.duplicate(), r.duplicate()
+    K.mult(r, Kr)
+    M.mult(r, Mr)
+    ext = hi - lo
+    q = abs(r.dot(Kr)) / r.dot(Mr) * (ext.min() / ext.max()) ** 2
+    for obj in (r, Kr, Mr):
+        obj.destroy()
+    return Operators(K, M, translations, total_mass, q)
+
+
+def _strike_point_check(model: Model, scene: Scene) -> None:
+    if scene.sound is None:
+        return
+    try:
+        probes.evaluate(model.u, {"strike": scene.sound.point})
+    except InputError:
+        raise InputError(f"sound.strike.point = {scene.sound.point}: point lies outside the mesh") from None
+
+
+def _sign_reference(V: fem.FunctionSpace) -> fem.Function:
+    """A fixed, generic field: each mode's sign is chosen to make its overlap with it positive, so
+    runs on any number of ranks give the same signs (within repeated eigenvalues the basis of the
+    eigenspace remains the solver's choice)."""
+    w = fem.Function(V)
+    w.interpolate(lambda x: np.vstack([np.sin(12.9898 * x[0] + 78.233 * x[1] + 37.719 * x[2] + k)
+                                       for k in (0.3, 1.7, 2.9)]))
+    return w
+
+
+def solve_modal(scene: Scene, material=None, model: Model | None = None) -> ModalResult:
+    """The scene's `[modal] count` lowest elastic modes. Raises InputError for bad input and
+    SolveError when the prestress solve or the eigensolver fails."""
+    t0 = time.perf_counter()
+    spec = scene.modal
+    model = model or build_model(scene, material)
+    _strike_point_check(model, scene)
+    static = None
+    if spec.prestress:
+        static = solve_static(scene, material, model=model)
+        if not static.report.converged:
+            raise SolveError(f"{scene.title}: prestress (static) solve did not converge: "
+                             f"{static.report.message}")
+    else:
+        model.load.set(0.0)                     # at rest: follower loads add no load stiffness
+        model.u.x.array[:] = 0.0
+    kind = scene.solver.linear
+    if kind == "auto":
+        kind = "direct" if model.dofs <= DIRECT_UP_TO_DOFS else "iterative"
+    ops = assemble_operators(model, kind, lumped=spec.mass == "lumped")
+    symmetric = model.conservative or not spec.prestress
+    nns = linear.rigid_body_modes(model.V) if kind == "iterative" else None
+
+    free_target = -SHIFT_FRACTION * ops.omega2_scale
+    rigid_below = RIGID_FRACTION * abs(free_target)
+    # supported: target 0. If the supports leave rigid-body motion, K is singular: the solve then
+    # fails or finds too few elastic modes, and is repeated as for an unsupported part.
+    attempts = ([(0.0, spec.count)] if scene.fix else []) + [(free_target, spec.count + RIGID_EXTRA)]
+    for i, (target, nev) in enumerate(attempts):
+        last = i == len(attempts) - 1
+        try:
+            res = eigen.eigensolve(ops.K, ops.M, nev, target, kind, symmetric=symmetric,
+                                   options=scene.solver.petsc, near_nullspace=nns)
+        except (PETSc.Error, SolveError) as e:
+            if last or isinstance(e, SolveError):     # retry only a failed factorisation
+                ops.destroy()
+                raise SolveError(f"{scene.title}: modal solve failed: {e}") from None
+            continue
+        rigid = np.abs(res.values) < rigid_below
+        elastic = np.flatnonzero(~rigid)[: spec.count]
+        if len(elastic) == spec.count:
+            break
+        for vec in res.vectors:
+            vec.destroy()
+        if last:
+            ops.destroy()
+            raise SolveError(f"{scene.title}: only {len(elastic)} elastic modes among the {res.converged} "
+                             f"converged ({int(rigid.sum())} rigid-body modes); ask for fewer modes")
+
+    w = _sign_reference(model.V)
+    modes, gammas = [], []
+    for k, i in enumerate(elastic):
+        vec = res.vectors[i]
+        if vec.dot(w.vector) < 0:
+            vec.scale(-1.0)
+        f = fem.Function(model.V, name=f"mode_{k + 1:02d}")
+        vec.copy(f.vector)
+        f.x.scatter_forward()
+        modes.append(f)
+        gammas.append([vec.dot(b) for b in ops.translations])   # participation phi^T M r_d
+    for vec in res.vectors:
+        vec.destroy()
+    emf = np.asarray(gammas) ** 2 / ops.total_mass if scene.fix else None
+    result = ModalResult(model, res.values[elastic], modes, int(rigid.sum()), ops.total_mass, emf,
+                         static, target, kind, res.converged, res.iterations, res.solve_time)
+    ops.destroy()
+    result.wall_time_s = time.perf_counter() - t0
+    return result
+
+
+def modes_picture(path: Path, result: ModalResult, count: int = 6) -> None:
+    """PNG: small multiples of the first modes, each boundary deformed by its scaled mode shape."""
+    from .. import output
+    surfaces = [output.boundary_surface(f) for f in result.modes[:count]]   # collective
+    # about a loaded equilibrium the modes are drawn on the deformed shape
+    base = output.boundary_surface(result.model.u) if result.static is not None else None
+    comm = result.model.mesh.comm
+    if comm.rank == 0:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+        n = len(surfaces)
+        cols = min(n, 3)
+        rows = -(-n // cols)
+        fig = plt.figure(figsize=(4.2 * cols, 3.6 * rows))
+        freqs = result.frequencies_hz
+        for k, (X, polys, d) in enumerate(surfaces):
+            ax = fig.add_subplot(rows, cols, k + 1, projection="3d")
+            if base is not None:
+                X = X + base[2]
+            mag = np.linalg.norm(d, axis=1)
+            span = (X.max(axis=0) - X.min(axis=0)).max()
+            x = X + (0.1 * span / mag.max() if mag.max() > 0 else 0.0) * d
+            colors = plt.get_cmap("viridis")(mag[polys].mean(axis=1) / max(mag.max(), 1e-300))
+            ax.add_collection3d(Poly3DCollection(x[polys], facecolors=colors,
+                                                 edgecolor=(0, 0, 0, 0.1), linewidths=0.1))
+            lo, hi = np.vstack([X, x]).min(axis=0), np.vstack([X, x]).max(axis=0)
+            ax.set_xlim(lo[0], hi[0]), ax.set_ylim(lo[1], hi[1]), ax.set_zlim(lo[2], hi[2])
+            ax.set_box_aspect(np.maximum(hi - lo, 0.05 * (hi - lo).max()))
+            ax.set_axis_off()
+            ax.view_init(elev=20, azim=-60)
+            ax.set_title(f"mode {k + 1}: {freqs[k]:.4g} Hz", fontsize=10)
+        fig.suptitle(f"{result.model.scene.title}: mode shapes (scaled)")
+        fig.tight_layout()
+        fig.savefig(path, dpi=100)
+        plt.close(fig)
+    comm.barrier()
+
+
+def write_modal_outputs(result: ModalResult, out: Path) -> dict:
+    """Mode shapes (XDMF, P1, unit largest displacement), picture, sound; results.json last."""
+    from .. import output, sound
+
+    out = Path(out)
+    comm = result.model.mesh.comm
+    if comm.rank == 0:
+        out.mkdir(parents=True, exist_ok=True)
+    comm.barrier()
+    scene = result.model.scene
+    summary = result.summary()
+    files = {}
+    if scene.output.fields and result.modes:
+        shapes = []
+        for f in result.modes:
+            g = output.p1_interpolant(f, f.name)
+            g.x.array[:] /= max(max_norm(f), 1e-300)
+            shapes.append(g)
+        output.write_fields(out / "modes.xdmf", result.model.mesh, shapes)
+        files["modes"] = "modes.xdmf"
+    if scene.output.picture and result.modes:
+        modes_picture(out / "modes.png", result)
+        files["picture"] = "modes.png"
+    if scene.sound is not None:
+        summary["sound"] = sound.modal_sound(result, scene.sound, out)
+        files["sound"] = summary["sound"]["wav"]
+        files["spectrogram"] = summary["sound"]["spectrogram"]
+    summary["files"] = files
+    output.write_json_atomic(out / "results.json", summary, comm)
+    return summary
+
+
+def run(scene: Scene, out, echo: bool = False) -> dict:
+    """CLI entry: solve, write outputs, print the frequencies on rank 0."""
+    result = solve_modal(scene)
+    summary = write_modal_outputs(result, Path(out))
+    if echo and MPI.COMM_WORLD.rank == 0:
+        freqs = ", ".join(f"{f:.6g}" for f in summary["frequencies_hz"])
+        rigid = f", {summary['rigid_modes']} rigid-body modes" if summary["rigid_modes"] else ""
+        print(f"{scene.title}: {summary['dofs']} dofs, {len(summary['frequencies_hz'])} modes{rigid}, "
+              f"{summary['wall_time_s']:.2f} s -> {out}")
+        print(f"  frequencies [Hz]: {freqs}")
+        if "sound" in summary:
+            print(f"  sound: {summary['sound']['wav']}, spectrum peaks [Hz]: "
+                  f"{', '.join(f'{p:.1f}' for p in summary['sound']['peaks_hz'])}")
+    return summary
