@@ -126,6 +126,7 @@ def run_ours(cells, kind: str) -> dict:
     total, cpu = time.perf_counter() - t0, time.process_time() - c0
     rep = res.report
     return {"dofs": res.model.dofs, "converged": rep.converged, "newton": rep.newton_iterations,
+            "krylov": rep.krylov_iterations,
             "linear_solver": rep.linear_solver, "assembly": rep.assembly_time, "solve": rep.solve_time,
             "total": total, "cpu": cpu, "max_u": res.max_displacement, "energy": res.energy,
             "residual": rep.residual_norm, "quadrature": scene.discretization.quadrature,
@@ -223,11 +224,12 @@ def bare_solve(cells, kind: str) -> dict:
 
     out = {"dofs": V.dofmap.index_map.size_global * V.dofmap.index_map_bs,
            "converged": snes.getConvergedReason() > 0, "newton": snes.getIterationNumber(),
+           "krylov": snes.getLinearSolveIterations(),
            "linear_solver": kind, "assembly": assembly[0], "solve": t_end - t_solve - assembly[0],
            "total": t_end - t0, "cpu": c_end - c0, "calls": calls, "mat_type": A.getType()}
     # checks outside the timed region
     vals = u.x.array.reshape(-1, 3)
-    out["max_u"] = float(np.linalg.norm(vals, axis=1).max())
+    out["max_u"] = comm.allreduce(float(np.linalg.norm(vals, axis=1).max()), op=MPI.MAX)
     out["energy"] = comm.allreduce(fem.assemble_scalar(energy), op=MPI.SUM)
     for k in list(BARE_SNES) + list(BARE_LINEAR[kind]):
         opts.delValue(prefix + k)

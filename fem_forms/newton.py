@@ -72,8 +72,10 @@ class SNESDriver:
                 "snes_stol": 1e-11, "snes_linesearch_max_it": 40}
 
     def __init__(self, problem: NonlinearProblem, options: dict | None = None, linear_kind: str = "auto",
-                 prefix: str = "fem_forms_", near_nullspace: Callable[[], PETSc.NullSpace] | None = None):
+                 prefix: str = "fem_forms_", near_nullspace: Callable[[], PETSc.NullSpace] | None = None,
+                 reuse_factor: bool = False):
         self.p = problem
+        self.reuse_factor = reuse_factor
         self.comm = problem.u.function_space.mesh.comm
         V = problem.u.function_space
         self.dofs = V.dofmap.index_map.size_global * V.dofmap.index_map_bs
@@ -94,7 +96,8 @@ class SNESDriver:
         """(Re)create matrix and SNES: done at start, after a failed step and on solver switch."""
         merged = dict(self.DEFAULTS)
         merged["snes_linesearch_type"] = "bt" if self.E is not None else "basic"
-        merged.update(linear.options(self.linear_kind, symmetric=self.E is not None))
+        merged.update(linear.options(self.linear_kind, symmetric=self.E is not None,
+                                     reuse_factor=self.reuse_factor))
         merged.update(self.user_options)
         # block (BAIJ) matrices assemble 2.5-3x faster and MUMPS takes them; other solvers need AIJ
         mumps = merged.get("pc_type") in ("lu", "cholesky") and merged.get("pc_factor_mat_solver_type") == "mumps"
@@ -220,14 +223,15 @@ class SNESDriver:
 def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1,
           max_cutbacks: int = 12, linear_kind: str = "auto",
           near_nullspace: Callable[[], PETSc.NullSpace] | None = None,
-          prefix: str = "fem_forms_", predictor: bool = True) -> SolveReport:
+          prefix: str = "fem_forms_", predictor: bool = True, reuse_factor: bool = False) -> SolveReport:
     """Continuation lambda: 0 -> 1 in `steps` increments, the increment grown 1.5x after a success and
     halved after a failure (at most `max_cutbacks` halvings in a row). A step is accepted only when
     SNES converged AND an independent re-assembly of the residual is small AND the state is finite
     and admissible (no inverted elements). With `predictor`, each step starts from the secant
-    extrapolation of the last two accepted states (a better first guess, fewer Newton steps)."""
+    extrapolation of the last two accepted states (a better first guess, fewer Newton steps).
+    `reuse_factor` factors the direct solver's LU once per load step (linear.REUSED_FACTOR)."""
     t0 = time.perf_counter()
-    drv = SNESDriver(problem, options, linear_kind, prefix, near_nullspace)
+    drv = SNESDriver(problem, options, linear_kind, prefix, near_nullspace, reuse_factor)
     u = problem.u
     set_load = problem.set_load or (lambda lam: None)
 
@@ -255,6 +259,8 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
             if rec.reason == "DIVERGED_LINEAR_SOLVE" and drv.linear_kind == "iterative" and linear_kind == "auto":
                 drv.linear_kind = "direct"           # indefinite tangent: fall back to LU
                 report.linear_solver = "iterative->direct"
+            elif rec.reason == "DIVERGED_LINEAR_SOLVE" and drv.reuse_factor:
+                drv.reuse_factor = False             # stale LU too far off: factor every iteration
         else:
             arr = u.x.array
             if not np.all(np.isfinite(arr)):
