@@ -26,7 +26,7 @@ from ..errors import InputError, SolveError
 from ..meshes import bounding_box
 from ..model import Model, build_model
 from ..scene import Scene
-from .static import StaticResult, max_norm, solve_static
+from .static import StaticResult, max_norm, peak_memory_mb, solve_static
 
 RIGID_EXTRA = 6          # modes requested beyond `count` when rigid-body modes may be present
 SHIFT_FRACTION = 1e-2    # unsupported parts: target = -SHIFT_FRACTION x (estimated first omega^2)
@@ -96,6 +96,7 @@ class ModalResult:
                             "converged": self.converged, "iterations": self.iterations,
                             "time_s": self.eigensolve_time_s},
             "wall_time_s": self.wall_time_s,
+            "peak_memory_mb": peak_memory_mb(m.mesh.comm),
         }
         if self.static is not None:
             s = self.static.summary()

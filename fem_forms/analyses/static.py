@@ -50,7 +50,7 @@ class StaticResult:
             "quadrature_degree": self.model.scene.discretization.quadrature,
             "mpi_ranks": self.model.mesh.comm.size,
             "formulation": self.model.scene.discretization.formulation,
-            "peak_memory_mb": _peak_memory_mb(self.model.mesh.comm),
+            "peak_memory_mb": peak_memory_mb(self.model.mesh.comm),
             "warnings": self.model.warnings,
             "probes": {n: {"point": self.model.scene.output.probes[n], "displacement": v}
                        for n, v in self.probes.items()},
@@ -58,7 +58,7 @@ class StaticResult:
         }
 
 
-def _peak_memory_mb(comm) -> float:
+def peak_memory_mb(comm) -> float:
     """Peak resident memory of this process so far, summed over ranks (MB)."""
     import resource
     return comm.allreduce(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0, op=MPI.SUM)
