@@ -223,15 +223,19 @@ class SNESDriver:
 def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1,
           max_cutbacks: int = 12, linear_kind: str = "auto",
           near_nullspace: Callable[[], PETSc.NullSpace] | None = None,
-          prefix: str = "fem_forms_", predictor: bool = True, reuse_factor: bool = False) -> SolveReport:
+          prefix: str = "fem_forms_", predictor: bool = True, reuse_factor: bool = False,
+          driver: SNESDriver | None = None) -> SolveReport:
     """Continuation lambda: 0 -> 1 in `steps` increments, the increment grown 1.5x after a success and
     halved after a failure (at most `max_cutbacks` halvings in a row). A step is accepted only when
     SNES converged AND an independent re-assembly of the residual is small AND the state is finite
     and admissible (no inverted elements). With `predictor`, each step starts from the secant
     extrapolation of the last two accepted states (a better first guess, fewer Newton steps).
-    `reuse_factor` factors the direct solver's LU once per load step (linear.REUSED_FACTOR)."""
+    `reuse_factor` factors the direct solver's LU once per load step (linear.REUSED_FACTOR).
+    A `driver` built once for `problem` and passed to repeated solves keeps its compiled forms,
+    matrix and SNES (the caller owns it); otherwise one is built here and destroyed at the end."""
     t0 = time.perf_counter()
-    drv = SNESDriver(problem, options, linear_kind, prefix, near_nullspace, reuse_factor)
+    drv = driver or SNESDriver(problem, options, linear_kind, prefix, near_nullspace, reuse_factor)
+    assembly0 = drv.assembly_time
     u = problem.u
     set_load = problem.set_load or (lambda lam: None)
 
@@ -298,9 +302,10 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
     else:
         report.converged = True
         report.message = "converged"
-    report.assembly_time = drv.assembly_time
-    report.solve_time = time.perf_counter() - t0 - drv.assembly_time
-    drv.snes.destroy()
+    report.assembly_time = drv.assembly_time - assembly0
+    report.solve_time = time.perf_counter() - t0 - report.assembly_time
+    if driver is None:
+        drv.snes.destroy()
     return report
 
 

@@ -161,6 +161,8 @@ class ForwardOnRest:
         points, _ = _quadrature_points(mesh, scene.discretization.quadrature)
         self._jexpr = fem.Expression(ufl.det(F) * jG, points)
         self.solves = 0
+        self._driver: newton.SNESDriver | None = None
+        self._problem: newton.NonlinearProblem | None = None
         self._u_ok = self.u.x.array.copy()
 
     def inadmissible(self):
@@ -173,17 +175,21 @@ class ForwardOnRest:
         """Equilibrium for the current d, warm-started from the last solution; falls back to load
         continuation from zero if the warm start fails."""
         self.solves += 1
-        problem = newton.NonlinearProblem(self.u, self.residual, self.jacobian, self.bcs, energy=self.energy,
-                                          set_load=None, inadmissible=self.inadmissible)
+        if self._driver is None:          # forms compiled and matrix created once for all solves
+            self._problem = newton.NonlinearProblem(self.u, self.residual, self.jacobian, self.bcs,
+                                                    energy=self.energy, set_load=None,
+                                                    inadmissible=self.inadmissible)
+            self._driver = newton.SNESDriver(self._problem, dict(self.scene.solver.petsc),
+                                             self.scene.solver.linear, "fem_forms_fwd_")
+        problem = self._problem
+        problem.set_load = None
         self.load.set(1.0)
-        opts = dict(self.scene.solver.petsc)
-        rep = newton.solve(problem, opts, prefix="fem_forms_fwd_", linear_kind=self.scene.solver.linear)
+        rep = newton.solve(problem, driver=self._driver)
         if not rep.converged:
             self.u.x.array[:] = 0.0
             problem.set_load = self.load.set
-            rep = newton.solve(problem, opts, steps=max(self.scene.solver.steps, 4),
-                               max_cutbacks=self.scene.solver.max_cutbacks, prefix="fem_forms_fwd_",
-                               linear_kind=self.scene.solver.linear)
+            rep = newton.solve(problem, steps=max(self.scene.solver.steps, 4),
+                               max_cutbacks=self.scene.solver.max_cutbacks, driver=self._driver)
         if rep.converged:
             self._u_ok = self.u.x.array.copy()
         else:
