@@ -46,6 +46,9 @@ class InverseResult:
     history: list = field(default_factory=list)
     solve_time: float = 0.0
     forward_solves: int = 0
+    # deformed minus target position at the design's own equilibrium (None: exactly the target, as
+    # for the direct method); the adjoint method's partial or regularised goals leave a mismatch
+    deformed_offset: fem.Function | None = None
 
 
 def target_scene(scene: Scene) -> MeshSpec:
@@ -171,9 +174,9 @@ class ForwardOnRest:
         jmin = self.mesh.comm.allreduce(float(vals.min()) if vals.size else np.inf, op=MPI.MIN)
         return None if np.isfinite(jmin) and jmin > 0 else f"inverted elements (min det = {jmin:.3g})"
 
-    def solve(self) -> newton.SolveReport:
-        """Equilibrium for the current d, warm-started from the last solution; falls back to load
-        continuation from zero if the warm start fails."""
+    def solve(self, fallback: bool = True) -> newton.SolveReport:
+        """Equilibrium for the current d, warm-started from the current u; if that fails and
+        `fallback`, load continuation from zero (costly: trial steps of an optimiser skip it)."""
         self.solves += 1
         if self._driver is None:          # forms compiled and matrix created once for all solves
             self._problem = newton.NonlinearProblem(self.u, self.residual, self.jacobian, self.bcs,
@@ -185,7 +188,7 @@ class ForwardOnRest:
         problem.set_load = None
         self.load.set(1.0)
         rep = newton.solve(problem, driver=self._driver)
-        if not rep.converged:
+        if not rep.converged and fallback:
             self.u.x.array[:] = 0.0
             problem.set_load = self.load.set
             rep = newton.solve(problem, steps=max(self.scene.solver.steps, 4),
@@ -244,22 +247,31 @@ class AdjointDesign:
             reg = reg + spec.stay_close * ufl.dot(trial, test) * dx
         self.R = fpetsc.assemble_matrix(fem.form(reg))
         self.R.assemble()
+        # damping metric of the Levenberg-Marquardt steps, applied to the predicted change of the
+        # deformed shape: an H1 inner product over the body's volume (L2 alone lets rough steps by)
+        volume = comm.allreduce(fem.assemble_scalar(fem.form(fem.Constant(mesh, 1.0) * dx)), op=MPI.SUM)
+        ell = mesh_size(mesh)
+        h1 = (ufl.dot(trial, test) + ell ** 2 * ufl.inner(ufl.grad(trial), ufl.grad(test))) / volume * dx
+        self.D = fpetsc.assemble_matrix(fem.form(h1))
+        self.D.assemble()
+        self.damping = 0.0
         self.K_form = fem.form(fwd.jacobian)
         self.B_form = fem.form(fwd.dres_dd)
+        self.C_form = fem.form(fwd.jacobian - fwd.dres_dd)    # K - B = K A: inverse elastostatics' tangent
         self.K = fpetsc.create_matrix(self.K_form)
         self.B = fpetsc.create_matrix(self.B_form)
-        self.ksp = PETSc.KSP().create(comm)
-        self.ksp.setOptionsPrefix("fem_forms_adjoint_")
-        opts = PETSc.Options()
-        for k, val in {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}.items():
-            opts["fem_forms_adjoint_" + k] = val
-        self.ksp.setFromOptions()
+        self.C = fpetsc.create_matrix(self.C_form)
+        self.ksp = _lu(comm, "fem_forms_adjoint_")
+        self.ksp_C = _lu(comm, "fem_forms_adjoint_c_")
+        self.ksp_N = _lu(comm, "fem_forms_adjoint_n_")
+        self.N: PETSc.Mat | None = None
         # the rest shape stays attached where the body is supported: d is fixed (0) on supported dofs
         fixed = [bc.dof_indices()[0] for bc in fwd.bcs]
         self.fixed = np.unique(np.concatenate(fixed)) if fixed else np.empty(0, dtype=np.int32)
         self.fixed = self.fixed[self.fixed < self.n]
         self.vec = lambda: self.W.createVecLeft()
         self.evaluations = 0
+        self.last_failure = ""
 
     def _solve_K(self, rhs: PETSc.Vec) -> PETSc.Vec:
         """K x = rhs with homogeneous conditions on supported dofs (K was assembled with them)."""
@@ -270,23 +282,30 @@ class AdjointDesign:
             raise SolveError(f"adjoint: linear solve failed ({self.ksp.getConvergedReason()})")
         return x
 
-    def evaluate(self, dvec: np.ndarray, gradient: bool = True):
-        """(J, gradient on owned dofs) at d; None if there is no forward equilibrium at d. Leaves K
-        assembled and factorised at that state for Gauss-Newton products."""
+    def forward(self, dvec: np.ndarray, guess: np.ndarray | None = None, fallback: bool = True):
+        """J at d (None if there is no forward equilibrium at d), solved from `guess` for u (owned
+        dofs) or else from the last state."""
         fwd = self.fwd
         fwd.d.x.array[:self.n] = dvec
         fwd.d.x.scatter_forward()
-        rep = fwd.solve()
+        if guess is not None:
+            fwd.u.x.array[:self.n] = guess
+            fwd.u.x.scatter_forward()
+        rep = fwd.solve(fallback)
         self.evaluations += 1
         if not rep.converged:
+            self.last_failure = rep.message
             return None
         m, d = self.vec(), self.vec()
         d.array[:] = dvec
         m.array[:] = dvec + fwd.u.x.array[:self.n]
-        Wm, Rd = self.W * m, self.R * d
-        J = 0.5 * m.dot(Wm) + 0.5 * d.dot(Rd)
-        if not gradient:
-            return J, None
+        self._Wm = self.W * m
+        return 0.5 * m.dot(self._Wm) + 0.5 * d.dot(self.R * d)
+
+    def linearise(self) -> np.ndarray:
+        """Gradient of J (owned dofs) at the last forward state; assembles and factorises K and B
+        there, for the Gauss-Newton products and linear_response that follow."""
+        fwd = self.fwd
         self.K.zeroEntries()
         fpetsc.assemble_matrix(self.K, self.K_form, bcs=fwd.bcs)
         self.K.assemble()
@@ -294,39 +313,109 @@ class AdjointDesign:
         fpetsc.assemble_matrix(self.B, self.B_form)
         self.B.assemble()
         self.ksp.setOperators(self.K)
-        mu = self._solve_K(Wm.copy())
-        g = Wm + Rd
-        g.axpy(-1.0, self.B.createVecRight().duplicate() if False else self._BT(mu))
+        self.C.zeroEntries()
+        fpetsc.assemble_matrix(self.C, self.C_form, bcs=fwd.bcs)
+        self.C.assemble()
+        self.ksp_C.setOperators(self.C)
+        d = self.vec()
+        d.array[:] = fwd.d.x.array[:self.n]
+        mu = self._solve_K(self._Wm.copy())
+        g = self._Wm + self.R * d
+        g.axpy(-1.0, self._BT(mu))
         out = g.array.copy()
         out[self.fixed] = 0.0
-        return J, out
+        return out
+
+    def evaluate(self, dvec: np.ndarray, gradient: bool = True):
+        """(J, gradient on owned dofs or None) at d; None if there is no forward equilibrium at d."""
+        J = self.forward(dvec)
+        if J is None:
+            return None
+        return J, (self.linearise() if gradient else None)
+
+    def linear_response(self, s: np.ndarray) -> np.ndarray:
+        """du = -K^-1 B s: first-order change of the equilibrium u when d changes by s (owned dofs),
+        at the last linearised state; a predictor for the next forward solve."""
+        q, Bq = self.vec(), self.vec()
+        q.array[:] = s
+        self.B.mult(q, Bq)
+        return -self._solve_K(Bq).array.copy()
 
     def _BT(self, y: PETSc.Vec) -> PETSc.Vec:
         z = self.vec()
         self.B.multTranspose(y, z)
         return z
 
+    def set_damping(self, lam: float) -> None:
+        """Damping of the Gauss-Newton products; (re)factorises N = W + lam D + R for the
+        preconditioner."""
+        self.damping = lam
+        N = self.D.copy()
+        N.scale(lam)
+        N.axpy(1.0, self.W, PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+        N.axpy(1.0, self.R, PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+        self.ksp_N.setOperators(N)
+        if self.N is not None:
+            self.N.destroy()
+        self.N = N
+
     def gauss_newton_product(self, p: PETSc.Vec, out: PETSc.Vec) -> None:
-        """out = (A^T W A + R) p on free dofs, A = I - K^-1 B, at the last evaluated state."""
+        """out = (A^T (W + damping D) A + R) p on free dofs, A = I - K^-1 B = K^-1 C, at the last
+        linearised state: the damping limits the predicted change of the deformed shape."""
         q = p.copy()
         q.array[self.fixed] = 0.0
         Bq = self.vec()
         self.B.mult(q, Bq)
         a = q - self._solve_K(Bq)
         b = self.W * a
+        if self.damping:
+            b.axpy(self.damping, self.D * a)
         r = b - self._BT(self._solve_K(b.copy())) + self.R * q
         r.array[self.fixed] = 0.0
         r.copy(out)
 
+    def precondition(self, r: PETSc.Vec, out: PETSc.Vec) -> None:
+        """out = A^-1 N^-1 A^-T r = C^-1 K N^-1 K C^-T r: the inverse of the damped Gauss-Newton
+        matrix when R = 0 (exact for matching the whole body), a close one otherwise."""
+        x = r.copy()
+        x.array[self.fixed] = 0.0
+        y = self.vec()
+        self.ksp_C.solveTranspose(x, y)
+        y.array[self.fixed] = 0.0
+        z = self.K * y
+        z.array[self.fixed] = 0.0
+        w = self.vec()
+        self.ksp_N.solve(z, w)
+        w.array[self.fixed] = 0.0
+        v = self.K * w
+        v.array[self.fixed] = 0.0
+        self.ksp_C.solve(v, out)
+        out.array[self.fixed] = 0.0
+
 
 class _GaussNewtonOperator:
-    """A PETSc shell-matrix context for the Gauss-Newton Hessian."""
+    """PETSc shell-matrix and shell-preconditioner context for the damped Gauss-Newton matrix."""
 
     def __init__(self, design: AdjointDesign):
         self.design = design
 
     def mult(self, mat, x, y):
         self.design.gauss_newton_product(x, y)
+
+    def apply(self, pc, x, y):
+        self.design.precondition(x, y)
+
+
+def _lu(comm, prefix: str) -> PETSc.KSP:
+    """A direct (MUMPS LU) solver whose options can be overridden under `prefix`."""
+    ksp = PETSc.KSP().create(comm)
+    ksp.setOptionsPrefix(prefix)
+    opts = PETSc.Options()
+    for k, val in {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}.items():
+        if not opts.hasName(prefix + k):
+            opts[prefix + k] = val
+    ksp.setFromOptions()
+    return ksp
 
 
 def _snap_points(V: fem.FunctionSpace, points: list):
@@ -347,9 +436,19 @@ def _snap_points(V: fem.FunctionSpace, points: list):
     return own, own
 
 
+# J is known to about this relative precision: the forward solves converge to 1e-9..1e-10 of the load
+# scale (measured: J at trial points within 1e-8 J of each other once the gradient vanishes)
+J_PRECISION = 1e-8
+
+
 def _gauss_newton(design: AdjointDesign, spec, J_stop: float, history: list, scale_len: float):
-    """Projected Gauss-Newton with backtracking on J: each step solves H delta = -g by CG (matrix-free
-    products through K's factors), then halves the step until J decreases."""
+    """Gauss-Newton with Levenberg-Marquardt damping: each step solves (H + lam D) s = -g by CG
+    (matrix-free H products through K's factors; D the mass matrix over the volume). The step is
+    kept when J falls by a fair share of what the quadratic model predicts, and lam shrinks or grows
+    with that agreement (Nielsen's rule). Damping cuts the step along the directions where the
+    linearised forward map is least reliable, where a line search would shorten all of it. Each
+    trial forward solve starts from the linear predictor u + du(s) and does not fall back to load
+    continuation (a failed trial is a rejected step)."""
     comm = design.fwd.mesh.comm
     n = design.n
     d = np.zeros(n)
@@ -359,7 +458,9 @@ def _gauss_newton(design: AdjointDesign, spec, J_stop: float, history: list, sca
     cg = PETSc.KSP().create(comm)
     cg.setOptionsPrefix("fem_forms_gn_")
     cg.setType("cg")
-    cg.getPC().setType("none")
+    pc = cg.getPC()
+    pc.setType("python")
+    pc.setPythonContext(_GaussNewtonOperator(design))
     cg.setTolerances(rtol=1e-3, max_it=200)
     cg.setOperators(H)
     cg.setFromOptions()
@@ -368,33 +469,50 @@ def _gauss_newton(design: AdjointDesign, spec, J_stop: float, history: list, sca
         return d, False, "no forward equilibrium at the target shape itself", 0
     J, g = out
     history.append({"J": J, "cg": 0})
+    u_ok = design.fwd.u.x.array[:n].copy()
+    lam, grow = 1e-3, 2.0
+    dot = lambda a, b: comm.allreduce(float(a @ b), op=MPI.SUM)
     for it in range(1, spec.iterations + 1):
-        gv, step = design.vec(), design.vec()
+        gv, sv, Hs = design.vec(), design.vec(), design.vec()
         gv.array[:] = -g
-        cg.solve(gv, step)
-        delta = step.array.copy()
-        t, accepted = 1.0, False
-        while t > 1e-4:
-            trial = d + t * delta
-            if bound is not None:
-                trial = np.clip(trial, -bound, bound)
-            trial[design.fixed] = 0.0
-            o = design.evaluate(trial)
-            if o is not None and o[0] < J:
-                d, (J, g), accepted = trial, o, True
-                break
-            t *= 0.5
-        if not accepted:
-            design.evaluate(d)
-            return d, J <= J_stop, f"line search failed at iteration {it}, J = {J:.3e}", it
-        gnorm = np.sqrt(comm.allreduce(float(g @ g), op=MPI.SUM))
-        history.append({"J": J, "cg": cg.getIterationNumber(), "step": t})
+        design.set_damping(lam)
+        cg.solve(gv, sv)
+        design.damping = 0.0
+        trial = d + sv.array
+        if bound is not None:
+            trial = np.clip(trial, -bound, bound)
+        trial[design.fixed] = 0.0
+        s = trial - d
+        sv.array[:] = s
+        design.gauss_newton_product(sv, Hs)
+        predicted = -(dot(g, s) + 0.5 * dot(s, Hs.array))
+        J_trial = design.forward(trial, guess=u_ok + design.linear_response(s), fallback=False)
+        rho = (J - J_trial) / predicted if J_trial is not None and predicted > 0 else -1.0
+        step = float(np.sqrt(dot(s, s)))
+        if rho > 1e-4:
+            d, J = trial, J_trial
+            g = design.linearise()
+            u_ok = design.fwd.u.x.array[:n].copy()
+            lam, grow = lam * max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3), 2.0
+        else:
+            design.fwd.u.x.array[:n] = u_ok
+            design.fwd.u.x.scatter_forward()
+            design.fwd.d.x.array[:n] = d
+            design.fwd.d.x.scatter_forward()
+            lam, grow = lam * grow, 2.0 * grow
+        history.append({"J": J, "cg": cg.getIterationNumber(), "damping": lam, "ratio": rho,
+                        "accepted": bool(rho > 1e-4)})
         if J <= J_stop:
             return d, True, f"mismatch below tolerance, J = {J:.3e}", it
-        if gnorm <= spec.tolerance * abs(J):
+        if np.sqrt(dot(g, g)) <= spec.tolerance * abs(J):
             return d, True, f"relative gradient below tolerance, J = {J:.3e}", it
-        if t * comm.allreduce(float(np.abs(delta).max()) if n else 0.0, op=MPI.MAX) <= 1e-14 * scale_len:
+        if rho > 1e-4 and comm.allreduce(float(np.abs(s).max()) if n else 0.0, op=MPI.MAX) <= 1e-14 * scale_len:
             return d, True, f"step below round-off, J = {J:.3e}", it
+        if J_trial is not None and predicted <= J_PRECISION * abs(J):
+            return d, True, f"predicted decrease {predicted:.1e} below the precision of J = {J:.3e}", it
+        if lam > 1e12:
+            why = f"; the last trial had no forward equilibrium: {design.last_failure}" if J_trial is None else ""
+            return d, J <= J_stop, f"no descent found at iteration {it} (damping {lam:.1e}), J = {J:.3e}{why}", it
     return d, False, f"no convergence in {spec.iterations} iterations, J = {J:.3e}", spec.iterations
 
 
@@ -473,6 +591,9 @@ def solve_adjoint(scene: Scene, material=None, loaded: LoadedMesh | None = None)
     v.x.array[:design.n] = d
     v.x.scatter_forward()
     res = InverseResult("adjoint", v, loaded, ok, its, msg, history=history, forward_solves=fwd.solves)
+    if final is not None:
+        res.deformed_offset = fem.Function(V, name="deformed_minus_target")
+        res.deformed_offset.x.array[:] = v.x.array + fwd.u.x.array
     res.solve_time = time.perf_counter() - t0
     return res
 
@@ -518,9 +639,26 @@ METHODS = {"direct": solve_direct, "adjoint": solve_adjoint, "fixed-point": solv
 # ------------------------------------------------------------------------------- checks and output
 @dataclass
 class ForwardCheck:
-    mismatch_max: float
+    mismatch_max: float             # largest distance of the forward-solved shape from the target
     static: object                  # the StaticResult of the forward solve from the rest shape
     problems: list
+    design_gap_max: float = np.inf  # ... from the deformed shape the design predicted
+    matched_mismatch_max: float | None = None   # ... from the target on the matched points/region
+
+
+def _matched_vertices(spec, pts_target: np.ndarray, size: float) -> np.ndarray | None:
+    """Mask of the target's vertices an adjoint objective matches (None: the whole body)."""
+    if spec.method != "adjoint" or (spec.match_points is None and spec.match_region is None):
+        return None
+    mask = np.zeros(len(pts_target), dtype=bool)
+    if spec.match_points is not None:
+        from scipy.spatial import cKDTree
+        mask[cKDTree(pts_target).query(np.asarray(spec.match_points, dtype=float))[1]] = True
+    else:
+        tol = 1e-9 * size
+        lo, hi = np.asarray(spec.match_region.lo), np.asarray(spec.match_region.hi)
+        mask = np.all((pts_target >= lo - tol) & (pts_target <= hi + tol), axis=1)
+    return mask
 
 
 def check_rest_shape(scene: Scene, res: InverseResult, out: Path) -> ForwardCheck:
@@ -534,6 +672,8 @@ def check_rest_shape(scene: Scene, res: InverseResult, out: Path) -> ForwardChec
     shift = output.node_values(res.v)
     gathered = output.gather_mesh(mesh, shift)
     target = output.gather_mesh(mesh)
+    designed = output.gather_mesh(mesh, output.node_values(res.deformed_offset)) \
+        if res.deformed_offset is not None else target
     groups = output.gather_facet_groups(res.loaded)
     problems = []
     if comm.rank == 0:
@@ -561,6 +701,7 @@ def check_rest_shape(scene: Scene, res: InverseResult, out: Path) -> ForwardChec
     problems = comm.bcast(problems, root=0)
     pts_rest = comm.bcast(gathered[0] if comm.rank == 0 else None, root=0)
     pts_target = comm.bcast(target[0] if comm.rank == 0 else None, root=0)
+    pts_design = comm.bcast(designed[0] if comm.rank == 0 else None, root=0)
     if problems and any("cannot write" in p for p in problems):
         return ForwardCheck(np.inf, None, problems)
     # independent forward check: read the written mesh back and solve the static problem on it
@@ -581,13 +722,21 @@ def check_rest_shape(scene: Scene, res: InverseResult, out: Path) -> ForwardChec
     X = fmesh.geometry.x
     dist, idx = cKDTree(pts_rest).query(X)
     deformed = X + output.node_values(static.u)
-    local = float(np.linalg.norm(deformed - pts_target[idx], axis=1).max()) if len(X) else 0.0
-    mismatch = comm.allreduce(local, op=MPI.MAX)
+    def largest(dist, where=None):
+        dist = dist if where is None else dist[where]
+        return comm.allreduce(float(dist.max()) if len(dist) else 0.0, op=MPI.MAX)
+
+    to_target = np.linalg.norm(deformed - pts_target[idx], axis=1)
+    mismatch = largest(to_target)
+    gap = largest(np.linalg.norm(deformed - pts_design[idx], axis=1))
+    matched = _matched_vertices(scene.inverse, pts_target, size)
+    matched_max = None if matched is None else largest(to_target, matched[idx])
     tol = scene.inverse.check_tolerance or 1e-3 * size
-    if mismatch > tol:
-        problems.append(f"the forward solve from the rest shape lands {mismatch:.3g} m from the target "
+    if gap > tol:
+        what = "the target" if res.deformed_offset is None else "the shape the design predicted"
+        problems.append(f"the forward solve from the rest shape lands {gap:.3g} m from {what} "
                         f"(tolerance {tol:.3g} m): another equilibrium, the design is not usable")
-    return ForwardCheck(mismatch, static, problems)
+    return ForwardCheck(mismatch, static, problems, gap, matched_max)
 
 
 def picture(path: Path, res: InverseResult, check: ForwardCheck, title: str) -> None:
@@ -656,6 +805,9 @@ def run(scene: Scene, out: Path, echo: bool = False) -> dict:
         check = check_rest_shape(scene, res, out)
         problems += check.problems
         summary["target_mismatch_max"] = check.mismatch_max
+        summary["design_gap_max"] = check.design_gap_max
+        if check.matched_mismatch_max is not None:
+            summary["matched_mismatch_max"] = check.matched_mismatch_max
         summary["rest_mesh"] = str((out / "rest_shape.msh"))
         summary["rest_surface"] = str((out / "rest_shape.stl"))
         from .static import max_norm
@@ -673,7 +825,9 @@ def run(scene: Scene, out: Path, echo: bool = False) -> dict:
     if echo and comm.rank == 0 and not problems:
         print(f"{scene.title}: rest shape by the {res.method} method in {res.iterations} iterations, "
               f"{res.solve_time:.2f} s; largest rest offset {summary['max_rest_offset']:.4g} m; forward check "
-              f"lands within {check.mismatch_max:.3g} m of the target -> {out}")
+              f"lands within {check.mismatch_max:.3g} m of the target"
+              + ("" if check.matched_mismatch_max is None else
+                 f" ({check.matched_mismatch_max:.3g} m where matched)") + f" -> {out}")
     if problems:
         raise SolveError(f"{scene.title}: no usable rest shape: {'; '.join(problems)}")
     return summary
