@@ -110,6 +110,8 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--max-cells", type=int, default=160, help="largest box length in cells (160: 1M dofs)")
     ap.add_argument("--ranks", default="1,2")
+    ap.add_argument("--out", default="scale_beam.md", help="table file name in benchmarks/")
+    ap.add_argument("--sizes", type=int, nargs="*", help="only these box lengths in cells (30 40 80 120 160)")
     ap.add_argument("--profile", action="store_true")
     ap.add_argument("--profile-cells", type=int, nargs=3, default=(80, 8, 8))
     ap.add_argument("--worker", nargs=4, metavar=("IMPL", "NX", "NY", "NZ"), help=argparse.SUPPRESS)
@@ -124,7 +126,7 @@ def main() -> None:
         return
 
     ranks = [int(r) for r in args.ranks.split(",")]
-    sizes = [c for c in SIZES if c[0] <= args.max_cells]
+    sizes = [c for c in SIZES if c[0] <= args.max_cells and (not args.sizes or c[0] in args.sizes)]
     t_start, loads, rows = time.perf_counter(), [], {}
     for cells in sizes:
         for n in ranks:
@@ -135,13 +137,18 @@ def main() -> None:
                     res = run(impl, cells, n)
                     by[impl].append(res)
                     print(f"  {res['dofs']:>9,} dofs {n} rank(s) {impl:4s} run {r + 1}: {res['newton']} Newton, "
-                          f"total {res['total']:.2f} s, {res['peak_mib']:.0f} MiB", file=sys.stderr, flush=True)
+                          f"{res['krylov']} CG, total {res['total']:.2f} s, {res['peak_mib']:.0f} MiB",
+                          file=sys.stderr, flush=True)
             rows[(cells, n)] = by
+            write_table(rows, args, sizes, loads, t_start)     # after every row: a stopped run keeps them
 
+
+def write_table(rows: dict, args, sizes: list, loads: list, t_start: float) -> None:
+    """benchmarks/scale_beam.md from the rows measured so far."""
     def krylov(r: dict) -> float:
         return r["krylov"] / max(r["newton"], 1)
 
-    head = ["| dofs | ranks | Newton its | CG its per Newton step | total s | µs per dof | peak MiB per rank "
+    head = ["| dofs | ranks | Newton its (each run) | CG its per Newton step (first run) | total s | µs per dof | peak MiB per rank "
             "| ratio to bare |", "|---:|---:|---:|---:|---:|---:|---:|---:|"]
     body, serial = [], {}
     for (cells, n), by in rows.items():
@@ -150,7 +157,8 @@ def main() -> None:
         t_o, t_b = med(o, "total"), med(b, "total")
         if n == 1:
             serial[cells] = (t_o, t_b)
-        body.append(f"| {o[0]['dofs']:,} | {n} | {o[0]['newton']} / {b[0]['newton']} | "
+        its = lambda rs: "/".join(str(x["newton"]) for x in rs)             # noqa: E731
+        body.append(f"| {o[0]['dofs']:,} | {n} | {its(o)} / {its(b)} | "
                     f"{krylov(o[0]):.1f} / {krylov(b[0]):.1f} | {t_o:.2f} / {t_b:.2f} | "
                     f"{1e6 * t_o / o[0]['dofs']:.1f} / {1e6 * t_b / b[0]['dofs']:.1f} | "
                     f"{med(o, 'peak_mib'):.0f} / {med(b, 'peak_mib'):.0f} | {t_o / t_b:.2f} |")
@@ -160,8 +168,11 @@ def main() -> None:
             t_o = statistics.median(x["total"] for x in by["ours"])
             t_b = statistics.median(x["total"] for x in by["bare"])
             speed.append(f"| {by['ours'][0]['dofs']:,} | {serial[cells][0] / t_o:.2f} | {serial[cells][1] / t_b:.2f} |")
-    first, last = rows[(sizes[0], ranks[0])]["ours"][0], rows[(sizes[-1], ranks[0])]["ours"][0]
+    n0 = min(n for _, n in rows)
+    done = [c for c in sizes if (c, n0) in rows]
+    first, last = rows[(done[0], n0)]["ours"][0], rows[(done[-1], n0)]["ours"][0]
     growth = krylov(last) / krylov(first)
+    pending = [c for c in sizes if not any(key[0] == c for key in rows)]
     md = ["# Scale: sagging beam, CG + GAMG with the rigid-body near-nullspace, ours / bare", "",
           f"Problem and options as in static_beam.md (P2 tetrahedra, quadrature degree 4, rtol 1e-8 CG). "
           f"Each cell is ours / bare; medians of {args.runs} runs, each its own process after a warm-up "
@@ -171,13 +182,15 @@ def main() -> None:
           "Parallel speedup (serial time / 2-rank time):", "",
           "| dofs | ours | bare |", "|---:|---:|---:|", *speed, "",
           f"CG iterations per Newton step grow {growth:.2f}x from {first['dofs']:,} to {last['dofs']:,} dofs "
-          "(serial, ours).", "",
+          f"({n0} rank(s), ours).", "",
           f"Machine: {os.cpu_count()} cores, Python {platform.python_version()}; 1-minute load average before "
           f"each run {min(loads):.2f} to {max(loads):.2f}; benchmark wall time "
           f"{(time.perf_counter() - t_start) / 60:.1f} min.", ""]
+    if pending:
+        md.append(f"Partial: {len(pending)} size(s) not measured yet when this file was written.\n")
     text = "\n".join(md)
-    print(text)
-    (HERE / "scale_beam.md").write_text(text)
+    print(text, flush=True)
+    (HERE / args.out).write_text(text)
 
 
 if __name__ == "__main__":
