@@ -442,13 +442,14 @@ J_PRECISION = 1e-8
 
 
 def _gauss_newton(design: AdjointDesign, spec, J_stop: float, history: list, scale_len: float):
-    """Gauss-Newton with Levenberg-Marquardt damping: each step solves (H + lam D) s = -g by CG
-    (matrix-free H products through K's factors; D the mass matrix over the volume). The step is
-    kept when J falls by a fair share of what the quadratic model predicts, and lam shrinks or grows
-    with that agreement (Nielsen's rule). Damping cuts the step along the directions where the
-    linearised forward map is least reliable, where a line search would shorten all of it. Each
-    trial forward solve starts from the linear predictor u + du(s) and does not fall back to load
-    continuation (a failed trial is a rejected step)."""
+    """Gauss-Newton with Levenberg-Marquardt damping: each step solves (A^T (W + lam D) A + R) s = -g
+    by CG, matrix-free through K's factors and preconditioned by the inverse-elastostatics tangent
+    (AdjointDesign.precondition). D, an H1 inner product, damps the predicted change of the deformed
+    shape: the step shortens along the directions where the linearised forward map is least reliable,
+    where a line search would shorten all of it. The step is kept when J falls by a fair share of the
+    model's prediction, and lam shrinks or grows with that agreement (Nielsen's rule). Trial forward
+    solves start from the linear predictor u + du(s) and do not fall back to load continuation (a
+    failed trial is a rejected step)."""
     comm = design.fwd.mesh.comm
     n = design.n
     d = np.zeros(n)
@@ -488,7 +489,6 @@ def _gauss_newton(design: AdjointDesign, spec, J_stop: float, history: list, sca
         predicted = -(dot(g, s) + 0.5 * dot(s, Hs.array))
         J_trial = design.forward(trial, guess=u_ok + design.linear_response(s), fallback=False)
         rho = (J - J_trial) / predicted if J_trial is not None and predicted > 0 else -1.0
-        step = float(np.sqrt(dot(s, s)))
         if rho > 1e-4:
             d, J = trial, J_trial
             g = design.linearise()
