@@ -218,7 +218,7 @@ class SNESDriver:
         """The residual norm round-off allows at the current state: safety x machine epsilon x
         |K|_inf x |u|_inf x sqrt(n). Stiff (nearly incompressible) materials make it reach 1e-6
         relative. With safety 1 it is still above the noise measured on the 19,683-dof P2 beam
-        (residuals stall at 0.1 of it), low enough not to cost accuracy (1e-9 relative there)."""
+        (residuals stall at 0.1 of it), low enough not to cost accuracy (1e-8 of the load scale there)."""
         x = self.p.u.vector
         return safety * np.finfo(float).eps * self.A.norm(PETSc.NormType.INFINITY) * \
             max(x.norm(PETSc.NormType.INFINITY), 1e-300) * np.sqrt(self.dofs)
