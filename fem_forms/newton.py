@@ -99,8 +99,6 @@ class SNESDriver:
         merged.update(linear.options(self.linear_kind, symmetric=self.E is not None,
                                      reuse_factor=self.reuse_factor))
         merged.update(self.user_options)
-        if getattr(self, "_load_scale", None) is not None and "snes_atol" not in self.user_options:
-            merged["snes_atol"] = 1e-10 * self._load_scale
         # block (BAIJ) matrices assemble 2.5-3x faster and MUMPS takes them; other solvers need AIJ
         mumps = merged.get("pc_type") in ("lu", "cholesky") and merged.get("pc_factor_mat_solver_type") == "mumps"
         self.A = fpetsc.create_matrix(self.a, "baij" if mumps else "aij")
@@ -159,7 +157,7 @@ class SNESDriver:
         the energy line search fail on noise and costs cut-backs (measured: 8 Newton steps for 4)."""
         self._history.append(float(fnorm))
         if it > 0:
-            snes.setTolerances(atol=max(self.options.get("snes_atol", 0.0), self.roundoff_floor(1.0)))
+            snes.setTolerances(atol=max(self.base_atol(), self.roundoff_floor(1.0)))
 
     # -- public ----------------------------------------------------------------------------------
     def residual_norm(self) -> float:
@@ -209,10 +207,15 @@ class SNESDriver:
             u.x.array[:] = 0.0
             self._load_scale = self.residual_norm()
             u.x.array[:] = saved
-            if "snes_atol" not in self.user_options:   # also converged at 1e-10 of the scale:
-                self.options["snes_atol"] = 1e-10 * self._load_scale  # a close first guess needs it
-                self.snes.setTolerances(atol=self.options["snes_atol"])
         return self._load_scale
+
+    def base_atol(self) -> float:
+        """SNES's absolute tolerance: the user's snes_atol, else 1e-10 of the load scale once known
+        (a close first guess must not be asked for 1e-9 of its own tiny residual)."""
+        if "snes_atol" in self.user_options:
+            return float(self.user_options["snes_atol"])
+        scale = getattr(self, "_load_scale", None)
+        return 1e-10 * scale if scale is not None else float(self.options.get("snes_atol", 0.0))
 
     def roundoff_floor(self, safety: float = 1e3) -> float:
         """The residual norm round-off allows at the current state: safety x machine epsilon x
@@ -235,7 +238,7 @@ class SNESDriver:
         if not self._finite_residual(self.x):
             self._linear_extension(x_old)
         x_old.destroy()
-        self.snes.setTolerances(atol=self.options.get("snes_atol", 0.0))
+        self.snes.setTolerances(atol=self.base_atol())
         self.snes.solve(None, self.x)
         reason = self.snes.getConvergedReason()
         self._set_state(self.x)

@@ -178,16 +178,20 @@ def test_unusable_rest_shape_is_refused(tmp_path, capsys):
     assert "no usable rest shape" in err
 
 
-@pytest.mark.mpi
-def test_two_ranks_design_the_same_rest_shape(tmp_path):
-    d = inverse_beam(E=1e6, cells=(12, 2, 2))
+def serial_and_two_ranks(tmp_path, d: dict) -> tuple[dict, dict]:
+    """results.json of the scene run in this process and under mpirun -n 2 (both must succeed)."""
     path = tmp_path / "scene.toml"
     path.write_text(toml_dumps(d))
     code, serial, _, _ = run_scene(tmp_path, d)
     assert code == 0
     p = mpirun(["-m", "fem_forms", "run", str(path), "--out", str(tmp_path / "par")])
     assert p.returncode == 0, p.stderr
-    par = json.loads((tmp_path / "par" / "results.json").read_text())
+    return serial, json.loads((tmp_path / "par" / "results.json").read_text())
+
+
+@pytest.mark.mpi
+def test_two_ranks_design_the_same_rest_shape(tmp_path):
+    serial, par = serial_and_two_ranks(tmp_path, inverse_beam(E=1e6, cells=(12, 2, 2)))
     np.testing.assert_allclose(par["probes"]["tip"]["rest_position"], serial["probes"]["tip"]["rest_position"],
                                rtol=1e-8, atol=1e-10)
     assert par["max_rest_offset"] == pytest.approx(serial["max_rest_offset"], rel=1e-9)
@@ -198,14 +202,7 @@ def test_two_ranks_design_the_same_rest_shape(tmp_path):
 def test_two_ranks_give_the_same_adjoint_design(tmp_path):
     """The adjoint stops once J cannot fall by more than its precision (1e-8 relative), which pins the
     design to about 1e-4 of its size: serial and 2 ranks agree to that."""
-    d = region_design(cells=(12, 2, 2))
-    path = tmp_path / "scene.toml"
-    path.write_text(toml_dumps(d))
-    code, serial, _, _ = run_scene(tmp_path, d)
-    assert code == 0
-    p = mpirun(["-m", "fem_forms", "run", str(path), "--out", str(tmp_path / "par")])
-    assert p.returncode == 0, p.stderr
-    par = json.loads((tmp_path / "par" / "results.json").read_text())
+    serial, par = serial_and_two_ranks(tmp_path, region_design(cells=(12, 2, 2)))
     np.testing.assert_allclose(par["probes"]["tip"]["rest_position"], serial["probes"]["tip"]["rest_position"],
                                rtol=0, atol=1e-4 * serial["max_rest_offset"])   # measured: 2e-5
     assert par["matched_mismatch_max"] == pytest.approx(serial["matched_mismatch_max"], rel=1e-4)
