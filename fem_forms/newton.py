@@ -16,6 +16,7 @@ from petsc4py import PETSc
 
 from . import linear
 from .errors import SolveError
+from .preconditioner_reuse import PreconditionerReuse
 
 _REASONS = {getattr(PETSc.SNES.ConvergedReason, n): n for n in dir(PETSc.SNES.ConvergedReason)
             if not n.startswith("_")}
@@ -42,6 +43,7 @@ class StepRecord:
     accepted: bool
     note: str = ""            # why an SNES-converged step was still rejected
     krylov_iterations: int = 0
+    preconditioner_builds: int = 0   # multigrid hierarchies built (kept across Newton steps when cheaper)
 
 
 @dataclass
@@ -63,6 +65,10 @@ class SolveReport:
     @property
     def krylov_iterations(self) -> int:
         return sum(s.krylov_iterations for s in self.steps)
+
+    @property
+    def preconditioner_builds(self) -> int:
+        return sum(s.preconditioner_builds for s in self.steps)
 
 
 class SNESDriver:
@@ -118,6 +124,10 @@ class SNESDriver:
         for k in merged:
             opts.delValue(self.prefix + k)
         self.options = merged
+        # multigrid set-up costs ~30 CG iterations: keep it across Newton steps while that is cheaper
+        self.pc_reuse = (PreconditionerReuse(snes, self.comm)
+                         if merged.get("pc_type") in ("gamg", "hypre") and "snes_lag_preconditioner" not in merged
+                         else None)
         if getattr(self, "snes", None) is not None:
             self.snes.destroy()
         self.snes = snes
@@ -143,6 +153,8 @@ class SNESDriver:
         fpetsc.assemble_matrix(A, self.a, bcs=self.p.bcs)
         A.assemble()
         self.assembly_time += time.perf_counter() - t
+        if snes is not None and self.pc_reuse is not None:
+            self.pc_reuse.decide()
 
     def _objective(self, snes, x) -> float:
         t = time.perf_counter()
@@ -239,12 +251,22 @@ class SNESDriver:
             self._linear_extension(x_old)
         x_old.destroy()
         self.snes.setTolerances(atol=self.base_atol())
+        builds0 = 0
+        if self.pc_reuse is not None:
+            self.pc_reuse.start_solve()
+            builds0 = self.pc_reuse.rebuilds
         self.snes.solve(None, self.x)
         reason = self.snes.getConvergedReason()
         self._set_state(self.x)
         return StepRecord(0.0, self.snes.getIterationNumber(), self._history,
                           _REASONS.get(reason, str(reason)), reason > 0,
-                          krylov_iterations=self.snes.getLinearSolveIterations())
+                          krylov_iterations=self.snes.getLinearSolveIterations(),
+                          preconditioner_builds=self.pc_reuse.rebuilds - builds0 if self.pc_reuse else 0)
+
+    def stale_preconditioner_failed(self) -> bool:
+        """Whether the last linear solve ran with a kept preconditioner (its failure is no reason
+        to give up the iterative solver: the retry builds a fresh one)."""
+        return self.pc_reuse is not None and self.pc_reuse.last_solve_reused
 
 
 def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1,
@@ -287,7 +309,9 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
         why = None
         if not rec.accepted:
             why = f"SNES {rec.reason}"
-            if rec.reason == "DIVERGED_LINEAR_SOLVE" and drv.linear_kind == "iterative" and linear_kind == "auto":
+            if rec.reason == "DIVERGED_LINEAR_SOLVE" and drv.stale_preconditioner_failed():
+                pass                                 # the retry (fresh SNES) rebuilds the preconditioner
+            elif rec.reason == "DIVERGED_LINEAR_SOLVE" and drv.linear_kind == "iterative" and linear_kind == "auto":
                 drv.linear_kind = "direct"           # indefinite tangent: fall back to LU
                 report.linear_solver = "iterative->direct"
             elif rec.reason == "DIVERGED_LINEAR_SOLVE" and drv.reuse_factor:

@@ -45,6 +45,7 @@ class StaticResult:
             "assembly_time_s": r.assembly_time,
             "linear_solver": r.linear_solver,
             "krylov_iterations": r.krylov_iterations,
+            "preconditioner_builds": r.preconditioner_builds,
             "element": ("P2-P1 (Taylor-Hood) " if self.model.scene.discretization.formulation == "mixed" else
                         f"P{self.model.scene.discretization.degree} ") + self.model.mesh.topology.cell_name(),
             "quadrature_degree": self.model.scene.discretization.quadrature,

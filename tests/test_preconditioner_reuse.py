@@ -1,0 +1,54 @@
+"""Multigrid kept across Newton steps: the answer is the direct solver's, fewer hierarchies are built
+than Newton steps, and the rule rebuilds exactly when the extra iterations cost more than a build."""
+import numpy as np
+import pytest
+from mpi4py import MPI
+from petsc4py import PETSc
+
+import fem_forms as ff
+from conftest import beam_scene
+from fem_forms import preconditioner_reuse as pr
+
+
+def _soft_beam(linear: str) -> ff.Scene:
+    scene = ff.Scene.from_dict(beam_scene(
+        mesh={"generator": "box", "size": [1.0, 0.1, 0.1], "cells": [20, 2, 2]},
+        material={"model": "neo-hookean", "E": 3e5, "nu": 0.3, "rho": 1000.0},
+        discretization={"degree": 2}))
+    scene.solver.linear = linear
+    return scene
+
+
+def test_kept_multigrid_gives_the_direct_answer_with_fewer_builds_than_newton_steps():
+    assert pr._SET_LAG is not None, "SNESSetLagPreconditioner must be reachable through petsc4py"
+    direct = ff.solve_static(_soft_beam("direct"))
+    iterative = ff.solve_static(_soft_beam("iterative"))
+    assert direct.report.converged and iterative.report.converged
+    rep = iterative.report
+    assert rep.linear_solver == "iterative" and rep.newton_iterations >= 4     # a truly nonlinear solve
+    assert 1 <= rep.preconditioner_builds < rep.newton_iterations
+    assert iterative.summary()["preconditioner_builds"] == rep.preconditioner_builds
+    np.testing.assert_allclose(iterative.probes["tip"], direct.probes["tip"], rtol=1e-6)
+    assert iterative.energy == pytest.approx(direct.energy, rel=1e-8)
+
+
+@pytest.mark.parametrize("extra_its, rebuild", [(0, False), (40, False), (60, True)])
+def test_rebuild_exactly_when_extra_iterations_cost_more_than_a_build(extra_its, rebuild):
+    snes = PETSc.SNES().create(MPI.COMM_SELF)
+    reuse = pr.PreconditionerReuse(snes, MPI.COMM_SELF)
+    # a build took 0.5 s; one iteration costs 0.01 s: break-even at 50 extra iterations
+    reuse._fresh = (True, 0.5, 0.01, 30)
+    reuse._last = (False, 0.0, 0.01, 30 + extra_its)
+    assert reuse.decide() is rebuild
+    assert reuse.last_solve_reused is (not rebuild)
+    snes.destroy()
+
+
+def test_first_jacobian_of_a_solve_always_rebuilds():
+    snes = PETSc.SNES().create(MPI.COMM_SELF)
+    reuse = pr.PreconditionerReuse(snes, MPI.COMM_SELF)
+    reuse._fresh = (True, 0.5, 0.01, 30)
+    reuse._last = (False, 0.0, 0.01, 30)
+    reuse.start_solve()
+    assert reuse.decide() is True
+    snes.destroy()
