@@ -105,11 +105,14 @@ class SNESDriver:
         merged.update(linear.options(self.linear_kind, symmetric=self.E is not None,
                                      reuse_factor=self.reuse_factor))
         merged.update(self.user_options)
-        # block (BAIJ) matrices assemble 2.5-3x faster and MUMPS takes them; other solvers need AIJ
+        # block (BAIJ) matrices assemble 2.5-3x faster and MUMPS takes them; multigrid (GAMG, hypre) needs
+        # AIJ and builds from an AIJ copy (self.P, made when it rebuilds); other solvers get AIJ
         mumps = merged.get("pc_type") in ("lu", "cholesky") and merged.get("pc_factor_mat_solver_type") == "mumps"
-        self.A = fpetsc.create_matrix(self.a, "baij" if mumps else "aij")
-        if merged.get("pc_type") == "gamg" and self.near_nullspace is not None:
-            self.A.setNearNullSpace(self.near_nullspace())
+        self.multigrid = merged.get("pc_type") in ("gamg", "hypre")
+        if getattr(self, "P", None) is not None:
+            self.P.destroy()
+        self.P = None
+        self.A = fpetsc.create_matrix(self.a, "baij" if mumps or self.multigrid else "aij")
         opts = PETSc.Options()
         for k, v in merged.items():
             opts[self.prefix + k] = v
@@ -126,8 +129,7 @@ class SNESDriver:
         self.options = merged
         # multigrid set-up costs ~30 CG iterations: keep it across Newton steps while that is cheaper
         self.pc_reuse = (PreconditionerReuse(snes, self.comm)
-                         if merged.get("pc_type") in ("gamg", "hypre") and "snes_lag_preconditioner" not in merged
-                         else None)
+                         if self.multigrid and "snes_lag_preconditioner" not in merged else None)
         if getattr(self, "snes", None) is not None:
             self.snes.destroy()
         self.snes = snes
@@ -152,9 +154,23 @@ class SNESDriver:
         A.zeroEntries()
         fpetsc.assemble_matrix(A, self.a, bcs=self.p.bcs)
         A.assemble()
+        if snes is not None and self.multigrid:
+            if self.pc_reuse is None or self.pc_reuse.decide():
+                self._refresh_multigrid_matrix(snes, A)
         self.assembly_time += time.perf_counter() - t
-        if snes is not None and self.pc_reuse is not None:
-            self.pc_reuse.decide()
+
+    def _refresh_multigrid_matrix(self, snes, A) -> None:
+        """Copy the block tangent into the AIJ matrix multigrid builds from (0.2 of an AIJ assembly,
+        measured; only when the hierarchy is rebuilt). The first copy is handed to SNES here, inside its
+        Jacobian callback: SNES gives its preconditioning matrix to the KSP right after this call."""
+        if self.P is None:
+            self.P = PETSc.Mat()
+            A.convert("aij", self.P)
+            if self.near_nullspace is not None:
+                self.P.setNearNullSpace(self.near_nullspace())
+            snes.setJacobian(self._jacobian, A, self.P)
+        else:
+            A.convert("aij", self.P)
 
     def _objective(self, snes, x) -> float:
         t = time.perf_counter()
