@@ -126,7 +126,7 @@ def run_ours(cells, kind: str) -> dict:
     total, cpu = time.perf_counter() - t0, time.process_time() - c0
     rep = res.report
     return {"dofs": res.model.dofs, "converged": rep.converged, "newton": rep.newton_iterations,
-            "krylov": rep.krylov_iterations,
+            "krylov": rep.krylov_iterations, "pc_builds": rep.preconditioner_builds,
             "linear_solver": rep.linear_solver, "assembly": rep.assembly_time, "solve": rep.solve_time,
             "total": total, "cpu": cpu, "max_u": res.max_displacement, "energy": res.energy,
             "residual": rep.residual_norm, "quadrature": scene.discretization.quadrature,
