@@ -12,6 +12,7 @@ from __future__ import annotations
 import ctypes
 import time
 
+import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
@@ -46,7 +47,6 @@ class PreconditionerReuse:
         self.comm = comm
         self.available = _SET_LAG is not None
         self.rebuilds = 0
-        self.reuses = 0
         snes.getKSP().setMonitor(self._ksp_monitor)
         self.start_solve()
 
@@ -74,7 +74,6 @@ class PreconditionerReuse:
         if self.available:
             _SET_LAG(ctypes.c_void_p(self.snes.handle), REBUILD_ONCE if rebuild else KEEP)
         self.rebuilds += rebuild
-        self.reuses += not rebuild
         self._reused_now = not rebuild
         self._t_operator = time.perf_counter()
         self._t_first = self._t_last = None
@@ -93,7 +92,9 @@ class PreconditionerReuse:
             return
         setup = self._t_first - self._t_operator
         per_it = (self._t_last - self._t_first) / max(self._its, 1)
-        setup, per_it = (self.comm.allreduce(v, op=MPI.MAX) for v in (setup, per_it))
+        costs = np.array([setup, per_it])
+        self.comm.Allreduce(MPI.IN_PLACE, costs, op=MPI.MAX)         # one reduction per Newton step
+        setup, per_it = costs
         self._last = (not self._reused_now, setup, per_it, self._its)
         if not self._reused_now:
             self._fresh = self._last
