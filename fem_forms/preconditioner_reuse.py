@@ -70,7 +70,7 @@ class PreconditionerReuse:
         if self.available and self._fresh is not None and self._last is not None:
             _, setup, per_it, fresh_its = self._fresh
             extra = self._last[3] - fresh_its
-            rebuild = extra * max(per_it, self._last[2]) > setup
+            rebuild = bool(extra * max(per_it, self._last[2]) > setup)
         if self.available:
             _SET_LAG(ctypes.c_void_p(self.snes.handle), REBUILD_ONCE if rebuild else KEEP)
         self.rebuilds += rebuild
@@ -94,7 +94,7 @@ class PreconditionerReuse:
         per_it = (self._t_last - self._t_first) / max(self._its, 1)
         costs = np.array([setup, per_it])
         self.comm.Allreduce(MPI.IN_PLACE, costs, op=MPI.MAX)         # one reduction per Newton step
-        setup, per_it = costs
+        setup, per_it = float(costs[0]), float(costs[1])
         self._last = (not self._reused_now, setup, per_it, self._its)
         if not self._reused_now:
             self._fresh = self._last

@@ -27,6 +27,7 @@ def test_kept_multigrid_gives_the_direct_answer_with_fewer_builds_than_newton_st
     rep = iterative.report
     assert rep.linear_solver == "iterative" and rep.newton_iterations >= 4     # a truly nonlinear solve
     assert 1 <= rep.preconditioner_builds < rep.newton_iterations
+    assert type(rep.preconditioner_builds) is int          # a count, not a numpy scalar (JSON writers)
     assert iterative.summary()["preconditioner_builds"] == rep.preconditioner_builds
     np.testing.assert_allclose(iterative.probes["tip"], direct.probes["tip"], rtol=1e-6)
     assert iterative.energy == pytest.approx(direct.energy, rel=1e-8)
