@@ -112,6 +112,7 @@ def main() -> None:
     ap.add_argument("--ranks", default="1,2")
     ap.add_argument("--out", default="scale_beam.md", help="table file name in benchmarks/")
     ap.add_argument("--sizes", type=int, nargs="*", help="only these box lengths in cells (30 40 80 120 160)")
+    ap.add_argument("--impls", default="ours,bare", help="ours,bare or ours (bare columns left empty)")
     ap.add_argument("--profile", action="store_true")
     ap.add_argument("--profile-cells", type=int, nargs=3, default=(80, 8, 8))
     ap.add_argument("--worker", nargs=4, metavar=("IMPL", "NX", "NY", "NZ"), help=argparse.SUPPRESS)
@@ -130,9 +131,10 @@ def main() -> None:
     t_start, loads, rows = time.perf_counter(), [], {}
     for cells in sizes:
         for n in ranks:
+            impls = args.impls.split(",")
             by = {"ours": [], "bare": []}
             for r in range(args.runs):
-                for impl in (("ours", "bare") if r % 2 == 0 else ("bare", "ours")):
+                for impl in (impls if r % 2 == 0 else impls[::-1]):
                     loads.append(os.getloadavg()[0])
                     res = run(impl, cells, n)
                     by[impl].append(res)
@@ -154,21 +156,28 @@ def write_table(rows: dict, args, sizes: list, loads: list, t_start: float) -> N
     for (cells, n), by in rows.items():
         o, b = by["ours"], by["bare"]
         med = lambda rs, k: statistics.median(x[k] for x in rs)           # noqa: E731
-        t_o, t_b = med(o, "total"), med(b, "total")
+        t_o, t_b = med(o, "total"), (med(b, "total") if b else None)
         if n == 1:
             serial[cells] = (t_o, t_b)
-        its = lambda rs: "/".join(str(x["newton"]) for x in rs)             # noqa: E731
+        its = lambda rs: "/".join(str(x["newton"]) for x in rs) or "—"      # noqa: E731
         builds = o[0].get("pc_builds", o[0]["newton"])        # bare SNES rebuilds at every Newton step
-        body.append(f"| {o[0]['dofs']:,} | {n} | {its(o)} / {its(b)} | {builds} / {b[0]['newton']} | "
-                    f"{krylov(o[0]):.1f} / {krylov(b[0]):.1f} | {t_o:.2f} / {t_b:.2f} | "
-                    f"{1e6 * t_o / o[0]['dofs']:.1f} / {1e6 * t_b / b[0]['dofs']:.1f} | "
-                    f"{med(o, 'peak_mib'):.0f} / {med(b, 'peak_mib'):.0f} | {t_o / t_b:.2f} |")
+        spread = f" ({min(x['total'] for x in o):.0f}-{max(x['total'] for x in o):.0f})" if len(o) > 1 else ""
+        if b:
+            bare = (b[0]["newton"], f"{krylov(b[0]):.1f}", f"{t_b:.2f}", f"{1e6 * t_b / b[0]['dofs']:.1f}",
+                    f"{med(b, 'peak_mib'):.0f}", f"{t_o / t_b:.2f}")
+        else:
+            bare = ("—",) * 5 + ("—",)
+        body.append(f"| {o[0]['dofs']:,} | {n} | {its(o)} / {its(b)} | {builds} / {bare[0]} | "
+                    f"{krylov(o[0]):.1f} / {bare[1]} | {t_o:.2f}{spread} / {bare[2]} | "
+                    f"{1e6 * t_o / o[0]['dofs']:.1f} / {bare[3]} | "
+                    f"{med(o, 'peak_mib'):.0f} / {bare[4]} | {bare[5]} |")
     speed = []
     for (cells, n), by in rows.items():
         if n > 1 and cells in serial:
             t_o = statistics.median(x["total"] for x in by["ours"])
-            t_b = statistics.median(x["total"] for x in by["bare"])
-            speed.append(f"| {by['ours'][0]['dofs']:,} | {serial[cells][0] / t_o:.2f} | {serial[cells][1] / t_b:.2f} |")
+            t_b = statistics.median(x["total"] for x in by["bare"]) if by["bare"] else None
+            bare = f"{serial[cells][1] / t_b:.2f}" if t_b and serial[cells][1] else "—"
+            speed.append(f"| {by['ours'][0]['dofs']:,} | {serial[cells][0] / t_o:.2f} | {bare} |")
     n0 = min(n for _, n in rows)
     done = [c for c in sizes if (c, n0) in rows]
     first, last = rows[(done[0], n0)]["ours"][0], rows[(done[-1], n0)]["ours"][0]
@@ -178,7 +187,8 @@ def write_table(rows: dict, args, sizes: list, loads: list, t_start: float) -> N
           f"Problem and options as in static_beam.md (P2 tetrahedra, quadrature degree 4, rtol 1e-8 CG). "
           "Ours keeps the GAMG hierarchy across Newton steps while that is cheaper than rebuilding "
           "(fem_forms/preconditioner_reuse.py); bare rebuilds it at every Newton step. "
-          f"Each cell is ours / bare; medians of {args.runs} runs, each its own process after a warm-up "
+          f"Each cell is ours / bare; medians of {args.runs} runs (ours' range in parentheses; — : bare not "
+          "run in this benchmark), each its own process after a warm-up "
           "solve (JIT excluded); total is the wall time from scene to solution (largest rank); peak is "
           "ru_maxrss of the largest rank. OPENBLAS_NUM_THREADS=1; 2 ranks with `mpirun --bind-to none`.", "",
           *head, *body, "",
