@@ -166,7 +166,7 @@ def write_table(rows: dict, args, sizes: list, loads: list, t_start: float) -> N
             bare = (b[0]["newton"], f"{krylov(b[0]):.1f}", f"{t_b:.2f}", f"{1e6 * t_b / b[0]['dofs']:.1f}",
                     f"{med(b, 'peak_mib'):.0f}", f"{t_o / t_b:.2f}")
         else:
-            bare = ("—",) * 5 + ("—",)
+            bare = ("—",) * 6
         body.append(f"| {o[0]['dofs']:,} | {n} | {its(o)} / {its(b)} | {builds} / {bare[0]} | "
                     f"{krylov(o[0]):.1f} / {bare[1]} | {t_o:.2f}{spread} / {bare[2]} | "
                     f"{1e6 * t_o / o[0]['dofs']:.1f} / {bare[3]} | "
