@@ -128,10 +128,10 @@ def main() -> None:
 
     ranks = [int(r) for r in args.ranks.split(",")]
     sizes = [c for c in SIZES if c[0] <= args.max_cells and (not args.sizes or c[0] in args.sizes)]
+    impls = args.impls.split(",")
     t_start, loads, rows = time.perf_counter(), [], {}
     for cells in sizes:
         for n in ranks:
-            impls = args.impls.split(",")
             by = {"ours": [], "bare": []}
             for r in range(args.runs):
                 for impl in (impls if r % 2 == 0 else impls[::-1]):

@@ -52,7 +52,7 @@ class PreconditionerReuse:
 
     def start_solve(self) -> None:
         """A new SNES solve (new load step or problem): its first Jacobian rebuilds."""
-        self._last = None          # (fresh?, setup seconds, seconds per iteration, iterations) of the last solve
+        self._last = None          # (setup seconds, seconds per iteration, iterations) of the last solve
         self._fresh = None         # the same for the last solve with a fresh preconditioner
         self._reused_now = False
         self._t_operator = None
@@ -68,9 +68,9 @@ class PreconditionerReuse:
         self._finish_solve()
         rebuild = True
         if self.available and self._fresh is not None and self._last is not None:
-            _, setup, per_it, fresh_its = self._fresh
-            extra = self._last[3] - fresh_its
-            rebuild = bool(extra * max(per_it, self._last[2]) > setup)
+            setup, per_it, fresh_its = self._fresh
+            extra = self._last[2] - fresh_its
+            rebuild = bool(extra * max(per_it, self._last[1]) > setup)
         if self.available:
             _SET_LAG(ctypes.c_void_p(self.snes.handle), REBUILD_ONCE if rebuild else KEEP)
         self.rebuilds += rebuild
@@ -95,7 +95,7 @@ class PreconditionerReuse:
         costs = np.array([setup, per_it])
         self.comm.Allreduce(MPI.IN_PLACE, costs, op=MPI.MAX)         # one reduction per Newton step
         setup, per_it = float(costs[0]), float(costs[1])
-        self._last = (not self._reused_now, setup, per_it, self._its)
+        self._last = (setup, per_it, self._its)
         if not self._reused_now:
             self._fresh = self._last
         self._t_operator = None
