@@ -46,7 +46,7 @@ def bare_eps(K, M, kind: str, V):
     """SLEPc set up by hand: the reference for our wrapper's overhead."""
     from petsc4py import PETSc
     from slepc4py import SLEPc
-    from fem_forms import linear
+    from fem_forms.solvers import linear
     eps = SLEPc.EPS().create(K.getComm())
     eps.setOperators(K, M)
     eps.setProblemType(SLEPc.EPS.ProblemType.GHEP)

@@ -96,23 +96,23 @@ def scene_dict(cells, kind: str) -> dict:
 def run_ours(cells, kind: str) -> dict:
     sys.path.insert(0, str(ROOT))
     import fem_forms as ff
-    from fem_forms import newton
+    from fem_forms.solvers import snes
 
     ff.quiet_jit()
     # record what the driver really used (options, matrix type) and count its assembly callbacks;
     # the wrappers cost a Python call each (microseconds)
     seen = {"options": None, "mat_type": None, "calls": {"R": 0, "J": 0, "E": 0}}
-    build, cbs = newton.SNESDriver._build_snes, {}
+    build, cbs = snes.SNESDriver._build_snes, {}
 
     def recording_build(self):
         build(self)
         seen["options"], seen["mat_type"] = dict(self.options), self.A.getType()
-    newton.SNESDriver._build_snes = recording_build
+    snes.SNESDriver._build_snes = recording_build
     for key, name in (("R", "_residual"), ("J", "_jacobian"), ("E", "_objective")):
-        def counted(self, *a, _f=getattr(newton.SNESDriver, name), _k=key):
+        def counted(self, *a, _f=getattr(snes.SNESDriver, name), _k=key):
             seen["calls"][_k] += 1
             return _f(self, *a)
-        setattr(newton.SNESDriver, name, counted)
+        setattr(snes.SNESDriver, name, counted)
 
     warm = ff.solve_static(ff.Scene.from_dict(scene_dict(WARMUP_CELLS, kind)))
     assert warm.report.converged, warm.report.message

@@ -1,3 +1,3 @@
-from .cli import entry
+from fem_forms.cli import entry
 
 entry()

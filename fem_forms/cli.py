@@ -7,8 +7,12 @@ import argparse
 import sys
 from pathlib import Path
 
-from .errors import InputError, SolveError
-from .logs import quiet_jit
+from fem_forms.errors import InputError, SolveError
+from fem_forms.logs import quiet_jit
+from mpi4py import MPI
+from fem_forms.analyses import run_analysis
+from fem_forms.scene import Scene, parse_assignment
+from fem_forms.study import run_study, solve_to_tolerance
 
 
 def _petsc_options(extra: list[str]) -> dict:
@@ -52,12 +56,9 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _run(args, petsc: dict) -> int:
-    from .scene import Scene, parse_assignment
-    from .analyses import run_analysis
 
     overrides = dict(parse_assignment(a) for a in args.set)
     if args.command == "study":
-        from .study import run_study
         if petsc:
             raise InputError("study: PETSc options go into the scene ([solver] petsc) or --set")
         run_study(Path(args.scene), Path(args.out), args.degrees, args.refine, overrides, args.ranks)
@@ -65,8 +66,6 @@ def _run(args, petsc: dict) -> int:
     scene = Scene.from_file(args.scene, overrides)
     scene.solver.petsc.update(petsc)
     if scene.discretization.tolerance is not None and not args.no_adapt:
-        from mpi4py import MPI
-        from .study import solve_to_tolerance
         if petsc or MPI.COMM_WORLD.size > 1:
             raise InputError("discretization.tolerance: run serially, with PETSc options in the scene")
         s = solve_to_tolerance(Path(args.scene), Path(args.out), scene.discretization.tolerance, overrides)

@@ -15,8 +15,8 @@ from dolfinx import cpp, mesh as dmesh
 from dolfinx.io import gmshio
 from mpi4py import MPI
 
-from .errors import InputError
-from .scene import MeshSpec
+from fem_forms.errors import InputError
+from fem_forms.scene import MeshSpec
 
 
 @dataclass

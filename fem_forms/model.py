@@ -8,11 +8,17 @@ import ufl
 from dolfinx import fem
 from mpi4py import MPI
 
-from .kinematics import deformation_gradient
-from .loads import LoadFactor, external_work, supports
-from .materials import Material, as_material, make_material
-from .meshes import LoadedMesh, load_mesh
-from .scene import Scene
+from fem_forms.kinematics import deformation_gradient
+from fem_forms.meshes import LoadedMesh, load_mesh
+from fem_forms.scene import Scene
+from fem_forms.physics.supports import LoadFactor
+from fem_forms.materials.hyperelastic import Material
+from fem_forms.materials.hyperelastic import as_material
+from fem_forms.physics.loads import external_work
+from fem_forms.materials.hyperelastic import make_material
+from fem_forms.physics.supports import supports
+import basix
+from fem_forms.materials import mixed_energy
 
 
 @dataclass
@@ -81,7 +87,6 @@ class Model:
 
 
 def _quadrature_points(mesh, degree: int):
-    import basix
     cell = {"tetrahedron": basix.CellType.tetrahedron,
             "hexahedron": basix.CellType.hexahedron}[mesh.topology.cell_name()]
     return basix.make_quadrature(cell, max(degree, 1))
@@ -99,7 +104,6 @@ NEARLY_INCOMPRESSIBLE_NU = 0.49
 
 def build_model(scene: Scene, material=None, comm: MPI.Comm = MPI.COMM_WORLD) -> Model:
     """Mesh, spaces, supports and the total potential energy for a scene (displacement or mixed u-p)."""
-    from .materials import mixed_energy
     loaded = load_mesh(scene.mesh, comm)
     mesh = loaded.mesh
     mat = build_material(scene, material)

@@ -17,8 +17,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import InputError, SolveError
-from .scene import Scene
+from fem_forms.errors import InputError, SolveError
+from fem_forms.scene import Scene
+from mpi4py import MPI
+from fem_forms.output.results import write_json_atomic
 
 
 @dataclass
@@ -197,7 +199,6 @@ def pareto(runs: list[Run]) -> list[Run]:
 
 def run_study(scene_path: Path, out: Path, degrees: list[int], refine: int, overrides: dict,
               ranks: int = 1) -> list[Run]:
-    from mpi4py import MPI
     if MPI.COMM_WORLD.size > 1:
         raise InputError("study: run it serially; use --ranks N for parallel runs of the ladder")
     out.mkdir(parents=True, exist_ok=True)
@@ -219,7 +220,6 @@ def solve_to_tolerance(scene_path: Path, out: Path, tolerance: float, overrides:
                        degrees=(1, 2), refine: int = 3) -> dict:
     """Accuracy on request: run the ladder, pick the cheapest run whose estimated error meets the
     tolerance, and make its results the answer in `out` (results.json gains "error_estimate")."""
-    from .output import write_json_atomic
     runs = study(scene_path, out / "study", list(degrees), refine, overrides, echo=False)
     write_report(runs, out / "study", "accuracy on request")
     best = cheapest_meeting(runs, tolerance)

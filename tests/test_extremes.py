@@ -7,7 +7,7 @@ import pytest
 from dolfinx import fem, mesh as dmesh
 
 import fem_forms as ff
-from fem_forms import newton
+from fem_forms.solvers import continuation, snes
 from fem_forms.model import build_model
 from conftest import beam_scene
 from test_static_physics import uniaxial_stretches, block_scene, E as E_BLOCK
@@ -108,7 +108,7 @@ def test_mesh_with_sliver_cells_still_passes_the_patch_test(tmp_path):
     model.mesh.topology.create_connectivity(2, 3)
     facets = dmesh.exterior_facet_indices(model.mesh.topology)
     bcs = [fem.dirichletbc(g_, fem.locate_dofs_topological(model.V, 2, facets))]
-    report = newton.solve(newton.NonlinearProblem(model.u, model.residual, model.jacobian, bcs,
+    report = continuation.solve(snes.NonlinearProblem(model.u, model.residual, model.jacobian, bcs,
                                                   energy=model.energy))
     assert report.converged
     assert np.abs(model.u.x.array - g_.x.array).max() < 1e-9

@@ -7,7 +7,7 @@ from petsc4py import PETSc
 
 import fem_forms as ff
 from conftest import beam_scene
-from fem_forms import preconditioner_reuse as pr
+from fem_forms.solvers import preconditioner_reuse as pr
 
 
 def _soft_beam(linear: str) -> ff.Scene:

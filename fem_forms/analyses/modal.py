@@ -21,12 +21,17 @@ from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from .. import eigen, linear, probes
-from ..errors import InputError, SolveError
-from ..meshes import bounding_box
-from ..model import Model, build_model
-from ..scene import Scene
-from .static import StaticResult, max_norm, peak_memory_mb, solve_static
+from fem_forms.errors import InputError, SolveError
+from fem_forms.meshes import bounding_box
+from fem_forms.model import Model, build_model
+from fem_forms.scene import Scene
+from fem_forms.equilibrium import StaticResult, max_norm, peak_memory_mb, solve_static
+from fem_forms.solvers import eigen
+from fem_forms.output import fields
+from fem_forms.solvers import linear
+from fem_forms.output import probes
+from fem_forms.output import results
+from fem_forms.output import sound
 
 RIGID_EXTRA = 6          # modes requested beyond `count` when rigid-body modes may be present
 SHIFT_FRACTION = 1e-2    # unsupported parts: target = -SHIFT_FRACTION x (estimated first omega^2)
@@ -262,10 +267,9 @@ def solve_modal(scene: Scene, material=None, model: Model | None = None) -> Moda
 
 def modes_picture(path: Path, result: ModalResult, count: int = 6) -> None:
     """PNG: small multiples of the first modes, each boundary deformed by its scaled mode shape."""
-    from .. import output
-    surfaces = [output.boundary_surface(f) for f in result.modes[:count]]   # collective
+    surfaces = [fields.boundary_surface(f) for f in result.modes[:count]]   # collective
     # about a loaded equilibrium the modes are drawn on the deformed shape
-    base = output.boundary_surface(result.model.u) if result.static is not None else None
+    base = fields.boundary_surface(result.model.u) if result.static is not None else None
     comm = result.model.mesh.comm
     if comm.rank == 0:
         import matplotlib
@@ -303,7 +307,6 @@ def modes_picture(path: Path, result: ModalResult, count: int = 6) -> None:
 
 def write_modal_outputs(result: ModalResult, out: Path) -> dict:
     """Mode shapes (XDMF, P1, unit largest displacement), picture, sound; results.json last."""
-    from .. import output, sound
 
     out = Path(out)
     comm = result.model.mesh.comm
@@ -316,10 +319,10 @@ def write_modal_outputs(result: ModalResult, out: Path) -> dict:
     if scene.output.fields and result.modes:
         shapes = []
         for f in result.modes:
-            g = output.p1_interpolant(f, f.name)
+            g = fields.p1_interpolant(f, f.name)
             g.x.array[:] /= max(max_norm(f), 1e-300)
             shapes.append(g)
-        output.write_fields(out / "modes.xdmf", result.model.mesh, shapes)
+        fields.write_fields(out / "modes.xdmf", result.model.mesh, shapes)
         files["modes"] = "modes.xdmf"
     if scene.output.picture and result.modes:
         modes_picture(out / "modes.png", result)
@@ -329,7 +332,7 @@ def write_modal_outputs(result: ModalResult, out: Path) -> dict:
         files["sound"] = summary["sound"]["wav"]
         files["spectrogram"] = summary["sound"]["spectrogram"]
     summary["files"] = files
-    output.write_json_atomic(out / "results.json", summary, comm)
+    results.write_json_atomic(out / "results.json", summary, comm)
     return summary
 
 

@@ -5,7 +5,7 @@ import numpy as np
 from dolfinx import fem, geometry
 from mpi4py import MPI
 
-from .errors import InputError
+from fem_forms.errors import InputError
 
 
 def evaluate(f: fem.Function, points: dict[str, list]) -> dict[str, list]:

@@ -1,15 +1,13 @@
-"""Boundary selectors, supports (Dirichlet conditions) and external loads as UFL terms."""
+"""Boundary selectors, the load factor and supports (Dirichlet conditions with Constant values)."""
 from __future__ import annotations
 
 import numpy as np
-import ufl
 from dolfinx import fem, mesh as dmesh
 from mpi4py import MPI
 from petsc4py import PETSc
-
-from .errors import InputError
-from .meshes import LoadedMesh, bounding_box, mesh_size
-from .scene import Fix, Load, Selector
+from fem_forms.errors import InputError
+from fem_forms.meshes import LoadedMesh, bounding_box, mesh_size
+from fem_forms.scene import Fix, Load, Selector
 
 
 def locate_facets(loaded: LoadedMesh, sel: Selector) -> np.ndarray:
@@ -73,37 +71,6 @@ def supports(V: fem.FunctionSpace, loaded: LoadedMesh, fixes: list[Fix], load: L
     return bcs
 
 
-def external_work(u, loaded: LoadedMesh, loads: list[Load], rho: float, load: LoadFactor,
-                  dx: ufl.Measure) -> tuple:
-    """(W, pressure_residual): the work of conservative loads (gravity, dead traction) as an energy
-    term, and the virtual work of follower pressure, which has no energy, as a residual term."""
-    mesh = loaded.mesh
-    tags, ids = load_regions(loaded, loads)
-    ds = ufl.Measure("ds", domain=mesh, subdomain_data=tags, metadata=dx.metadata())
-    W = 0
-    pressure_terms = []
-    for i, spec in enumerate(loads):
-        if spec.type == "gravity":
-            W = W + rho * ufl.dot(fem.Constant(mesh, PETSc.ScalarType(spec.g)), u) * dx
-        elif spec.type == "traction":
-            t = fem.Constant(mesh, PETSc.ScalarType(spec.value))
-            W = W + sum(ufl.dot(t, u) * ds(k) for k in ids[i])
-        else:
-            pressure_terms.append((spec.pressure, ids[i]))
-    W = load.constant * W if not isinstance(W, int) else None
-
-    def pressure_residual(v, F):
-        """Virtual work of pressure p on the deformed surface: int p J F^-T N . v dA."""
-        if not pressure_terms:
-            return None
-        N = ufl.FacetNormal(mesh)
-        J = ufl.det(F)
-        return load.constant * sum(p * J * ufl.dot(ufl.inv(F).T * N, v) * ds(k)
-                                 for p, ks in pressure_terms for k in ks)
-
-    return W, pressure_residual
-
-
 def load_regions(loaded: LoadedMesh, loads: list[Load]):
     """One facet MeshTags for all surface loads: each distinct set of loads sharing a facet gets an id."""
     mesh = loaded.mesh
@@ -122,3 +89,4 @@ def load_regions(loaded: LoadedMesh, loads: list[Load]):
     facets = np.array(sorted(owner), dtype=np.int32)
     values = np.array([cid[owner[f]] for f in facets], dtype=np.int32)
     return dmesh.meshtags(mesh, fdim, facets, values), ids
+

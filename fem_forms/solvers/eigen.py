@@ -14,8 +14,8 @@ import numpy as np
 from petsc4py import PETSc
 from slepc4py import SLEPc
 
-from . import linear
-from .errors import SolveError
+from fem_forms.errors import SolveError
+from fem_forms.solvers import linear
 
 ST_DIRECT = {"st_ksp_type": "preonly", "st_pc_type": "lu", "st_pc_factor_mat_solver_type": "mumps"}
 ST_ITERATIVE = {"st_" + k: v for k, v in linear.ITERATIVE.items()} | {"st_ksp_rtol": 1e-10,

@@ -1,18 +1,12 @@
-"""Hyperelastic energy densities psi(F) as UFL expressions, and the stresses derived from them.
-
-A material is anything with a method ``psi(F)``; a plain function of F is wrapped by
-``as_material``. Stresses come from the energy with ``ufl.diff``, never written by hand.
-"""
+"""Hyperelastic energy densities psi(F) as UFL expressions: the built-in models and user functions."""
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
 from typing import Callable, Protocol
-
 import ufl
-
-from .errors import InputError
-from .kinematics import green_strain, invariants, small_strain
+from fem_forms.errors import InputError
+from fem_forms.kinematics import green_strain, invariants, small_strain
 
 
 class Material(Protocol):
@@ -155,21 +149,6 @@ def make_material(model: str, *, E: float | None = None, nu: float | None = None
     return MODELS[model](float(mu), float(lmbda))
 
 
-def mixed_energy(material: Material, F, p):
-    """Perturbed-Lagrangian energy of the u-p formulation: psi|_(lambda=0)(F) + p theta(F) - p^2/(2 lambda).
-    Stationary in p at p = lambda theta, where it equals psi(F); finite as lambda grows (nu -> 1/2),
-    so nearly incompressible parts neither lock nor fail."""
-    import dataclasses
-    if not hasattr(material, "volumetric") or not hasattr(material, "lmbda"):
-        raise InputError("discretization.formulation = 'mixed': needs a built-in material model "
-                         "(a user psi(F) has no volumetric part to split off)")
-    if material.lmbda <= 0:
-        raise InputError("discretization.formulation = 'mixed': needs lambda > 0 (nu > 0); it is meant "
-                         "for nearly incompressible materials")
-    deviatoric = dataclasses.replace(material, lmbda=0.0)
-    return deviatoric.psi(F) + p * material.volumetric(F) - p**2 / (2 * material.lmbda)
-
-
 def as_material(material) -> Material:
     """Accept a Material or a plain function psi(F)."""
     if hasattr(material, "psi"):
@@ -178,19 +157,3 @@ def as_material(material) -> Material:
         return UserMaterial(material, getattr(material, "__name__", "user"))
     raise InputError(f"material: {material!r} is neither a material nor a function psi(F)")
 
-
-def first_piola_kirchhoff(material: Material, F) -> ufl.core.expr.Expr:
-    """P = d psi / d F."""
-    F = ufl.variable(F)
-    return ufl.diff(material.psi(F), F)
-
-
-def cauchy_stress(material: Material, F) -> ufl.core.expr.Expr:
-    """sigma = P F^T / J."""
-    return first_piola_kirchhoff(material, F) * F.T / ufl.det(F)
-
-
-def von_mises(sigma) -> ufl.core.expr.Expr:
-    """sqrt(3/2 s:s) with s the deviator of sigma."""
-    s = ufl.dev(sigma)
-    return ufl.sqrt(1.5 * ufl.inner(s, s))

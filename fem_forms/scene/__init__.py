@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .errors import InputError
+from fem_forms.errors import InputError
 
 ANALYSES = ("static", "modal", "inverse")   # extended as analyses register (see analyses/__init__.py)
 GENERATORS = ("box", "cylinder", "sphere", "revolve", "file")
@@ -339,7 +339,7 @@ def _parse_mesh(t: _Table, base_dir: Path) -> MeshSpec:
 
 
 def _parse_material(t: _Table) -> MaterialSpec:
-    from .materials import make_material
+    from fem_forms.materials import make_material
     s = MaterialSpec(model=t.string("model", "neo-hookean"))
     s.E = t.number("E")
     s.nu = t.number("nu")

@@ -1,0 +1,81 @@
+"""Inverse rest-shape design analysis: run the scene's method, check the design, write outputs."""
+from __future__ import annotations
+
+import time
+from pathlib import Path
+import numpy as np
+from dolfinx import fem
+from fem_forms.errors import SolveError
+from fem_forms.meshes import load_mesh
+from fem_forms.scene import Scene
+from fem_forms.design.parameters import InverseResult
+from fem_forms.analyses.inverse.check import check_rest_shape
+from fem_forms.output import fields
+from fem_forms.analyses.inverse.check import picture
+from fem_forms.output import probes
+from fem_forms.output import results
+from fem_forms.design.optimizers import solve_adjoint
+from fem_forms.design.direct import solve_direct
+from fem_forms.design.fixed_point import solve_fixed_point
+from fem_forms.design.parameters import target_scene
+from fem_forms.equilibrium import max_norm
+
+
+METHODS = {"direct": solve_direct, "adjoint": solve_adjoint, "fixed-point": solve_fixed_point}
+
+
+def design_rest_shape(scene: Scene, material=None) -> InverseResult:
+    """Run the scene's inverse method (mesh loading and compilation included in solve_time)."""
+    t0 = time.perf_counter()
+    loaded = load_mesh(target_scene(scene))
+    V = fem.VectorFunctionSpace(loaded.mesh, ("Lagrange", scene.discretization.degree))
+    probes.evaluate(fem.Function(V), scene.output.probes)       # a probe outside the target: bad input
+    res = METHODS[scene.inverse.method](scene, material, loaded)
+    res.solve_time = time.perf_counter() - t0
+    return res
+
+
+def run(scene: Scene, out: Path, echo: bool = False) -> dict:
+    """CLI entry: design, check, write outputs; SolveError (exit 3) for any unusable design."""
+    t0 = time.perf_counter()
+    res = design_rest_shape(scene)
+    comm = res.loaded.mesh.comm
+    if comm.rank == 0:
+        out.mkdir(parents=True, exist_ok=True)
+    comm.barrier()
+    summary = {"analysis": "inverse", "title": scene.title, "method": res.method,
+               "dofs": res.v.function_space.dofmap.index_map.size_global * 3,
+               "iterations": res.iterations, "converged": res.converged, "design_time_s": res.solve_time,
+               "forward_solves": res.forward_solves, "mpi_ranks": comm.size, "history": res.history}
+    problems = [] if res.converged else [f"the {res.method} method did not reach a rest shape: {res.message}"]
+    check = None
+    if res.converged:
+        check = check_rest_shape(scene, res, out)
+        problems += check.problems
+        summary["target_mismatch_max"] = check.mismatch_max
+        summary["design_gap_max"] = check.design_gap_max
+        if check.matched_mismatch_max is not None:
+            summary["matched_mismatch_max"] = check.matched_mismatch_max
+        summary["rest_mesh"] = str((out / "rest_shape.msh"))
+        summary["rest_surface"] = str((out / "rest_shape.stl"))
+        summary["max_rest_offset"] = max_norm(res.v)
+        offsets = probes.evaluate(res.v, scene.output.probes)
+        summary["probes"] = {n: {"point": p, "rest_position": (np.array(p) + offsets[n]).tolist()}
+                             for n, p in scene.output.probes.items()}
+        fields.write_fields(out / "fields.xdmf", res.loaded.mesh,
+                            [fields.p1_interpolant(res.v, "rest_minus_target")])
+        picture(out / "inverse.png", res, check, scene.title)
+    summary["usable"] = not problems
+    summary["problems"] = problems
+    summary["wall_time_s"] = time.perf_counter() - t0
+    results.write_json_atomic(out / "results.json", summary, comm)
+    if echo and comm.rank == 0 and not problems:
+        print(f"{scene.title}: rest shape by the {res.method} method in {res.iterations} iterations, "
+              f"{res.solve_time:.2f} s; largest rest offset {summary['max_rest_offset']:.4g} m; forward check "
+              f"lands within {check.mismatch_max:.3g} m of the target"
+              + ("" if check.matched_mismatch_max is None else
+                 f" ({check.matched_mismatch_max:.3g} m where matched)") + f" -> {out}")
+    if problems:
+        raise SolveError(f"{scene.title}: no usable rest shape: {'; '.join(problems)}")
+    return summary
+

@@ -1,0 +1,153 @@
+"""Every designed rest shape is checked before it is handed out: written, read back, solved forward."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+import numpy as np
+from mpi4py import MPI
+from fem_forms.errors import InputError
+from fem_forms.meshes import mesh_size
+from fem_forms.scene import MeshSpec, Scene
+from fem_forms.design.parameters import InverseResult
+from fem_forms.output import fields
+from fem_forms.output import pictures
+from fem_forms.design import rest_shape
+import copy
+from scipy.spatial import cKDTree
+from fem_forms.equilibrium import solve_static
+
+
+@dataclass
+class ForwardCheck:
+    mismatch_max: float             # largest distance of the forward-solved shape from the target
+    static: object                  # the StaticResult of the forward solve from the rest shape
+    problems: list
+    design_gap_max: float = np.inf  # ... from the deformed shape the design predicted
+    matched_mismatch_max: float | None = None   # ... from the target on the matched points/region
+
+
+def _matched_vertices(spec, pts_target: np.ndarray, size: float) -> np.ndarray | None:
+    """Mask of the target's vertices an adjoint objective matches (None: the whole body)."""
+    if spec.method != "adjoint" or (spec.match_points is None and spec.match_region is None):
+        return None
+    mask = np.zeros(len(pts_target), dtype=bool)
+    if spec.match_points is not None:
+        mask[cKDTree(pts_target).query(np.asarray(spec.match_points, dtype=float))[1]] = True
+    else:
+        tol = 1e-9 * size
+        lo, hi = np.asarray(spec.match_region.lo), np.asarray(spec.match_region.hi)
+        mask = np.all((pts_target >= lo - tol) & (pts_target <= hi + tol), axis=1)
+    return mask
+
+
+def check_rest_shape(scene: Scene, res: InverseResult, out: Path) -> ForwardCheck:
+    """Write the rest shape (volume .msh + STL), check it crosses no support plane and does not
+    intersect itself, then read it back as a file mesh, solve the forward problem from it and measure
+    the largest distance of the deformed shape from the target."""
+    mesh = res.loaded.mesh
+    comm = mesh.comm
+    size = mesh_size(mesh)
+    shift = fields.node_values(res.v)
+    gathered = fields.gather_mesh(mesh, shift)
+    target = fields.gather_mesh(mesh)
+    designed = fields.gather_mesh(mesh, fields.node_values(res.deformed_offset)) \
+        if res.deformed_offset is not None else target
+    groups = fields.gather_facet_groups(res.loaded)
+    problems = []
+    if comm.rank == 0:
+        points, cells, ctype = gathered
+        write_ok = True
+        try:
+            rest_shape.write_volume_mesh(out / "rest_shape.msh", points, cells, ctype, groups)
+            faces = rest_shape.boundary_faces(cells, ctype)
+            tris = rest_shape.triangles(faces)
+            rest_shape.write_stl(out / "rest_shape.stl", points, tris)
+        except OSError as e:
+            write_ok = False
+            problems.append(f"cannot write the rest shape: {e}")
+        if write_ok:
+            for f in scene.fix:
+                if f.where.kind == "plane":
+                    depth = rest_shape.crosses_support_plane(points, target[0], f.where.axis, f.where.at,
+                                                             1e-6 * size)
+                    if depth > 0:
+                        problems.append(f"the rest shape crosses the support plane {'xyz'[f.where.axis]} = "
+                                        f"{f.where.at} by {depth:.3g} m")
+            hits = rest_shape.self_intersections(points, tris)
+            if hits:
+                problems.append(f"the rest shape's surface intersects itself ({hits} crossing triangle pairs)")
+    problems = comm.bcast(problems, root=0)
+    pts_rest = comm.bcast(gathered[0] if comm.rank == 0 else None, root=0)
+    pts_target = comm.bcast(target[0] if comm.rank == 0 else None, root=0)
+    pts_design = comm.bcast(designed[0] if comm.rank == 0 else None, root=0)
+    if problems and any("cannot write" in p for p in problems):
+        return ForwardCheck(np.inf, None, problems)
+    # independent forward check: read the written mesh back and solve the static problem on it
+    fscene = copy.deepcopy(scene)
+    fscene.analysis = "static"
+    fscene.mesh = MeshSpec(generator="file", file=out / "rest_shape.msh")
+    fscene.output.probes = {}
+    try:
+        static = solve_static(fscene)
+    except InputError as e:
+        return ForwardCheck(np.inf, None, problems + [f"the rest shape is not a valid mesh: {e}"])
+    if not static.report.converged:
+        return ForwardCheck(np.inf, static, problems + [f"the forward solve from the rest shape failed: "
+                                                        f"{static.report.message}"])
+    fmesh = static.model.mesh
+    X = fmesh.geometry.x
+    dist, idx = cKDTree(pts_rest).query(X)
+    deformed = X + fields.node_values(static.u)
+    def largest(dist, where=None):
+        dist = dist if where is None else dist[where]
+        return comm.allreduce(float(dist.max()) if len(dist) else 0.0, op=MPI.MAX)
+
+    to_target = np.linalg.norm(deformed - pts_target[idx], axis=1)
+    mismatch = largest(to_target)
+    gap = largest(np.linalg.norm(deformed - pts_design[idx], axis=1))
+    matched = _matched_vertices(scene.inverse, pts_target, size)
+    matched_max = None if matched is None else largest(to_target, matched[idx])
+    tol = scene.inverse.check_tolerance or 1e-3 * size
+    if gap > tol:
+        what = "the target" if res.deformed_offset is None else "the shape the design predicted"
+        problems.append(f"the forward solve from the rest shape lands {gap:.3g} m from {what} "
+                        f"(tolerance {tol:.3g} m): another equilibrium, the design is not usable")
+    return ForwardCheck(mismatch, static, problems, gap, matched_max)
+
+
+def picture(path: Path, res: InverseResult, check: ForwardCheck, title: str) -> None:
+    """Three panels: the target, the designed rest shape, the forward check (rest shape under load)."""
+    mesh = res.loaded.mesh
+    target = fields.gather_mesh(mesh)
+    rest = fields.gather_mesh(mesh, fields.node_values(res.v))
+    fwd = None
+    if check.static is not None:
+        fm = check.static.model.mesh
+        fwd = fields.gather_mesh(fm, fields.node_values(check.static.u))
+    if mesh.comm.rank != 0:
+        return
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+    panels = [("target", target, "tab:blue"), ("rest shape to fabricate", rest, "tab:orange")]
+    if fwd is not None:
+        panels.append((f"forward check (mismatch {check.mismatch_max:.2g} m)", fwd, "tab:green"))
+    allp = np.vstack([p[0] for _, p, _ in panels])
+    lo, hi = allp.min(axis=0), allp.max(axis=0)
+    fig = plt.figure(figsize=(5 * len(panels), 5))
+    for k, (name, (pts, cells, ctype), colour) in enumerate(panels):
+        ax = fig.add_subplot(1, len(panels), k + 1, projection="3d")
+        faces = rest_shape.boundary_faces(cells, ctype)
+        ax.add_collection3d(Poly3DCollection(target[0][rest_shape.boundary_faces(target[1], target[2])],
+                                             facecolor=(0.5, 0.5, 0.5, 0.06), edgecolor=(0.3, 0.3, 0.3, 0.08),
+                                             linewidths=0.2))
+        ax.add_collection3d(Poly3DCollection(pts[faces], facecolor=colour, alpha=0.75,
+                                             edgecolor=(0, 0, 0, 0.2), linewidths=0.2))
+        pictures.style_axes(ax, lo, hi)
+        ax.set_title(name)
+    fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+

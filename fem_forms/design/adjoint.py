@@ -1,0 +1,235 @@
+"""The adjoint rest-shape design: objective, gradient by one adjoint solve, Gauss-Newton products."""
+from __future__ import annotations
+
+import numpy as np
+import ufl
+from dolfinx import fem
+from dolfinx.fem import petsc as fpetsc
+from mpi4py import MPI
+from petsc4py import PETSc
+from fem_forms.errors import InputError, SolveError
+from fem_forms.meshes import mesh_size
+from fem_forms.design.forward_on_rest import ForwardOnRest
+from dolfinx import mesh as dmesh
+
+
+class AdjointDesign:
+    """J(d) = 1/2 m^T W m + 1/2 d^T R d with m = d + u(d) the mismatch (deformed minus target
+    position), W the matching weight (mass matrix of the matched volume over its volume, or 1/n at
+    the matched points' dofs) and R the regularisation (smoothness * stiffness of grad d, stay_close *
+    mass). The gradient needs one adjoint solve K mu = W m: dJ/dd = W m - B^T mu + R d, with
+    B = dR_u/dd. Gauss-Newton products H p = A^T W A p + R p, A = I - K^-1 B, reuse K's factors."""
+
+    def __init__(self, fwd: ForwardOnRest):
+        self.fwd = fwd
+        spec = fwd.scene.inverse
+        mesh, V = fwd.mesh, fwd.V
+        comm = mesh.comm
+        dx = fwd.dx
+        trial, test = ufl.TrialFunction(V), ufl.TestFunction(V)
+        self.n = V.dofmap.index_map.size_local * V.dofmap.index_map_bs
+        if spec.match_points is not None:
+            _, owned = _snap_points(V, spec.match_points)
+            diag = fpetsc.create_vector(fem.form(ufl.dot(fem.Constant(mesh, PETSc.ScalarType((0, 0, 0))), test) * dx))
+            diag.set(0.0)
+            diag.array[owned] = 1.0 / len(spec.match_points)
+            W = PETSc.Mat().createAIJ(((self.n, None), (self.n, None)), nnz=1, comm=comm)
+            W.setDiagonal(diag)
+            W.assemble()
+            self.W = W
+        else:
+            dxm = dx
+            if spec.match_region is not None:
+                lo = np.array(spec.match_region.lo)[:, None]
+                hi = np.array(spec.match_region.hi)[:, None]
+                tol = 1e-9 * mesh_size(mesh)
+                cells = dmesh.locate_entities(mesh, 3, lambda x: np.all((x >= lo - tol) & (x <= hi + tol), axis=0))
+                if comm.allreduce(len(cells), op=MPI.SUM) == 0:
+                    raise InputError("inverse.match_region: contains no cell of the mesh")
+                tags = dmesh.meshtags(mesh, 3, np.sort(cells).astype(np.int32), 1)
+                dxm = ufl.Measure("dx", domain=mesh, subdomain_data=tags, metadata=dx.metadata())(1)
+            vol = comm.allreduce(fem.assemble_scalar(fem.form(fem.Constant(mesh, 1.0) * dxm)), op=MPI.SUM)
+            self.W = fpetsc.assemble_matrix(fem.form(ufl.dot(trial, test) / vol * dxm))
+            self.W.assemble()
+        reg = fem.Constant(mesh, 0.0) * ufl.dot(trial, test) * dx
+        if spec.smoothness > 0:
+            reg = reg + spec.smoothness * ufl.inner(ufl.grad(trial), ufl.grad(test)) * dx
+        if spec.stay_close > 0:
+            reg = reg + spec.stay_close * ufl.dot(trial, test) * dx
+        self.R = fpetsc.assemble_matrix(fem.form(reg))
+        self.R.assemble()
+        # damping metric of the Levenberg-Marquardt steps, applied to the predicted change of the
+        # deformed shape: an H1 inner product over the body's volume (L2 alone lets rough steps by)
+        volume = comm.allreduce(fem.assemble_scalar(fem.form(fem.Constant(mesh, 1.0) * dx)), op=MPI.SUM)
+        ell = mesh_size(mesh)
+        h1 = (ufl.dot(trial, test) + ell ** 2 * ufl.inner(ufl.grad(trial), ufl.grad(test))) / volume * dx
+        self.D = fpetsc.assemble_matrix(fem.form(h1))
+        self.D.assemble()
+        self.damping = 0.0
+        self.K_form = fem.form(fwd.jacobian)
+        self.B_form = fem.form(fwd.dres_dd)
+        self.C_form = fem.form(fwd.jacobian - fwd.dres_dd)    # K - B = K A: inverse elastostatics' tangent
+        self.K = fpetsc.create_matrix(self.K_form)
+        self.B = fpetsc.create_matrix(self.B_form)
+        self.C = fpetsc.create_matrix(self.C_form)
+        self.ksp = _lu(comm, "fem_forms_adjoint_")
+        self.ksp_C = _lu(comm, "fem_forms_adjoint_c_")
+        self.ksp_N = _lu(comm, "fem_forms_adjoint_n_")
+        self.N: PETSc.Mat | None = None
+        # the rest shape stays attached where the body is supported: d is fixed (0) on supported dofs
+        fixed = [bc.dof_indices()[0] for bc in fwd.bcs]
+        self.fixed = np.unique(np.concatenate(fixed)) if fixed else np.empty(0, dtype=np.int32)
+        self.fixed = self.fixed[self.fixed < self.n]
+        self.vec = lambda: self.W.createVecLeft()
+        self.evaluations = 0
+        self.last_failure = ""
+
+    def _solve_K(self, rhs: PETSc.Vec) -> PETSc.Vec:
+        """K x = rhs with homogeneous conditions on supported dofs (K was assembled with them)."""
+        fpetsc.set_bc(rhs, self.fwd.bcs, scale=0.0)
+        x = rhs.duplicate()
+        self.ksp.solve(rhs, x)
+        if self.ksp.getConvergedReason() < 0:
+            raise SolveError(f"adjoint: linear solve failed ({self.ksp.getConvergedReason()})")
+        return x
+
+    def forward(self, dvec: np.ndarray, guess: np.ndarray | None = None, fallback: bool = True):
+        """J at d (None if there is no forward equilibrium at d), solved from `guess` for u (owned
+        dofs) or else from the last state."""
+        fwd = self.fwd
+        fwd.d.x.array[:self.n] = dvec
+        fwd.d.x.scatter_forward()
+        if guess is not None:
+            fwd.u.x.array[:self.n] = guess
+            fwd.u.x.scatter_forward()
+        rep = fwd.solve(fallback)
+        self.evaluations += 1
+        if not rep.converged:
+            self.last_failure = rep.message
+            return None
+        m, d = self.vec(), self.vec()
+        d.array[:] = dvec
+        m.array[:] = dvec + fwd.u.x.array[:self.n]
+        self._Wm = self.W * m
+        return 0.5 * m.dot(self._Wm) + 0.5 * d.dot(self.R * d)
+
+    def linearise(self) -> np.ndarray:
+        """Gradient of J (owned dofs) at the last forward state; assembles and factorises K and B
+        there, for the Gauss-Newton products and linear_response that follow."""
+        fwd = self.fwd
+        self.K.zeroEntries()
+        fpetsc.assemble_matrix(self.K, self.K_form, bcs=fwd.bcs)
+        self.K.assemble()
+        self.B.zeroEntries()
+        fpetsc.assemble_matrix(self.B, self.B_form)
+        self.B.assemble()
+        self.ksp.setOperators(self.K)
+        self.C.zeroEntries()
+        fpetsc.assemble_matrix(self.C, self.C_form, bcs=fwd.bcs)
+        self.C.assemble()
+        self.ksp_C.setOperators(self.C)
+        d = self.vec()
+        d.array[:] = fwd.d.x.array[:self.n]
+        mu = self._solve_K(self._Wm.copy())
+        g = self._Wm + self.R * d
+        g.axpy(-1.0, self._BT(mu))
+        out = g.array.copy()
+        out[self.fixed] = 0.0
+        return out
+
+    def evaluate(self, dvec: np.ndarray, gradient: bool = True):
+        """(J, gradient on owned dofs or None) at d; None if there is no forward equilibrium at d."""
+        J = self.forward(dvec)
+        if J is None:
+            return None
+        return J, (self.linearise() if gradient else None)
+
+    def linear_response(self, s: np.ndarray) -> np.ndarray:
+        """du = -K^-1 B s: first-order change of the equilibrium u when d changes by s (owned dofs),
+        at the last linearised state; a predictor for the next forward solve."""
+        q, Bq = self.vec(), self.vec()
+        q.array[:] = s
+        self.B.mult(q, Bq)
+        return -self._solve_K(Bq).array.copy()
+
+    def _BT(self, y: PETSc.Vec) -> PETSc.Vec:
+        z = self.vec()
+        self.B.multTranspose(y, z)
+        return z
+
+    def set_damping(self, lam: float) -> None:
+        """Damping of the Gauss-Newton products; (re)factorises N = W + lam D + R for the
+        preconditioner."""
+        self.damping = lam
+        N = self.D.copy()
+        N.scale(lam)
+        N.axpy(1.0, self.W, PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+        N.axpy(1.0, self.R, PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+        self.ksp_N.setOperators(N)
+        if self.N is not None:
+            self.N.destroy()
+        self.N = N
+
+    def gauss_newton_product(self, p: PETSc.Vec, out: PETSc.Vec) -> None:
+        """out = (A^T (W + damping D) A + R) p on free dofs, A = I - K^-1 B = K^-1 C, at the last
+        linearised state: the damping limits the predicted change of the deformed shape."""
+        q = p.copy()
+        q.array[self.fixed] = 0.0
+        Bq = self.vec()
+        self.B.mult(q, Bq)
+        a = q - self._solve_K(Bq)
+        b = self.W * a
+        if self.damping:
+            b.axpy(self.damping, self.D * a)
+        r = b - self._BT(self._solve_K(b.copy())) + self.R * q
+        r.array[self.fixed] = 0.0
+        r.copy(out)
+
+    def precondition(self, r: PETSc.Vec, out: PETSc.Vec) -> None:
+        """out = A^-1 N^-1 A^-T r = C^-1 K N^-1 K C^-T r: the inverse of the damped Gauss-Newton
+        matrix when R = 0 (exact for matching the whole body), a close one otherwise."""
+        x = r.copy()
+        x.array[self.fixed] = 0.0
+        y = self.vec()
+        self.ksp_C.solveTranspose(x, y)
+        y.array[self.fixed] = 0.0
+        z = self.K * y
+        z.array[self.fixed] = 0.0
+        w = self.vec()
+        self.ksp_N.solve(z, w)
+        w.array[self.fixed] = 0.0
+        v = self.K * w
+        v.array[self.fixed] = 0.0
+        self.ksp_C.solve(v, out)
+        out.array[self.fixed] = 0.0
+
+
+
+def _lu(comm, prefix: str) -> PETSc.KSP:
+    """A direct (MUMPS LU) solver whose options can be overridden under `prefix`."""
+    ksp = PETSc.KSP().create(comm)
+    ksp.setOptionsPrefix(prefix)
+    opts = PETSc.Options()
+    for k, val in {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}.items():
+        if not opts.hasName(prefix + k):
+            opts[prefix + k] = val
+    ksp.setFromOptions()
+    return ksp
+
+
+def _snap_points(V: fem.FunctionSpace, points: list):
+    """Dofs of the mesh vertices nearest each point: (all local dof indices, owned only)."""
+    bs = V.dofmap.index_map_bs
+    nown = V.dofmap.index_map.size_local
+    X = V.tabulate_dof_coordinates()[:nown]
+    comm = V.mesh.comm
+    own = []
+    for p in points:
+        dist = np.linalg.norm(X - np.asarray(p), axis=1) if len(X) else np.array([np.inf])
+        k = int(np.argmin(dist))
+        best = comm.allreduce(float(dist[k]), op=MPI.MIN)
+        rank = comm.allreduce(comm.rank if dist[k] <= best else comm.size, op=MPI.MIN)
+        if comm.rank == rank:
+            own += [k * bs + c for c in range(bs)]
+    own = np.array(own, dtype=np.int32)
+    return own, own

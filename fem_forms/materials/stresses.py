@@ -1,0 +1,39 @@
+"""Stresses derived from an energy density with ufl.diff (never written by hand), and the mixed u-p energy."""
+from __future__ import annotations
+
+import ufl
+from fem_forms.errors import InputError
+from fem_forms.materials.hyperelastic import Material
+import dataclasses
+
+
+def first_piola_kirchhoff(material: Material, F) -> ufl.core.expr.Expr:
+    """P = d psi / d F."""
+    F = ufl.variable(F)
+    return ufl.diff(material.psi(F), F)
+
+
+def cauchy_stress(material: Material, F) -> ufl.core.expr.Expr:
+    """sigma = P F^T / J."""
+    return first_piola_kirchhoff(material, F) * F.T / ufl.det(F)
+
+
+def von_mises(sigma) -> ufl.core.expr.Expr:
+    """sqrt(3/2 s:s) with s the deviator of sigma."""
+    s = ufl.dev(sigma)
+    return ufl.sqrt(1.5 * ufl.inner(s, s))
+
+
+def mixed_energy(material: Material, F, p):
+    """Perturbed-Lagrangian energy of the u-p formulation: psi|_(lambda=0)(F) + p theta(F) - p^2/(2 lambda).
+    Stationary in p at p = lambda theta, where it equals psi(F); finite as lambda grows (nu -> 1/2),
+    so nearly incompressible parts neither lock nor fail."""
+    if not hasattr(material, "volumetric") or not hasattr(material, "lmbda"):
+        raise InputError("discretization.formulation = 'mixed': needs a built-in material model "
+                         "(a user psi(F) has no volumetric part to split off)")
+    if material.lmbda <= 0:
+        raise InputError("discretization.formulation = 'mixed': needs lambda > 0 (nu > 0); it is meant "
+                         "for nearly incompressible materials")
+    deviatoric = dataclasses.replace(material, lmbda=0.0)
+    return deviatoric.psi(F) + p * material.volumetric(F) - p**2 / (2 * material.lmbda)
+

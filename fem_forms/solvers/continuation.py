@@ -1,0 +1,119 @@
+"""Load continuation on the one SNES driver: increments grown after success and halved on failure,
+every step accepted only after independent checks, state restored on a cut-back."""
+from __future__ import annotations
+
+import math
+import time
+from typing import Callable
+import numpy as np
+from petsc4py import PETSc
+from fem_forms.errors import SolveError
+from fem_forms.solvers.snes import NonlinearProblem
+from fem_forms.solvers.snes import SNESDriver
+from fem_forms.solvers.snes import SolveReport
+import re
+
+
+def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1,
+          max_cutbacks: int = 12, linear_kind: str = "auto",
+          near_nullspace: Callable[[], PETSc.NullSpace] | None = None,
+          prefix: str = "fem_forms_", predictor: bool = True, reuse_factor: bool = False,
+          driver: SNESDriver | None = None) -> SolveReport:
+    """Continuation lambda: 0 -> 1 in `steps` increments, the increment grown 1.5x after a success and
+    halved after a failure (at most `max_cutbacks` halvings in a row). A step is accepted only when
+    SNES converged AND an independent re-assembly of the residual is small AND the state is finite
+    and admissible (no inverted elements). With `predictor`, each step starts from the secant
+    extrapolation of the last two accepted states (a better first guess, fewer Newton steps).
+    `reuse_factor` factors the direct solver's LU once per load step (linear.REUSED_FACTOR).
+    A `driver` built once for `problem` and passed to repeated solves keeps its compiled forms,
+    matrix and SNES (the caller owns it); otherwise one is built here and destroyed at the end."""
+    t0 = time.perf_counter()
+    drv = driver or SNESDriver(problem, options, linear_kind, prefix, near_nullspace, reuse_factor)
+    assembly0 = drv.assembly_time
+    u = problem.u
+    set_load = problem.set_load or (lambda lam: None)
+
+    # reference scale: residual of the undeformed state under full load
+    saved = u.x.array.copy()
+    set_load(1.0)
+    r_full = drv.load_scale()
+
+    report = SolveReport(False, 0.0, 0, math.nan, linear_solver=drv.linear_kind)
+    lam, dlam, cuts = 0.0, 1.0 / steps, 0
+    if problem.set_load is None:                     # nothing to continue in: one attempt
+        lam, dlam, max_cutbacks = 0.0, 1.0, 0
+    last_step, last_dlam = None, 0.0                # secant: u_k - u_{k-1} over lambda_k - lambda_{k-1}
+    while lam < 1.0 - 1e-12:
+        trial = min(1.0, lam + dlam)
+        set_load(trial)
+        if predictor and last_step is not None and last_dlam > 0:
+            u.x.array[:] = saved + ((trial - lam) / last_dlam) * last_step
+            u.x.scatter_forward()
+        rec = drv.solve_step()
+        rec.load = trial
+        why = None
+        if not rec.accepted:
+            why = f"SNES {rec.reason}"
+            if rec.reason == "DIVERGED_LINEAR_SOLVE" and drv.stale_preconditioner_failed():
+                pass                                 # the retry (fresh SNES) rebuilds the preconditioner
+            elif rec.reason == "DIVERGED_LINEAR_SOLVE" and drv.linear_kind == "iterative" and linear_kind == "auto":
+                drv.linear_kind = "direct"           # indefinite tangent: fall back to LU
+                report.linear_solver = "iterative->direct"
+            elif rec.reason == "DIVERGED_LINEAR_SOLVE" and drv.reuse_factor:
+                drv.reuse_factor = False             # stale LU too far off: factor every iteration
+        else:
+            arr = u.x.array
+            if not np.all(np.isfinite(arr)):
+                why = "NaN or Inf in the solution"
+            elif problem.inadmissible is not None and (bad := problem.inadmissible()):
+                why = bad
+            else:
+                rn = drv.residual_norm()
+                r0 = rec.residuals[0] if rec.residuals else 0.0
+                if rn > 1e-6 * max(r_full, r0) and rn > drv.roundoff_floor():
+                    why = f"residual {rn:.3e} after SNES reported convergence (scale {max(r_full, r0):.3e})"
+                else:
+                    report.residual_norm = rn
+        rec.accepted = why is None
+        rec.note = why or ""
+        report.steps.append(rec)
+        report.newton_iterations += rec.iterations
+        if rec.accepted:
+            last_step, last_dlam = u.x.array - saved, trial - lam
+            lam, saved, cuts = trial, u.x.array.copy(), 0
+            dlam = min(1.0 - lam, 1.5 * dlam) if lam < 1.0 else dlam
+            report.load_reached = lam
+        else:
+            u.x.array[:] = saved                     # restore the last accepted state
+            u.x.scatter_forward()
+            cuts += 1
+            dlam *= 0.5
+            drv._build_snes()                        # fresh solver state after a failure
+            if cuts > max_cutbacks:
+                report.message = (f"no convergence: load factor {lam:.6g} reached, the step to "
+                                  f"{trial:.6g} failed after {cuts - 1} cut-backs (failures seen: "
+                                  f"{'; '.join(_distinct(s.note for s in report.steps if s.note))})")
+                break
+            report.message = why
+    else:
+        report.converged = True
+        report.message = "converged"
+    report.assembly_time = drv.assembly_time - assembly0
+    report.solve_time = time.perf_counter() - t0 - report.assembly_time
+    if driver is None:
+        drv.snes.destroy()
+    return report
+
+
+def _distinct(notes) -> list:
+    """The first note of each kind (kinds differ in their words, not their numbers)."""
+    first = {}
+    for n in notes:
+        first.setdefault(re.sub(r"[-+]?[0-9][0-9.e+-]*", "#", n), n)
+    return list(first.values())
+
+
+def require_converged(report: SolveReport) -> None:
+    if not report.converged:
+        raise SolveError(report.message)
+
