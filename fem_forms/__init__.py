@@ -7,15 +7,15 @@ Python API::
     result = ff.solve_static(scene)            # or solve_static(scene, material=my_psi)
     print(result.summary()["max_displacement"])
 """
+from fem_forms.analyses.modal import ModalResult, solve_modal, write_modal_outputs
+from fem_forms.analyses.static import write_static_outputs
+from fem_forms.equilibrium import StaticResult, solve_static
 from fem_forms.errors import InputError, SolveError
 from fem_forms.logs import quiet_jit
-from fem_forms.scene import Scene
 from fem_forms.materials import LinearElastic, MooneyRivlin, NeoHookean, StVenantKirchhoff, UserMaterial
-from fem_forms.materials.stresses import cauchy_stress, first_piola_kirchhoff, von_mises
 from fem_forms.materials.hyperelastic import make_material
-from fem_forms.equilibrium import StaticResult, solve_static
-from fem_forms.analyses.static import write_static_outputs
-from fem_forms.analyses.modal import ModalResult, solve_modal, write_modal_outputs
+from fem_forms.materials.stresses import cauchy_stress, first_piola_kirchhoff, von_mises
+from fem_forms.scene import Scene
 
 __all__ = ["quiet_jit", "InputError", "SolveError", "Scene", "LinearElastic", "StVenantKirchhoff", "NeoHookean",
            "MooneyRivlin", "UserMaterial", "make_material", "first_piola_kirchhoff", "cauchy_stress",

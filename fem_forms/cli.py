@@ -4,13 +4,14 @@ Exit status: 0 solved, 2 bad input (one line on stderr naming the key), 3 no con
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
+import sys
 
+from mpi4py import MPI
+
+from fem_forms.analyses import run_analysis
 from fem_forms.errors import InputError, SolveError
 from fem_forms.logs import quiet_jit
-from mpi4py import MPI
-from fem_forms.analyses import run_analysis
 from fem_forms.scene import Scene, parse_assignment
 from fem_forms.study import run_study, solve_to_tolerance
 

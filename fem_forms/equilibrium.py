@@ -1,18 +1,19 @@
 """The one equilibrium solve: static, the modal prestress and the inverse design's forward check use it."""
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, field
-import numpy as np
+import resource
+import time
+
 from dolfinx import fem
 from mpi4py import MPI
+import numpy as np
+
 from fem_forms.model import Model, build_model
-from fem_forms.scene import Scene
-from fem_forms.solvers import continuation
 from fem_forms.output import probes
+from fem_forms.scene import Scene
+from fem_forms.solvers import continuation, snes
 from fem_forms.solvers.linear import rigid_body_modes
-from fem_forms.solvers import snes
-import resource
 
 
 @dataclass

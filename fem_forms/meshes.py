@@ -5,15 +5,15 @@ for degenerate and inverted cells, and then distributed by ``dolfinx.mesh.create
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
+import math
 from pathlib import Path
 
-import numpy as np
-import ufl
 from dolfinx import cpp, mesh as dmesh
 from dolfinx.io import gmshio
 from mpi4py import MPI
+import numpy as np
+import ufl
 
 from fem_forms.errors import InputError
 from fem_forms.scene import MeshSpec

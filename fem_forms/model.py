@@ -3,22 +3,19 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numpy as np
-import ufl
+import basix
 from dolfinx import fem
 from mpi4py import MPI
+import numpy as np
+import ufl
 
 from fem_forms.kinematics import deformation_gradient
-from fem_forms.meshes import LoadedMesh, load_mesh
-from fem_forms.scene import Scene
-from fem_forms.physics.supports import LoadFactor
-from fem_forms.materials.hyperelastic import Material
-from fem_forms.materials.hyperelastic import as_material
-from fem_forms.physics.loads import external_work
-from fem_forms.materials.hyperelastic import make_material
-from fem_forms.physics.supports import supports
-import basix
 from fem_forms.materials import mixed_energy
+from fem_forms.materials.hyperelastic import Material, as_material, make_material
+from fem_forms.meshes import LoadedMesh, load_mesh
+from fem_forms.physics.loads import external_work
+from fem_forms.physics.supports import LoadFactor, supports
+from fem_forms.scene import Scene
 
 
 @dataclass

@@ -6,21 +6,21 @@ Each run is a separate `fem-forms run --set ...` process, so its time and peak m
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 import json
 import math
 import os
+from pathlib import Path
 import shutil
 import subprocess
 import sys
-from dataclasses import dataclass
-from pathlib import Path
 
+from mpi4py import MPI
 import numpy as np
 
 from fem_forms.errors import InputError, SolveError
-from fem_forms.scene import Scene
-from mpi4py import MPI
 from fem_forms.output.results import write_json_atomic
+from fem_forms.scene import Scene
 
 
 @dataclass

@@ -9,29 +9,25 @@ modes (omega^2 ~ 0) are counted and left out of the reported modes.
 """
 from __future__ import annotations
 
-import math
-import time
 from dataclasses import dataclass
+import math
 from pathlib import Path
+import time
 
-import numpy as np
-import ufl
 from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
+import numpy as np
 from petsc4py import PETSc
+import ufl
 
+from fem_forms.equilibrium import StaticResult, max_norm, peak_memory_mb, solve_static
 from fem_forms.errors import InputError, SolveError
 from fem_forms.meshes import bounding_box
 from fem_forms.model import Model, build_model
+from fem_forms.output import fields, probes, results, sound
 from fem_forms.scene import Scene
-from fem_forms.equilibrium import StaticResult, max_norm, peak_memory_mb, solve_static
-from fem_forms.solvers import eigen
-from fem_forms.output import fields
-from fem_forms.solvers import linear
-from fem_forms.output import probes
-from fem_forms.output import results
-from fem_forms.output import sound
+from fem_forms.solvers import eigen, linear
 
 RIGID_EXTRA = 6          # modes requested beyond `count` when rigid-body modes may be present
 SHIFT_FRACTION = 1e-2    # unsupported parts: target = -SHIFT_FRACTION x (estimated first omega^2)

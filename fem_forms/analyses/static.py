@@ -1,18 +1,17 @@
 """Static analysis: equilibrium under the scene's loads, then fields, picture and results.json."""
 from __future__ import annotations
 
-from mpi4py import MPI
-from fem_forms.scene import Scene
 from pathlib import Path
-from fem_forms.equilibrium import StaticResult
-from fem_forms.output import fields
-from fem_forms.output import pictures
-from fem_forms.output import results
-from fem_forms.equilibrium import solve_static
 import sys
+
+from mpi4py import MPI
+
+from fem_forms.equilibrium import StaticResult, solve_static
 from fem_forms.errors import SolveError
 from fem_forms.kinematics import deformation_gradient
 from fem_forms.materials import cauchy_stress, von_mises
+from fem_forms.output import fields, pictures, results
+from fem_forms.scene import Scene
 
 
 def write_static_outputs(result: StaticResult, out: "Path") -> dict:

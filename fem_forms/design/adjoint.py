@@ -1,16 +1,16 @@
 """The adjoint rest-shape design: objective, gradient by one adjoint solve, Gauss-Newton products."""
 from __future__ import annotations
 
-import numpy as np
-import ufl
-from dolfinx import fem
+from dolfinx import fem, mesh as dmesh
 from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
+import numpy as np
 from petsc4py import PETSc
+import ufl
+
+from fem_forms.design.forward_on_rest import ForwardOnRest
 from fem_forms.errors import InputError, SolveError
 from fem_forms.meshes import mesh_size
-from fem_forms.design.forward_on_rest import ForwardOnRest
-from dolfinx import mesh as dmesh
 
 
 class AdjointDesign:

@@ -2,23 +2,21 @@
 from __future__ import annotations
 
 import time
-import numpy as np
-import ufl
+
 from dolfinx import fem
 from mpi4py import MPI
+import numpy as np
 from petsc4py import PETSc
+import ufl
+
+from fem_forms.design.parameters import InverseResult, target_scene
+from fem_forms.materials.stresses import first_piola_kirchhoff
 from fem_forms.meshes import LoadedMesh, load_mesh
 from fem_forms.model import _quadrature_points, build_material
+from fem_forms.physics.supports import LoadFactor, load_regions, supports
 from fem_forms.scene import Scene
-from fem_forms.design.parameters import InverseResult
-from fem_forms.physics.supports import LoadFactor
-from fem_forms.solvers import continuation
-from fem_forms.materials.stresses import first_piola_kirchhoff
-from fem_forms.physics.supports import load_regions
+from fem_forms.solvers import continuation, snes
 from fem_forms.solvers.linear import rigid_body_modes
-from fem_forms.solvers import snes
-from fem_forms.physics.supports import supports
-from fem_forms.design.parameters import target_scene
 
 
 def _pulled_back_loads(scene: Scene, loaded: LoadedMesh, eta, F, j, dx, quad: dict):

@@ -2,14 +2,15 @@
 from __future__ import annotations
 
 import time
-import numpy as np
+
 from dolfinx import fem
 from mpi4py import MPI
+import numpy as np
+
+from fem_forms.design.forward_on_rest import ForwardOnRest
+from fem_forms.design.parameters import InverseResult, target_scene
 from fem_forms.meshes import LoadedMesh, load_mesh, mesh_size
 from fem_forms.scene import Scene
-from fem_forms.design.forward_on_rest import ForwardOnRest
-from fem_forms.design.parameters import InverseResult
-from fem_forms.design.parameters import target_scene
 
 
 def solve_fixed_point(scene: Scene, material=None, loaded: LoadedMesh | None = None) -> InverseResult:

@@ -1,20 +1,18 @@
 """Forward equilibrium of a body whose rest shape is the target mesh + d, written on the fixed target mesh."""
 from __future__ import annotations
 
-import numpy as np
-import ufl
 from dolfinx import fem
 from mpi4py import MPI
+import numpy as np
 from petsc4py import PETSc
+import ufl
+
 from fem_forms.errors import InputError
 from fem_forms.meshes import LoadedMesh
 from fem_forms.model import _quadrature_points, build_material
+from fem_forms.physics.supports import LoadFactor, load_regions, supports
 from fem_forms.scene import Scene
-from fem_forms.physics.supports import LoadFactor
-from fem_forms.solvers import continuation
-from fem_forms.physics.supports import load_regions
-from fem_forms.solvers import snes
-from fem_forms.physics.supports import supports
+from fem_forms.solvers import continuation, snes
 
 
 class ForwardOnRest:

@@ -1,22 +1,20 @@
 """Optimisers of the adjoint design: damped Gauss-Newton (default) and PETSc TAO bounded L-BFGS."""
 from __future__ import annotations
 
-import numpy as np
-import ufl
+import time
+
 from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
+import numpy as np
 from petsc4py import PETSc
+import ufl
 
 from fem_forms.design.adjoint import AdjointDesign
 from fem_forms.design.forward_on_rest import ForwardOnRest
-from fem_forms.design.parameters import InverseResult
-from fem_forms.meshes import LoadedMesh
+from fem_forms.design.parameters import InverseResult, target_scene
+from fem_forms.meshes import LoadedMesh, load_mesh, mesh_size
 from fem_forms.scene import Scene
-from fem_forms.meshes import load_mesh
-from fem_forms.meshes import mesh_size
-from fem_forms.design.parameters import target_scene
-import time
 
 class _GaussNewtonOperator:
     """PETSc shell-matrix and shell-preconditioner context for the damped Gauss-Newton matrix."""

@@ -2,7 +2,9 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+
 from dolfinx import fem
+
 from fem_forms.meshes import LoadedMesh
 from fem_forms.scene import MeshSpec, Scene
 

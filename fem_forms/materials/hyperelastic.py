@@ -1,10 +1,12 @@
 """Hyperelastic energy densities psi(F) as UFL expressions: the built-in models and user functions."""
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
+import math
 from typing import Callable, Protocol
+
 import ufl
+
 from fem_forms.errors import InputError
 from fem_forms.kinematics import green_strain, invariants, small_strain
 

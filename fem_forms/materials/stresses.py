@@ -1,10 +1,12 @@
 """Stresses derived from an energy density with ufl.diff (never written by hand), and the mixed u-p energy."""
 from __future__ import annotations
 
+import dataclasses
+
 import ufl
+
 from fem_forms.errors import InputError
 from fem_forms.materials.hyperelastic import Material
-import dataclasses
 
 
 def first_piola_kirchhoff(material: Material, F) -> ufl.core.expr.Expr:

@@ -2,8 +2,9 @@
 from __future__ import annotations
 
 from pathlib import Path
-import numpy as np
+
 from dolfinx import cpp, fem, io, mesh as dmesh
+import numpy as np
 
 
 def p1_interpolant(f: fem.Function, name: str | None = None) -> fem.Function:

@@ -2,8 +2,10 @@
 from __future__ import annotations
 
 from pathlib import Path
-import numpy as np
+
 from dolfinx import fem
+import numpy as np
+
 from fem_forms.output.fields import boundary_surface
 
 

@@ -1,9 +1,9 @@
 """Point evaluation of fields at points of the undeformed configuration, correct under MPI."""
 from __future__ import annotations
 
-import numpy as np
 from dolfinx import fem, geometry
 from mpi4py import MPI
+import numpy as np
 
 from fem_forms.errors import InputError
 

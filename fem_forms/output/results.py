@@ -4,10 +4,11 @@ from __future__ import annotations
 import json
 import math
 import os
-import tempfile
 from pathlib import Path
-import numpy as np
+import tempfile
+
 from mpi4py import MPI
+import numpy as np
 
 
 def _clean(obj):

@@ -14,8 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from fem_forms.scene import SoundSpec
 from fem_forms.output import probes
+from fem_forms.scene import SoundSpec
 
 PEAK_FLOOR_DB = -60.0        # spectrum peaks reported down to this level below the strongest
 PEAK_PROMINENCE_DB = 6.0

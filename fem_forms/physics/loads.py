@@ -1,13 +1,13 @@
 """External loads as UFL terms."""
 from __future__ import annotations
 
-import ufl
 from dolfinx import fem
 from petsc4py import PETSc
+import ufl
+
 from fem_forms.meshes import LoadedMesh
+from fem_forms.physics.supports import LoadFactor, load_regions
 from fem_forms.scene import Load
-from fem_forms.physics.supports import LoadFactor
-from fem_forms.physics.supports import load_regions
 
 
 def external_work(u, loaded: LoadedMesh, loads: list[Load], rho: float, load: LoadFactor,

@@ -1,10 +1,11 @@
 """Boundary selectors, the load factor and supports (Dirichlet conditions with Constant values)."""
 from __future__ import annotations
 
-import numpy as np
 from dolfinx import fem, mesh as dmesh
 from mpi4py import MPI
+import numpy as np
 from petsc4py import PETSc
+
 from fem_forms.errors import InputError
 from fem_forms.meshes import LoadedMesh, bounding_box, mesh_size
 from fem_forms.scene import Fix, Load, Selector

@@ -3,15 +3,16 @@ every step accepted only after independent checks, state restored on a cut-back.
 from __future__ import annotations
 
 import math
+import re
 import time
 from typing import Callable
+
 import numpy as np
 from petsc4py import PETSc
+
+from fem_forms import progress
 from fem_forms.errors import SolveError
-from fem_forms.solvers.snes import NonlinearProblem
-from fem_forms.solvers.snes import SNESDriver
-from fem_forms.solvers.snes import SolveReport
-import re
+from fem_forms.solvers.snes import NonlinearProblem, SNESDriver, SolveReport
 
 
 def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1,
@@ -49,6 +50,8 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
         if predictor and last_step is not None and last_dlam > 0:
             u.x.array[:] = saved + ((trial - lam) / last_dlam) * last_step
             u.x.scatter_forward()
+        drv.load_factor = trial
+        progress.report("load_step", load=trial, step=len(report.steps) + 1)
         rec = drv.solve_step()
         rec.load = trial
         why = None
@@ -78,6 +81,8 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
         rec.note = why or ""
         report.steps.append(rec)
         report.newton_iterations += rec.iterations
+        progress.report("step_accepted" if rec.accepted else "step_rejected", load=trial,
+                        iterations=rec.iterations, why=why or "")
         if rec.accepted:
             last_step, last_dlam = u.x.array - saved, trial - lam
             lam, saved, cuts = trial, u.x.array.copy(), 0

@@ -7,8 +7,8 @@ near-nullspace (less memory for large meshes; the solves must be tight, rtol 1e-
 """
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, field
+import time
 
 import numpy as np
 from petsc4py import PETSc

@@ -2,8 +2,8 @@
 near-nullspace for large, mildly nonlinear problems (see STACK.md for the measured crossover)."""
 from __future__ import annotations
 
-import numpy as np
 from dolfinx import fem
+import numpy as np
 from petsc4py import PETSc
 
 # Above this many dofs "auto" picks the iterative path (sparse direct cost grows ~N^2 in 3D;

@@ -12,8 +12,8 @@ from __future__ import annotations
 import ctypes
 import time
 
-import numpy as np
 from mpi4py import MPI
+import numpy as np
 from petsc4py import PETSc
 
 

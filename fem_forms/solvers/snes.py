@@ -2,18 +2,21 @@
 nonlinear problem, with the energy as line-search objective where one exists."""
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 import math
 import time
-from dataclasses import dataclass, field
 from typing import Callable
-import numpy as np
-import ufl
+
 from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
+import numpy as np
 from petsc4py import PETSc
-from fem_forms.solvers.preconditioner_reuse import PreconditionerReuse
+import ufl
+
+from fem_forms import progress
 from fem_forms.solvers import linear
+from fem_forms.solvers.preconditioner_reuse import PreconditionerReuse
 
 
 _REASONS = {getattr(PETSc.SNES.ConvergedReason, n): n for n in dir(PETSc.SNES.ConvergedReason)
@@ -93,6 +96,7 @@ class SNESDriver:
         self.b = fpetsc.create_vector(self.L)
         self.x = self.b.copy()
         self.assembly_time = 0.0
+        self.load_factor = 1.0           # for progress reports; set by the continuation
         self._build_snes()
 
     # -- PETSc objects -------------------------------------------------------------------------
@@ -182,6 +186,7 @@ class SNESDriver:
         (PETSc tests convergence right after this call). Asking for less than round-off allows makes
         the energy line search fail on noise and costs cut-backs (measured: 8 Newton steps for 4)."""
         self._history.append(float(fnorm))
+        progress.report("newton", load=self.load_factor, iteration=int(it), residual=float(fnorm))
         if it > 0:
             snes.setTolerances(atol=max(self.base_atol(), self.roundoff_floor(1.0)))
 

@@ -1,24 +1,22 @@
 """Inverse rest-shape design analysis: run the scene's method, check the design, write outputs."""
 from __future__ import annotations
 
-import time
 from pathlib import Path
-import numpy as np
+import time
+
 from dolfinx import fem
-from fem_forms.errors import SolveError
-from fem_forms.meshes import load_mesh
-from fem_forms.scene import Scene
-from fem_forms.design.parameters import InverseResult
-from fem_forms.analyses.inverse.check import check_rest_shape
-from fem_forms.output import fields
-from fem_forms.analyses.inverse.check import picture
-from fem_forms.output import probes
-from fem_forms.output import results
-from fem_forms.design.optimizers import solve_adjoint
+import numpy as np
+
+from fem_forms.analyses.inverse.check import check_rest_shape, picture
 from fem_forms.design.direct import solve_direct
 from fem_forms.design.fixed_point import solve_fixed_point
-from fem_forms.design.parameters import target_scene
+from fem_forms.design.optimizers import solve_adjoint
+from fem_forms.design.parameters import InverseResult, target_scene
 from fem_forms.equilibrium import max_norm
+from fem_forms.errors import SolveError
+from fem_forms.meshes import load_mesh
+from fem_forms.output import fields, probes, results
+from fem_forms.scene import Scene
 
 
 METHODS = {"direct": solve_direct, "adjoint": solve_adjoint, "fixed-point": solve_fixed_point}

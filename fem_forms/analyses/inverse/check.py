@@ -1,20 +1,21 @@
 """Every designed rest shape is checked before it is handed out: written, read back, solved forward."""
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 from pathlib import Path
-import numpy as np
+
 from mpi4py import MPI
+import numpy as np
+from scipy.spatial import cKDTree
+
+from fem_forms.design import rest_shape
+from fem_forms.design.parameters import InverseResult
+from fem_forms.equilibrium import solve_static
 from fem_forms.errors import InputError
 from fem_forms.meshes import mesh_size
+from fem_forms.output import fields, pictures
 from fem_forms.scene import MeshSpec, Scene
-from fem_forms.design.parameters import InverseResult
-from fem_forms.output import fields
-from fem_forms.output import pictures
-from fem_forms.design import rest_shape
-import copy
-from scipy.spatial import cKDTree
-from fem_forms.equilibrium import solve_static
 
 
 @dataclass

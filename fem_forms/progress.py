@@ -1,0 +1,24 @@
+"""Progress of long runs, reported as events by the solvers and shown (or not) by a reporter.
+
+The solvers call ``report(event, **fields)``; what is shown, where and how (one line updated in place on a
+terminal, plain lines otherwise, nothing with --quiet or in the Python API by default) is the reporter's
+business. Events: "load_step" (load, step), "newton" (load, iteration, residual), "step_accepted"
+(load, iterations), "step_rejected" (load, why), "time_step" (time, dt, step, total_time).
+"""
+from __future__ import annotations
+
+from typing import Callable
+
+_reporter: Callable[..., None] | None = None
+
+
+def set_reporter(reporter: Callable[..., None] | None) -> None:
+    """Install the function that receives events (None: events are dropped)."""
+    global _reporter
+    _reporter = reporter
+
+
+def report(event: str, **fields) -> None:
+    """Pass an event to the installed reporter, if any (cheap when none is installed)."""
+    if _reporter is not None:
+        _reporter(event, **fields)
