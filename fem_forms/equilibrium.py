@@ -53,6 +53,7 @@ class StaticResult:
             "quadrature_degree": self.model.scene.discretization.quadrature,
             "mpi_ranks": self.model.mesh.comm.size,
             "formulation": self.model.scene.discretization.formulation,
+            "physics": self.model.physics,
             "peak_memory_mb": peak_memory_mb(self.model.mesh.comm),
             "warnings": self.model.warnings,
             "probes": {n: {"point": self.model.scene.output.probes[n], "displacement": v}
@@ -82,13 +83,13 @@ def solve_static(scene: Scene, material=None, model: Model | None = None) -> Sta
     model = model or build_model(scene, material)
     probes.evaluate(model.u, scene.output.probes)          # a probe outside the mesh is bad input
     problem = snes.NonlinearProblem(
-        model.state, model.residual, model.jacobian, model.bcs,
+        model.unknown, model.residual, model.jacobian, model.bcs,
         energy=model.energy if model.conservative else None,
-        set_load=model.load.set, inadmissible=model.inadmissible)
+        set_load=model.load.set, inadmissible=model.inadmissible, state=model.state)
+    linear_kind = "direct" if scene.discretization.formulation == "mixed" else scene.solver.linear
     report = continuation.solve(problem, scene.solver.petsc, steps=scene.solver.steps,
-                          max_cutbacks=scene.solver.max_cutbacks,
-                          linear_kind="direct" if scene.discretization.formulation == "mixed" else scene.solver.linear,
-                          near_nullspace=lambda: rigid_body_modes(model.V))
+                                max_cutbacks=scene.solver.max_cutbacks, linear_kind=linear_kind,
+                                near_nullspace=lambda: rigid_body_modes(model.V))
     result = StaticResult(model, report)
     if report.converged:
         model.sync_displacement()

@@ -25,6 +25,7 @@ from fem_forms.equilibrium import StaticResult, max_norm, peak_memory_mb, solve_
 from fem_forms.errors import InputError, SolveError
 from fem_forms.meshes import bounding_box
 from fem_forms.model import Model, build_model
+from fem_forms.physics.inertia import Inertia
 from fem_forms.output import fields, probes, results, sound
 from fem_forms.scene import Scene
 from fem_forms.solvers import eigen, linear
@@ -85,6 +86,7 @@ class ModalResult:
             "mpi_ranks": m.mesh.comm.size,
             "mass": scene.modal.mass,
             "prestress": scene.modal.prestress,
+            "physics": m.physics + ["inertia"],
             "frequencies_hz": self.frequencies_hz.tolist(),
             "omega2": self.omega2.tolist(),
             "rigid_modes": self.rigid_modes,
@@ -121,11 +123,11 @@ def assemble_operators(model: Model, kind: str = "direct", lumped: bool = False)
     fpetsc.assemble_matrix(K, a, bcs=model.bcs, diagonal=1.0)
     K.assemble()
 
-    rho = fem.Constant(mesh, PETSc.ScalarType(model.scene.material.rho))
+    inertia = Inertia()
     du, v = ufl.TrialFunction(V), ufl.TestFunction(V)
-    m = fem.form(rho * ufl.inner(du, v) * model.dx)
+    m = fem.form(inertia.mass(model.context, du, v))
     e = fem.Constant(mesh, PETSc.ScalarType((0.0, 0.0, 0.0)))
-    L = fem.form(rho * ufl.inner(e, v) * model.dx)
+    L = fem.form(inertia.mass(model.context, e, v))
     translations = []
     for d in range(3):                                   # M r_d, exactly, as a linear form
         e.value = np.eye(3)[d]

@@ -1,12 +1,12 @@
 """Stresses derived from an energy density with ufl.diff (never written by hand), and the mixed u-p energy."""
 from __future__ import annotations
 
-import dataclasses
+import copy
 
 import ufl
 
 from fem_forms.errors import InputError
-from fem_forms.materials.hyperelastic import Material
+from fem_forms.materials.hyperelastic import Material, parameter_value
 
 
 def first_piola_kirchhoff(material: Material, F) -> ufl.core.expr.Expr:
@@ -33,9 +33,10 @@ def mixed_energy(material: Material, F, p):
     if not hasattr(material, "volumetric") or not hasattr(material, "lmbda"):
         raise InputError("discretization.formulation = 'mixed': needs a built-in material model "
                          "(a user psi(F) has no volumetric part to split off)")
-    if material.lmbda <= 0:
+    if parameter_value(material.lmbda) <= 0:
         raise InputError("discretization.formulation = 'mixed': needs lambda > 0 (nu > 0); it is meant "
                          "for nearly incompressible materials")
-    deviatoric = dataclasses.replace(material, lmbda=0.0)
+    deviatoric = copy.copy(material)                 # lambda = 0, without re-validating Constants
+    object.__setattr__(deviatoric, "lmbda", 0.0)
     return deviatoric.psi(F) + p * material.volumetric(F) - p**2 / (2 * material.lmbda)
 

@@ -1,42 +1,65 @@
-"""External loads as UFL terms."""
+"""External loads as terms, one class per [[load]] type, each registered under its type name.
+
+All values are Constants scaled by the load factor: a new g, traction or pressure compiles nothing.
+Dead loads (gravity per rest volume, traction per rest area) have an energy, minus their work; follower
+pressure acts on the deformed surface and has none: it adds its virtual work to the residual.
+"""
 from __future__ import annotations
 
-from dolfinx import fem
+from dolfinx import fem, mesh as dmesh
 from petsc4py import PETSc
 import ufl
 
-from fem_forms.meshes import LoadedMesh
-from fem_forms.physics.supports import LoadFactor, load_regions
+from fem_forms.physics.terms import Context, Term, register_load
 from fem_forms.scene import Load
 
 
-def external_work(u, loaded: LoadedMesh, loads: list[Load], rho: float, load: LoadFactor,
-                  dx: ufl.Measure) -> tuple:
-    """(W, pressure_residual): the work of conservative loads (gravity, dead traction) as an energy
-    term, and the virtual work of follower pressure, which has no energy, as a residual term."""
-    mesh = loaded.mesh
-    tags, ids = load_regions(loaded, loads)
-    ds = ufl.Measure("ds", domain=mesh, subdomain_data=tags, metadata=dx.metadata())
-    W = 0
-    pressure_terms = []
-    for i, spec in enumerate(loads):
-        if spec.type == "gravity":
-            W = W + rho * ufl.dot(fem.Constant(mesh, PETSc.ScalarType(spec.g)), u) * dx
-        elif spec.type == "traction":
-            t = fem.Constant(mesh, PETSc.ScalarType(spec.value))
-            W = W + sum(ufl.dot(t, u) * ds(k) for k in ids[i])
-        else:
-            pressure_terms.append((spec.pressure, ids[i]))
-    W = load.constant * W if not isinstance(W, int) else None
+@register_load("gravity")
+class Gravity(Term):
+    """Weight: -lambda int rho g . u dX (rho the density field)."""
+    name = "gravity"
 
-    def pressure_residual(v, F):
-        """Virtual work of pressure p on the deformed surface: int p J F^-T N . v dA."""
-        if not pressure_terms:
-            return None
-        N = ufl.FacetNormal(mesh)
-        J = ufl.det(F)
-        return load.constant * sum(p * J * ufl.dot(ufl.inv(F).T * N, v) * ds(k)
-                                 for p, ks in pressure_terms for k in ks)
+    def __init__(self, spec: Load, index: int, mesh: dmesh.Mesh):
+        self.index = index
+        self.g = fem.Constant(mesh, PETSc.ScalarType(tuple(spec.g)))
 
-    return W, pressure_residual
+    def set_values(self, spec: Load) -> None:
+        self.g.value = spec.g
 
+    def energy(self, ctx: Context) -> ufl.Form:
+        return -ctx.load.constant * ctx.volume(ctx.parameters.density * ufl.dot(self.g, ctx.u))
+
+
+@register_load("traction")
+class Traction(Term):
+    """Dead traction per rest area on the selected facets: -lambda int T . u dA."""
+    name = "traction"
+
+    def __init__(self, spec: Load, index: int, mesh: dmesh.Mesh):
+        self.index = index
+        self.value = fem.Constant(mesh, PETSc.ScalarType(tuple(spec.value)))
+
+    def set_values(self, spec: Load) -> None:
+        self.value.value = spec.value
+
+    def energy(self, ctx: Context) -> ufl.Form:
+        return -ctx.load.constant * sum(ctx.area(ufl.dot(self.value, ctx.u), k) for k in ctx.regions[self.index])
+
+
+@register_load("pressure")
+class Pressure(Term):
+    """Follower pressure p on the deformed surface, pushing against its outward normal:
+    virtual work lambda int p J F^-T N . v dA."""
+    name = "pressure"
+
+    def __init__(self, spec: Load, index: int, mesh: dmesh.Mesh):
+        self.index = index
+        self.value = fem.Constant(mesh, PETSc.ScalarType(spec.pressure))
+
+    def set_values(self, spec: Load) -> None:
+        self.value.value = spec.pressure
+
+    def virtual_work(self, ctx: Context, v) -> ufl.Form:
+        F = ctx.F
+        traction = self.value * ufl.det(F) * ufl.inv(F).T * ctx.rest_area_vector()
+        return ctx.load.constant * sum(ufl.dot(traction, v) * ctx.ds(k) for k in ctx.regions[self.index])

@@ -39,13 +39,19 @@ class LoadFactor:
 
     def __init__(self, mesh: dmesh.Mesh):
         self.constant = fem.Constant(mesh, PETSc.ScalarType(1.0))
-        self._scaled: list[tuple[fem.Constant, float]] = []
+        self._scaled: dict = {}                      # key -> [Constant, full value]
 
-    def scaled(self, mesh: dmesh.Mesh, value: float) -> fem.Constant:
-        """A Constant that equals lambda * value."""
-        c = fem.Constant(mesh, PETSc.ScalarType(value))
-        self._scaled.append((c, value))
+    def scaled(self, mesh: dmesh.Mesh, value: float, key=None) -> fem.Constant:
+        """A Constant that equals lambda * value (`key` names it for rescale)."""
+        c = fem.Constant(mesh, PETSc.ScalarType(self.value * value))
+        self._scaled[key if key is not None else len(self._scaled)] = [c, value]
         return c
+
+    def rescale(self, key, value: float) -> None:
+        """A new full value for a scaled Constant (e.g. a support's prescribed displacement)."""
+        entry = self._scaled[key]
+        entry[1] = value
+        entry[0].value = self.value * value
 
     @property
     def value(self) -> float:
@@ -53,7 +59,7 @@ class LoadFactor:
 
     def set(self, lam: float) -> None:
         self.constant.value = lam
-        for c, v in self._scaled:
+        for c, v in self._scaled.values():
             c.value = lam * v
 
 
@@ -63,11 +69,11 @@ def supports(V: fem.FunctionSpace, loaded: LoadedMesh, fixes: list[Fix], load: L
     (sign -1 for the inverse problem, whose unknown is rest minus deformed position)."""
     fdim = loaded.mesh.topology.dim - 1
     bcs = []
-    for fix in fixes:
+    for i, fix in enumerate(fixes):
         facets = locate_facets(loaded, fix.where)
         for c in fix.components:
             dofs = fem.locate_dofs_topological(V.sub(c), fdim, facets)
-            value = load.scaled(loaded.mesh, sign * fix.value[c])
+            value = load.scaled(loaded.mesh, sign * fix.value[c], key=(i, c))
             bcs.append(fem.dirichletbc(value, dofs, V.sub(c)))
     return bcs
 

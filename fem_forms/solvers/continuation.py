@@ -13,6 +13,7 @@ from petsc4py import PETSc
 from fem_forms import progress
 from fem_forms.errors import SolveError
 from fem_forms.solvers.snes import NonlinearProblem, SNESDriver, SolveReport
+from fem_forms.state import State
 
 
 def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1,
@@ -33,9 +34,11 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
     assembly0 = drv.assembly_time
     u = problem.u
     set_load = problem.set_load or (lambda lam: None)
+    state = problem.state or State({"unknown": u})
+    old = state.old[next(k for k, f in state.fields.items() if f is u)]
+    state.commit()                                   # the starting point is what a cut-back returns to
 
     # reference scale: residual of the undeformed state under full load
-    saved = u.x.array.copy()
     set_load(1.0)
     r_full = drv.load_scale()
 
@@ -48,7 +51,7 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
         trial = min(1.0, lam + dlam)
         set_load(trial)
         if predictor and last_step is not None and last_dlam > 0:
-            u.x.array[:] = saved + ((trial - lam) / last_dlam) * last_step
+            u.x.array[:] = old.x.array + ((trial - lam) / last_dlam) * last_step
             u.x.scatter_forward()
         drv.load_factor = trial
         progress.report("load_step", load=trial, step=len(report.steps) + 1)
@@ -84,13 +87,13 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
         progress.report("step_accepted" if rec.accepted else "step_rejected", load=trial,
                         iterations=rec.iterations, why=why or "")
         if rec.accepted:
-            last_step, last_dlam = u.x.array - saved, trial - lam
-            lam, saved, cuts = trial, u.x.array.copy(), 0
+            last_step, last_dlam = u.x.array - old.x.array, trial - lam
+            state.commit()
+            lam, cuts = trial, 0
             dlam = min(1.0 - lam, 1.5 * dlam) if lam < 1.0 else dlam
             report.load_reached = lam
         else:
-            u.x.array[:] = saved                     # restore the last accepted state
-            u.x.scatter_forward()
+            state.rollback()                         # back to the last accepted state, history included
             cuts += 1
             dlam *= 0.5
             drv._build_snes()                        # fresh solver state after a failure

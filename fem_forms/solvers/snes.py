@@ -17,6 +17,7 @@ import ufl
 from fem_forms import progress
 from fem_forms.solvers import linear
 from fem_forms.solvers.preconditioner_reuse import PreconditionerReuse
+from fem_forms.state import State
 
 
 _REASONS = {getattr(PETSc.SNES.ConvergedReason, n): n for n in dir(PETSc.SNES.ConvergedReason)
@@ -33,6 +34,7 @@ class NonlinearProblem:
     energy: ufl.Form | None = None
     set_load: Callable[[float], None] | None = None     # continuation parameter setter
     inadmissible: Callable[[], str | None] | None = None  # why a state is unphysical, or None
+    state: State | None = None         # fields and history committed/rolled back with the steps (default: u)
 
 
 @dataclass

@@ -1,0 +1,107 @@
+"""The terms a scene asks for, and the forms built from them: total energy, residual and tangent.
+
+Residual and tangent always come from ufl.derivative: of the energy for conservative terms, plus the
+virtual work of the others. The inverse problem's residual is the same virtual work, taken with respect
+to the displacement and then written with u = -v (the unknown rest offset)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from dolfinx import fem
+import ufl
+
+from fem_forms.materials import Material, as_material, bind_constants, make_material
+from fem_forms.meshes import LoadedMesh
+import fem_forms.physics.loads  # noqa: F401 (registers the load terms)
+from fem_forms.physics.elastic import ElasticEnergy
+from fem_forms.physics.parameters import Parameters
+from fem_forms.physics.supports import LoadFactor, load_regions
+from fem_forms.physics.terms import LOAD_TERMS, Context, Term
+from fem_forms.scene import Scene
+
+
+def build_material(scene: Scene, override=None) -> Material:
+    """The scene's material model with float parameters (validated), or the caller's own."""
+    if override is not None:
+        return as_material(override)
+    m = scene.material
+    return make_material(m.model, E=m.E, nu=m.nu, mu=m.mu, lmbda=m.lmbda, C10=m.C10, C01=m.C01)
+
+
+def scene_physics(scene: Scene, loaded: LoadedMesh, u, material=None, rest_map=None, pressure=None,
+                  load: LoadFactor | None = None) -> tuple[Context, list[Term]]:
+    """The Context (measures, density field, load factor, kinematics of `u` and the rest map) and the
+    terms of a scene, the material's parameters as Constants."""
+    mesh = loaded.mesh
+    mat = bind_constants(build_material(scene, material), mesh)
+    dx = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": scene.discretization.quadrature})
+    parameters = Parameters(mesh, scene.material.rho)
+    ctx = make_context(loaded, scene, u, dx, parameters, load or LoadFactor(mesh), rest_map, pressure)
+    name = scene.material.model if material is None else getattr(as_material(material), "name",
+                                                                   type(material).__name__)
+    return ctx, scene_terms(scene, mat, mesh, name)
+
+
+def scene_terms(scene: Scene, material: Material, mesh, model_name: str | None = None) -> list[Term]:
+    """The elastic energy of the scene's material and one term per [[load]], in scene order."""
+    terms: list[Term] = [ElasticEnergy(material, model_name or scene.material.model)]
+    for i, spec in enumerate(scene.load):
+        terms.append(LOAD_TERMS[spec.type](spec, i, mesh))
+    return terms
+
+
+def make_context(loaded: LoadedMesh, scene: Scene, u, dx: ufl.Measure, parameters: Parameters,
+                 load: LoadFactor, rest_map=None, pressure=None) -> Context:
+    """A Context on the loaded mesh with one tagged boundary measure for all of the scene's surface loads."""
+    tags, regions = load_regions(loaded, scene.load)
+    ds = ufl.Measure("ds", domain=loaded.mesh, subdomain_data=tags, metadata=dx.metadata())
+    return Context(loaded.mesh, u, dx, ds, regions, parameters, load, rest_map, pressure)
+
+
+def total_energy(terms: list[Term], ctx: Context) -> ufl.Form | None:
+    """Sum of the conservative terms' energies (None if no term has one)."""
+    parts = [e for e in (t.energy(ctx) for t in terms) if e is not None]
+    return sum(parts[1:], parts[0]) if parts else None
+
+
+def virtual_work(terms: list[Term], ctx: Context, v) -> ufl.Form | None:
+    """Sum of the non-conservative terms' virtual works (None if there are none)."""
+    parts = [w for w in (t.virtual_work(ctx, v) for t in terms) if w is not None]
+    return sum(parts[1:], parts[0]) if parts else None
+
+
+@dataclass
+class EquilibriumForms:
+    """Total potential energy (None without one), residual and tangent of one unknown."""
+    energy: ufl.Form | None
+    residual: ufl.Form
+    jacobian: ufl.Form
+    conservative: bool          # the residual is the exact gradient of `energy`
+
+
+def equilibrium_forms(terms: list[Term], ctx: Context, unknown: fem.Function, v) -> EquilibriumForms:
+    """Residual dPi/du[test] + non-conservative virtual work at v (v: the displacement part of the
+    test function), tangent by ufl.derivative."""
+    test, trial = ufl.TestFunction(unknown.function_space), ufl.TrialFunction(unknown.function_space)
+    energy = total_energy(terms, ctx)
+    residual = ufl.derivative(energy, unknown, test)
+    extra = virtual_work(terms, ctx, v)
+    if extra is not None:
+        residual = residual + extra
+    jacobian = ufl.derivative(residual, unknown, trial)
+    return EquilibriumForms(energy, residual, jacobian, extra is None)
+
+
+def inverse_forms(terms: list[Term], ctx: Context, rest_offset: fem.Function) -> EquilibriumForms:
+    """Equilibrium on the deformed (mesh) shape with the rest offset v as unknown: the virtual work of
+    every term with respect to the displacement, at u = -v. `ctx.u` must be a placeholder Function on
+    v's space and ctx.rest_map = I + grad v."""
+    V = rest_offset.function_space
+    eta, trial = ufl.TestFunction(V), ufl.TrialFunction(V)
+    placeholder = ctx.u
+    work = ufl.derivative(total_energy(terms, ctx), placeholder, eta)
+    extra = virtual_work(terms, ctx, eta)
+    if extra is not None:
+        work = work + extra
+    residual = ufl.replace(work, {placeholder: -rest_offset})
+    return EquilibriumForms(None, residual, ufl.derivative(residual, rest_offset, trial), False)
