@@ -1,0 +1,95 @@
+"""Do two versions of fem_forms give the same answers? Runs every demo and benchmark scene (made small
+with --set where they are large) through `python -m fem_forms run` in a checkout of REF and in this tree,
+and compares the numbers users read (probe displacements and rest positions, frequencies, max |u|,
+energy) to a relative tolerance.
+
+    .venv/bin/python benchmarks/same_answers.py cb0ef34 [--tol 1e-10] [--out benchmarks/same_answers.md]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+from pathlib import Path
+import subprocess
+import sys
+import tempfile
+
+ROOT = Path(__file__).resolve().parent.parent
+SCENES = [
+    ("demos/scenes/sagging_beam.toml", []),
+    ("demos/scenes/straight_beam_inverse.toml", []),
+    ("demos/scenes/goblet_inverse.toml", []),
+    ("demos/scenes/struck_bar.toml", []),
+    ("benchmarks/scenes/beam_gravity.toml", ["mesh.cells=[20, 2, 2]"]),
+    ("benchmarks/scenes/incompressible_block.toml", []),
+    ("benchmarks/scenes/modal_beam.toml", ["mesh.cells=[16, 4, 4]"]),
+]
+
+
+def key_numbers(summary: dict) -> dict[str, float]:
+    """name -> value of every number a user reads from results.json."""
+    out = {}
+    for k in ("max_displacement", "energy", "max_rest_offset"):
+        if isinstance(summary.get(k), (int, float)):
+            out[k] = float(summary[k])
+    for i, f in enumerate(summary.get("frequencies_hz") or []):
+        out[f"f{i + 1}"] = float(f)
+    for name, p in (summary.get("probes") or {}).items():
+        for key in ("displacement", "rest_position"):
+            for c, v in enumerate(p.get(key) or []):
+                out[f"{name}.{key}[{c}]"] = float(v)
+    return out
+
+
+def run(tree: Path, scene: str, sets: list[str], out: Path) -> dict:
+    cmd = [sys.executable, "-m", "fem_forms", "run", str(ROOT / scene), "--out", str(out)]
+    for s in sets:
+        cmd += ["--set", s]
+    env = dict(os.environ, PYTHONPATH=str(tree), OPENBLAS_NUM_THREADS="1")
+    p = subprocess.run(cmd, cwd=tree, env=env, capture_output=True, text=True)
+    res = out / "results.json"
+    if not res.exists():
+        raise RuntimeError(f"{scene} in {tree}: exit {p.returncode}: {p.stderr.strip()[-300:]}")
+    return json.loads(res.read_text())
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("ref", help="git revision to compare with (e.g. the previous main)")
+    ap.add_argument("--tol", type=float, default=1e-10, help="largest relative difference allowed")
+    ap.add_argument("--out", default=str(ROOT / "benchmarks" / "same_answers.md"))
+    args = ap.parse_args()
+    rows, worst_all = [], 0.0
+    with tempfile.TemporaryDirectory() as tmp:
+        ref_tree = Path(tmp) / "ref"
+        subprocess.run(["git", "worktree", "add", "--detach", str(ref_tree), args.ref], cwd=ROOT,
+                       check=True, capture_output=True)
+        try:
+            for scene, sets in SCENES:
+                a = key_numbers(run(ref_tree, scene, sets, Path(tmp) / "a" / Path(scene).stem))
+                b = key_numbers(run(ROOT, scene, sets, Path(tmp) / "b" / Path(scene).stem))
+                scale = max((abs(v) for v in a.values()), default=1.0) or 1.0
+                diffs = {k: abs(a[k] - b.get(k, float("nan"))) / max(abs(a[k]), 1e-300 * scale)
+                         for k in a}
+                small = {k: d for k, d in diffs.items() if abs(a[k]) > 1e-6 * scale}
+                worst_key = max(small, key=small.get) if small else "-"
+                worst = small.get(worst_key, 0.0)
+                worst_all = max(worst_all, worst)
+                rows.append(f"| {scene} {' '.join(sets)} | {len(a)} | {worst:.1e} ({worst_key}) |")
+                print(rows[-1], flush=True)
+        finally:
+            subprocess.run(["git", "worktree", "remove", "--force", str(ref_tree)], cwd=ROOT,
+                           capture_output=True)
+    ok = worst_all <= args.tol
+    text = (f"# Same answers as {args.ref}\n\n`benchmarks/same_answers.py {args.ref}`: largest relative "
+            f"difference of the numbers results.json reports (values below 1e-6 of the scene's largest "
+            f"are compared absolutely), tolerance {args.tol:g}: {'met' if ok else 'NOT met'}.\n\n"
+            "| scene | numbers | largest relative difference |\n|---|---:|---|\n" + "\n".join(rows) + "\n")
+    Path(args.out).write_text(text)
+    print(text)
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
