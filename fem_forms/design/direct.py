@@ -44,7 +44,8 @@ def solve_direct(scene: Scene, material=None, loaded: LoadedMesh | None = None) 
                                 reuse_factor=True)
     res = InverseResult("direct", v, loaded, report.converged, report.newton_iterations, report.message,
                         history=[{"load": s.load, "iterations": s.iterations, "accepted": s.accepted,
-                                  "reason": s.reason, "note": s.note} for s in report.steps])
+                                  "reason": s.reason, "note": s.note} for s in report.steps],
+                        physics=[t.name for t in terms])
     res.solve_time = time.perf_counter() - t0
     return res
 

@@ -43,7 +43,7 @@ def solve_fixed_point(scene: Scene, material=None, loaded: LoadedMesh | None = N
     v = fem.Function(V, name="rest_minus_target")
     v.x.array[:] = fwd.d.x.array
     res = InverseResult("fixed-point", v, loaded, ok, len(history), msg, history=history,
-                        forward_solves=fwd.solves)
+                        forward_solves=fwd.solves, physics=fwd.physics)
     res.solve_time = time.perf_counter() - t0
     return res
 

@@ -35,6 +35,7 @@ class ForwardOnRest:
         forms = equilibrium_forms(terms, ctx, self.u, ufl.TestFunction(V))
         self.energy, self.residual, self.jacobian = forms.energy, forms.residual, forms.jacobian
         self.dres_dd = ufl.derivative(self.residual, self.d, ufl.TrialFunction(V))
+        self.physics = [t.name for t in terms]
         self._volume_ratio = SmallestValue(ufl.det(ctx.F) * ufl.det(G), mesh, scene.discretization.quadrature)
         self.solves = 0
         self._driver: snes.SNESDriver | None = None

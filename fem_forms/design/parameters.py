@@ -23,6 +23,7 @@ class InverseResult:
     # deformed minus target position at the design's own equilibrium (None: exactly the target, as
     # for the direct method); the adjoint method's partial or regularised goals leave a mismatch
     deformed_offset: fem.Function | None = None
+    physics: list = field(default_factory=list)     # names of the terms in the design's forms
 
 
 def target_scene(scene: Scene) -> MeshSpec:

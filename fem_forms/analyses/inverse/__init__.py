@@ -44,7 +44,8 @@ def run(scene: Scene, out: Path, echo: bool = False) -> dict:
     summary = {"analysis": "inverse", "title": scene.title, "method": res.method,
                "dofs": res.v.function_space.dofmap.index_map.size_global * 3,
                "iterations": res.iterations, "converged": res.converged, "design_time_s": res.solve_time,
-               "forward_solves": res.forward_solves, "mpi_ranks": comm.size, "history": res.history}
+               "forward_solves": res.forward_solves, "mpi_ranks": comm.size,
+               "physics": res.physics, "history": res.history}
     problems = [] if res.converged else [f"the {res.method} method did not reach a rest shape: {res.message}"]
     check = None
     if res.converged:
