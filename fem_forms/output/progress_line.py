@@ -37,8 +37,8 @@ class ProgressLine:
     # -- the reporter ------------------------------------------------------------------------------
     def __call__(self, event: str, **fields) -> None:
         st = self.state
-        if event == "load_step":
-            st.update(load=fields.get("load"), step=fields.get("step"), iteration=None, residual=None)
+        if event == "load_step":        # numbered as the summary counts them: accepted steps + 1
+            st.update(load=fields.get("load"), step=st.get("accepted", 0) + 1, iteration=None, residual=None)
         elif event == "newton":
             st.update(load=fields.get("load", st.get("load")), iteration=fields.get("iteration"),
                       residual=fields.get("residual"))
@@ -47,8 +47,11 @@ class ProgressLine:
                       total_time=fields.get("total_time"), iteration=None, residual=None)
             if self._time0 is None:
                 self._time0 = (time.perf_counter(), float(fields.get("time") or 0.0))
-        elif event == "solve_done":
+        elif event == "step_accepted":
+            st["accepted"] = st.get("accepted", 0) + 1
+        elif event == "solve_done":     # the next solve (e.g. a forward check) counts from 1 again
             self.close()
+            self.state = {}
             return
         if self.tty:
             if event != "newton" or time.perf_counter() - self._last_draw >= REDRAW_EVERY_S:
