@@ -6,6 +6,9 @@ Python API::
     scene = ff.Scene.from_file("demos/scenes/sagging_beam.toml")
     result = ff.solve_static(scene)            # or solve_static(scene, material=my_psi)
     print(result.summary()["max_displacement"])
+
+The API prints nothing while it works: no FFCx compile log (``quiet_jit(verbose=True)`` shows it) and no
+progress (``show_progress()`` shows load steps, Newton iterations and residuals on stderr).
 """
 from fem_forms.analyses.modal import ModalResult, solve_modal, write_modal_outputs
 from fem_forms.analyses.static import write_static_outputs
@@ -15,10 +18,13 @@ from fem_forms.logs import quiet_jit
 from fem_forms.materials import LinearElastic, MooneyRivlin, NeoHookean, StVenantKirchhoff, UserMaterial
 from fem_forms.materials.hyperelastic import make_material
 from fem_forms.materials.stresses import cauchy_stress, first_piola_kirchhoff, von_mises
+from fem_forms.output.progress_line import show_progress
 from fem_forms.scene import Scene
 
-__all__ = ["quiet_jit", "InputError", "SolveError", "Scene", "LinearElastic", "StVenantKirchhoff", "NeoHookean",
+__all__ = ["quiet_jit", "show_progress", "InputError", "SolveError", "Scene", "LinearElastic", "StVenantKirchhoff", "NeoHookean",
            "MooneyRivlin", "UserMaterial", "make_material", "first_piola_kirchhoff", "cauchy_stress",
            "von_mises", "StaticResult", "solve_static", "write_static_outputs", "ModalResult",
            "solve_modal", "write_modal_outputs"]
 __version__ = "0.1.0"
+
+quiet_jit()

@@ -1,10 +1,16 @@
-"""Command line: `fem-forms run SCENE.toml --out DIR [-snes_monitor ...]`.
+"""Command line: `fem-forms run SCENE.toml [--out DIR] [-q] [-snes_monitor ...]`.
 
-Exit status: 0 solved, 2 bad input (one line on stderr naming the key), 3 no convergence."""
+Exit status: 0 solved, 2 bad input (one line on stderr naming the key), 3 no convergence, 130 interrupted
+(Ctrl-C), 143 terminated (SIGTERM); an interrupt prints one line, "fem-forms: interrupted", no traceback.
+Progress (load step, Newton iteration, residual, elapsed time) goes to stderr on rank 0 unless --quiet.
+Results: results.json is written last and atomically, and a run removes an old results.json from its
+output folder before it solves, so after an interrupted or failed rerun no results.json from an earlier
+run is left looking like this run's answer (a scene that fails to read changes nothing)."""
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
+import signal
 import sys
 
 from mpi4py import MPI
@@ -12,6 +18,8 @@ from mpi4py import MPI
 from fem_forms.analyses import run_analysis
 from fem_forms.errors import InputError, SolveError
 from fem_forms.logs import quiet_jit
+from fem_forms.output.progress_line import show_progress
+from fem_forms.output.results import forget_results
 from fem_forms.scene import Scene, parse_assignment
 from fem_forms.study import run_study, solve_to_tolerance
 
@@ -36,36 +44,49 @@ def _petsc_options(extra: list[str]) -> dict:
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="fem-forms", description="Hyperelastic solids from scene files.")
     sub = p.add_subparsers(dest="command", required=True)
-    run = sub.add_parser("run", help="solve a scene file and write results to --out",
+    run = sub.add_parser("run", help="solve a scene file and write results to --out (default out/<scene stem>/)",
                          epilog="Trailing -key value pairs are passed to PETSc (e.g. -snes_monitor).")
     run.add_argument("scene", help="scene file (TOML)")
-    run.add_argument("--out", required=True, help="output folder (created)")
+    run.add_argument("--out", help="output folder (created; default out/<scene file stem>/ in the current folder)")
     run.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                      help="override a scene key, e.g. --set mesh.cells=[8,1,1] (TOML value)")
     run.add_argument("--no-adapt", action="store_true",
                      help="solve the discretization as given, ignoring [discretization] tolerance")
     run.add_argument("-v", "--verbose", action="store_true", help="show FFCx/UFL compilation logs")
+    run.add_argument("-q", "--quiet", action="store_true", help="show no progress on stderr")
     study = sub.add_parser("study", help="solve a scene on a ladder of meshes and degrees; error vs cost")
     study.add_argument("scene", help="scene file (TOML); its mesh is the coarsest of the ladder")
-    study.add_argument("--out", required=True, help="output folder (created)")
+    study.add_argument("--out", help="output folder (created; default out/<scene file stem>_study/ in the current "
+                       "folder, beside a run's out/<stem>/)")
     study.add_argument("--degrees", type=int, nargs="+", default=[1, 2], help="element degrees (1, 2)")
     study.add_argument("--refine", type=int, default=3, help="number of mesh levels (each refined by 2)")
     study.add_argument("--ranks", type=int, default=1, help="MPI ranks per run")
     study.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override a scene key")
     study.add_argument("-v", "--verbose", action="store_true", help="show FFCx/UFL compilation logs")
+    study.add_argument("-q", "--quiet", action="store_true", help="show no progress (the per-run lines)")
     return p
+
+
+def default_out(command: str, scene: str) -> Path:
+    """out/<stem>/ for run, out/<stem>_study/ for study (a study's folders never mix with a run's files)."""
+    stem = Path(scene).stem
+    return Path("out") / (f"{stem}_study" if command == "study" else stem)
 
 
 def _run(args, petsc: dict) -> int:
 
     overrides = dict(parse_assignment(a) for a in args.set)
+    if args.out is None:
+        args.out = str(default_out(args.command, args.scene))
     if args.command == "study":
         if petsc:
             raise InputError("study: PETSc options go into the scene ([solver] petsc) or --set")
-        run_study(Path(args.scene), Path(args.out), args.degrees, args.refine, overrides, args.ranks)
+        run_study(Path(args.scene), Path(args.out), args.degrees, args.refine, overrides, args.ranks,
+                  echo=not args.quiet)
         return 0
     scene = Scene.from_file(args.scene, overrides)
     scene.solver.petsc.update(petsc)
+    forget_results(Path(args.out) / "results.json")
     if scene.discretization.tolerance is not None and not args.no_adapt:
         if petsc or MPI.COMM_WORLD.size > 1:
             raise InputError("discretization.tolerance: run serially, with PETSc options in the scene")
@@ -83,16 +104,51 @@ def main(argv: list[str] | None = None) -> int:
     parser = _parser()
     args, extra = parser.parse_known_args(argv)
     quiet_jit(args.verbose)
-    rank = 0
+    rank = MPI.COMM_WORLD.rank
+    reporter = show_progress(not args.quiet)
+    previous = _interrupts_raise()
     try:
-        from mpi4py import MPI
-        rank = MPI.COMM_WORLD.rank
         petsc = _petsc_options(extra)
         return _run(args, petsc)
     except (InputError, SolveError) as e:
+        if reporter:
+            reporter.close()
         if rank == 0:
             print(f"fem-forms: error: {e}", file=sys.stderr)
         return e.exit_status
+    except KeyboardInterrupt as e:
+        if reporter:
+            reporter.close()
+        if rank == 0:
+            print("fem-forms: interrupted", file=sys.stderr, flush=True)
+        return getattr(e, "exit_status", 130)
+    finally:
+        show_progress(False)
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (e.g. from mpirun, a batch system or `kill`), handled like Ctrl-C with its own status."""
+    exit_status = 143
+
+
+def _raise_terminated(signum, frame) -> None:
+    raise Terminated()
+
+
+def _interrupts_raise() -> dict:
+    """Make Ctrl-C raise KeyboardInterrupt again (importing gmsh, which dolfinx.io.gmshio does, sets SIGINT
+    to SIG_DFL: the process died silently with status -2) and SIGTERM raise Terminated. Python runs these
+    handlers between bytecodes, so inside one long C call (a MUMPS factorisation, gmsh meshing) the
+    interrupt takes effect when the call returns. Returns the handlers replaced ({} off the main thread)."""
+    previous = {}
+    try:
+        for signum, handler in ((signal.SIGINT, signal.default_int_handler), (signal.SIGTERM, _raise_terminated)):
+            previous[signum] = signal.signal(signum, handler)
+    except ValueError:                   # not the main thread (main() called from a thread): leave them
+        pass
+    return previous
 
 
 def entry() -> None:

@@ -63,7 +63,7 @@ def mesh_level(scene: Scene, level: int) -> dict:
 
 
 def _run_one(scene_path: Path, run: Run, ranks: int) -> None:
-    cmd = [sys.executable, "-m", "fem_forms", "run", str(scene_path), "--out", str(run.folder), "--no-adapt"]
+    cmd = [sys.executable, "-m", "fem_forms", "run", str(scene_path), "--out", str(run.folder), "--no-adapt", "-q"]
     for k, v in run.overrides.items():
         cmd += ["--set", f"{k}={json.dumps(v)}"]
     env = dict(os.environ)
@@ -147,11 +147,12 @@ def write_report(runs: list[Run], out: Path, title: str) -> str:
             "|---|---|---|---|---|---|---|"]
     csv = ["degree,level,dofs,error_finest,error_richardson,wall_time_s,peak_memory_mb,converged"]
     for r in runs:
-        rows.append(f"| P{r.degree} | {r.level} | {r.dofs} | {r.error_finest:.2e} | {r.error_richardson:.2e} | "
-                    f"{r.wall:.2f} | {r.memory_mb:.0f} |" if r.ok else
+        rows.append(f"| P{r.degree} | {r.level} | {r.dofs} | {_cell(r.error_finest, '.2e')} | "
+                    f"{_cell(r.error_richardson, '.2e')} | {_cell(r.wall, '.2f')} | {_cell(r.memory_mb, '.0f')} |"
+                    if r.ok else
                     f"| P{r.degree} | {r.level} | {r.dofs} | failed | | | |")
-        csv.append(f"{r.degree},{r.level},{r.dofs},{r.error_finest},{r.error_richardson},{r.wall},"
-                   f"{r.memory_mb},{int(r.ok)}")
+        csv.append(f"{r.degree},{r.level},{r.dofs},{_field(r.error_finest)},{_field(r.error_richardson)},"
+                   f"{_field(r.wall)},{_field(r.memory_mb)},{int(r.ok)}")
     table = "\n".join(rows) + "\n"
     (out / "study.md").write_text(f"# {title}\n\n" + table)
     (out / "study.csv").write_text("\n".join(csv) + "\n")
@@ -182,6 +183,16 @@ def write_report(runs: list[Run], out: Path, title: str) -> str:
     return table
 
 
+def _cell(x: float, spec: str) -> str:
+    """A table cell: the number, or "-" where no estimate exists (NaN: e.g. no Richardson limit)."""
+    return format(x, spec) if math.isfinite(x) else "-"
+
+
+def _field(x: float) -> str:
+    """A CSV field: the number, or empty where no estimate exists."""
+    return repr(float(x)) if math.isfinite(x) else ""
+
+
 def _err(r: Run) -> float:
     return r.error_richardson if np.isfinite(r.error_richardson) else r.error_finest
 
@@ -198,13 +209,13 @@ def pareto(runs: list[Run]) -> list[Run]:
 
 
 def run_study(scene_path: Path, out: Path, degrees: list[int], refine: int, overrides: dict,
-              ranks: int = 1) -> list[Run]:
+              ranks: int = 1, echo: bool = True) -> list[Run]:
     if MPI.COMM_WORLD.size > 1:
         raise InputError("study: run it serially; use --ranks N for parallel runs of the ladder")
     out.mkdir(parents=True, exist_ok=True)
     title = Scene.from_file(scene_path, overrides).title
     print(f"study of {title}: degrees {degrees}, {refine} mesh levels")
-    runs = study(scene_path, out, degrees, refine, overrides, ranks)
+    runs = study(scene_path, out, degrees, refine, overrides, ranks, echo=echo)
     print(write_report(runs, out, title))
     print(f"-> {out}/study.md, study.csv, study.png")
     return runs

@@ -25,18 +25,29 @@ def _clean(obj):
 
 
 def write_json_atomic(path: Path, data: dict, comm: MPI.Comm = MPI.COMM_WORLD) -> None:
-    """Rank 0 writes to a temporary file beside `path` and renames it: complete or absent."""
+    """Rank 0 writes to a temporary file beside `path` and renames it: complete or absent. Any exception
+    during the write, KeyboardInterrupt included, removes the temporary file and leaves `path` as it was."""
     if comm.rank == 0:
         path.parent.mkdir(parents=True, exist_ok=True)
+        text = json.dumps(_clean(data), indent=2)           # serialise before any file exists
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".results-", suffix=".json")
         try:
             with os.fdopen(fd, "w") as f:
-                json.dump(_clean(data), f, indent=2)
+                f.write(text)
             os.chmod(tmp, 0o644)
             os.replace(tmp, path)
         except BaseException:
-            os.unlink(tmp)
+            if os.path.exists(tmp):
+                os.unlink(tmp)
             raise
+    comm.barrier()
+
+
+def forget_results(path: Path, comm: MPI.Comm = MPI.COMM_WORLD) -> None:
+    """Remove an earlier run's results.json before solving again: if this run is interrupted or fails
+    before it writes its own, no old answer is left that looks like the new one."""
+    if comm.rank == 0:
+        path.unlink(missing_ok=True)
     comm.barrier()
 
 

@@ -110,6 +110,7 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
     report.solve_time = time.perf_counter() - t0 - report.assembly_time
     if driver is None:
         drv.snes.destroy()
+    progress.report("solve_done", converged=report.converged)
     return report
 
 

@@ -1,0 +1,131 @@
+"""Show the solvers' progress events (fem_forms.progress) to a person watching a long run.
+
+On a terminal: one status line rewritten in place (carriage return, cleared when a solve ends, so the
+summary printed afterwards starts on a clean line). Anywhere else (a log file, a pipe, CI): one plain
+line per accepted or rejected step and none per Newton iteration, so logs stay short. The CLI installs
+it on rank 0 unless --quiet; the Python API stays silent unless the user calls ``show_progress()``.
+"""
+from __future__ import annotations
+
+import shutil
+import sys
+import time
+from typing import TextIO
+
+from mpi4py import MPI
+
+from fem_forms import progress
+
+CLEAR = "\r\x1b[K"          # back to column 0, erase to the end of the line
+REDRAW_EVERY_S = 0.1        # a terminal line is redrawn at most this often for Newton iterations
+
+
+class ProgressLine:
+    """A reporter for ``progress.set_reporter``: keeps the latest step, iteration and residual and shows
+    them. `stream` None means sys.stderr at the time of writing (so pytest's capture sees it); `tty`
+    None means ask the stream."""
+
+    def __init__(self, stream: TextIO | None = None, tty: bool | None = None) -> None:
+        self._stream = stream
+        self._tty = tty
+        self.t0 = time.perf_counter()
+        self.state: dict = {}
+        self._shown = False          # a terminal line is on screen
+        self._last_draw = -1.0
+        self._time0: tuple[float, float] | None = None   # (wall, simulated time) at the first time step
+
+    # -- the reporter ------------------------------------------------------------------------------
+    def __call__(self, event: str, **fields) -> None:
+        st = self.state
+        if event == "load_step":        # numbered as the summary counts them: accepted steps + 1
+            st.update(load=fields.get("load"), step=st.get("accepted", 0) + 1, iteration=None, residual=None)
+        elif event == "newton":
+            st.update(load=fields.get("load", st.get("load")), iteration=fields.get("iteration"),
+                      residual=fields.get("residual"))
+        elif event == "time_step":
+            st.update(time=fields.get("time"), dt=fields.get("dt"), time_step=fields.get("step"),
+                      total_time=fields.get("total_time"), iteration=None, residual=None)
+            if self._time0 is None:
+                self._time0 = (time.perf_counter(), float(fields.get("time") or 0.0))
+        elif event == "step_accepted":
+            st["accepted"] = st.get("accepted", 0) + 1
+        elif event == "solve_done":     # the next solve (e.g. a forward check) counts from 1 again
+            self.close()
+            self.state = {}
+            return
+        if self.tty:
+            if event != "newton" or time.perf_counter() - self._last_draw >= REDRAW_EVERY_S:
+                self._draw(self.status())
+        elif event in ("step_accepted", "step_rejected"):
+            verdict = "accepted" if event == "step_accepted" else f"rejected ({fields.get('why') or 'failed'})"
+            iters = fields.get("iterations")
+            self._write(f"fem-forms: {self.status(newton=False)}: {verdict}"
+                        + (f" after {iters} Newton iterations" if iters is not None else "") + "\n")
+
+    def close(self) -> None:
+        """Erase the terminal line (if one is shown), so what is printed next starts clean."""
+        if self._shown:
+            self._write(CLEAR)
+            self._shown = False
+
+    # -- formatting --------------------------------------------------------------------------------
+    @property
+    def tty(self) -> bool:
+        if self._tty is None:
+            isatty = getattr(self.stream, "isatty", None)
+            self._tty = bool(isatty and isatty())
+        return self._tty
+
+    @property
+    def stream(self) -> TextIO:
+        return self._stream if self._stream is not None else sys.stderr
+
+    def status(self, newton: bool = True) -> str:
+        """The current state in one line: time step and ETA, load step, Newton iteration, residual, elapsed."""
+        st, now = self.state, time.perf_counter()
+        parts = []
+        if st.get("time") is not None:
+            parts.append(f"t = {st['time']:.4g}" + (f" / {st['total_time']:.4g} s" if st.get("total_time") else " s")
+                         + f" (step {st.get('time_step')}, dt {st.get('dt', 0.0):.3g})")
+        if st.get("step") is not None:
+            parts.append(f"load step {st['step']} (load {st.get('load', 0.0):.4g})")
+        if newton and st.get("iteration") is not None:
+            parts.append(f"Newton {st['iteration']}")
+        if st.get("residual") is not None:
+            parts.append(f"residual {st['residual']:.2e}")
+        parts.append(f"{now - self.t0:.1f} s")
+        eta = self.eta(now)
+        if eta is not None:
+            parts.append(f"ETA {eta:.0f} s")
+        return ", ".join(parts)
+
+    def eta(self, now: float) -> float | None:
+        """Remaining wall time from the simulated-time rate seen since the first time step."""
+        st = self.state
+        if self._time0 is None or not st.get("total_time") or st.get("time") is None:
+            return None
+        wall0, sim0 = self._time0
+        done = st["time"] - sim0
+        if done <= 0:
+            return None
+        return max(0.0, (now - wall0) / done * (st["total_time"] - st["time"]))
+
+    def _draw(self, line: str) -> None:
+        width = shutil.get_terminal_size((80, 24)).columns - 1     # never wrap: \r returns one row only
+        self._write(CLEAR + line[:width])
+        self._shown = True
+        self._last_draw = time.perf_counter()
+
+    def _write(self, text: str) -> None:
+        s = self.stream
+        s.write(text)
+        s.flush()
+
+
+def show_progress(enabled: bool = True, stream: TextIO | None = None,
+                  comm: MPI.Comm = MPI.COMM_WORLD) -> ProgressLine | None:
+    """Show solver progress on `stream` (default stderr) on rank 0 of `comm`; enabled=False silences it
+    again. The Python API is silent until this is called; the CLI calls it unless --quiet."""
+    reporter = ProgressLine(stream) if enabled and comm.rank == 0 else None
+    progress.set_reporter(reporter)
+    return reporter
