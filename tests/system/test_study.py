@@ -6,8 +6,7 @@ import pytest
 
 from fem_forms.cli import main
 from fem_forms.study import pareto, richardson, Run
-from conftest import beam_scene
-from test_bad_input import toml_dumps
+from helpers import beam_scene, toml_dumps
 
 L, H, E, RHO = 1.0, 0.05, 1e9, 1000.0
 EB_SAG = RHO * 9.81 * H * H * L**4 / (8 * E * H**4 / 12)

@@ -6,16 +6,7 @@ from scipy.optimize import fsolve
 
 import fem_forms as ff
 from fem_forms.materials import lame_from_young_poisson
-from conftest import beam_scene
-
-
-def beam(nu, formulation, degree, cells=(20, 2, 2)):
-    L, h = 1.0, 0.05
-    d = beam_scene(mesh={"generator": "box", "size": [L, h, h], "cells": list(cells)},
-                   material={"model": "neo-hookean", "E": 1e9, "nu": nu, "rho": 1000.0},
-                   discretization={"degree": degree, "formulation": formulation},
-                   output={"probes": {"tip": [L, h / 2, h / 2]}})
-    return ff.Scene.from_dict(d)
+from helpers import incompressible_beam as beam
 
 
 def euler_bernoulli_timoshenko(nu, E=1e9, rho=1000.0, L=1.0, h=0.05):

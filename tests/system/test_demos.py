@@ -2,7 +2,7 @@
 import json
 
 from fem_forms import Scene, solve_static, write_static_outputs
-from conftest import ROOT
+from helpers import ROOT
 
 
 def test_demo_scene_solves_and_writes_outputs(tmp_path):

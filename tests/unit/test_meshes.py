@@ -10,7 +10,7 @@ from mpi4py import MPI
 import fem_forms as ff
 from fem_forms.meshes import load_mesh
 from fem_forms.scene import MeshSpec
-from conftest import beam_scene
+from helpers import beam_scene
 
 
 def volume(mesh) -> float:

@@ -12,31 +12,9 @@ import fem_forms as ff
 from fem_forms.analyses import inverse
 from fem_forms.design.adjoint import AdjointDesign
 from fem_forms.design.forward_on_rest import ForwardOnRest
-from fem_forms.cli import main
-from conftest import beam_scene
-from test_bad_input import toml_dumps, with_
-from test_mpi import mpirun
+from helpers import beam_scene, inverse_beam, mpirun, run_scene, toml_dumps, with_
 
 comm = MPI.COMM_WORLD
-
-
-def inverse_beam(E=1e7, method="direct", cells=(10, 2, 2), **inv) -> dict:
-    d = beam_scene(mesh={"generator": "box", "size": [1.0, 0.1, 0.1], "cells": list(cells)},
-                   material={"model": "neo-hookean", "E": E, "nu": 0.3, "rho": 1100.0})
-    d["analysis"] = "inverse"
-    d["inverse"] = {"method": method, **inv}
-    d["solver"] = {"steps": 4}
-    return d
-
-
-def run_scene(tmp_path, d, capsys=None):
-    path = tmp_path / "scene.toml"
-    path.write_text(toml_dumps(d))
-    out = tmp_path / "out"
-    code = main(["run", str(path), "--out", str(out)])
-    err = capsys.readouterr().err if capsys else ""
-    data = json.loads((out / "results.json").read_text()) if (out / "results.json").exists() else None
-    return code, data, err, out
 
 
 def test_direct_round_trip_on_a_soft_beam(tmp_path):

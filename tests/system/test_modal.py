@@ -16,24 +16,14 @@ import pytest
 from scipy.integrate import quad
 from scipy.optimize import brentq
 
-from conftest import ROOT
+from helpers import MODAL_E, MODAL_L, MODAL_RHO, MODAL_T, ROOT, to_toml
+from helpers import modal_beam as beam
 from fem_forms import Scene, cli
 from fem_forms.analyses.modal import solve_modal, write_modal_outputs
 
 PYTHON = str(ROOT / ".venv" / "bin" / "python")
-L, T, E, RHO = 1.0, 0.025, 1.0e8, 1000.0          # slender square beam, nu = 0
+L, T, E, RHO = MODAL_L, MODAL_T, MODAL_E, MODAL_RHO          # slender square beam, nu = 0
 EI, RHO_A = E * T**4 / 12, RHO * T * T
-
-
-def beam(count=4, cells=(20, 1, 1), fix=True, **over) -> dict:
-    d = {"title": "modal beam", "analysis": "modal",
-         "mesh": {"size": [L, T, T], "cells": list(cells)},
-         "material": {"model": "neo-hookean", "E": E, "nu": 0.0, "rho": RHO},
-         "discretization": {"degree": 2},
-         "fix": [{"where": {"axis": "x", "at": 0.0}}] if fix else [],
-         "modal": {"count": count}}
-    d.update(over)
-    return d
 
 
 def eb_frequency(beta_l: float) -> float:
@@ -72,29 +62,6 @@ def tensioned_cantilever_f1(N: float) -> float:
     d = [det(w) for w in ws]
     i = next(i for i in range(len(ws) - 1) if d[i] * d[i + 1] < 0)
     return brentq(det, ws[i], ws[i + 1]) / (2 * math.pi)
-
-
-def to_toml(d: dict) -> str:
-    """Just enough TOML for these scenes: scalars, lists, inline tables, tables, arrays of tables."""
-    def val(v):
-        if isinstance(v, bool):
-            return "true" if v else "false"
-        if isinstance(v, (int, float)):
-            return repr(v)
-        if isinstance(v, str):
-            return json.dumps(v)
-        if isinstance(v, list):
-            return "[" + ", ".join(val(x) for x in v) + "]"
-        return "{" + ", ".join(f"{k} = {val(x)}" for k, x in v.items()) + "}"
-    lines = [f"{k} = {val(v)}" for k, v in d.items() if not isinstance(v, (dict, list)) or
-             (isinstance(v, list) and not (v and isinstance(v[0], dict)))]
-    for k, v in d.items():
-        if isinstance(v, dict):
-            lines += [f"[{k}]"] + [f"{kk} = {val(x)}" for kk, x in v.items()]
-        elif isinstance(v, list) and v and isinstance(v[0], dict):
-            for item in v:
-                lines += [f"[[{k}]]"] + [f"{kk} = {val(x)}" for kk, x in item.items()]
-    return "\n".join(lines) + "\n"
 
 
 # ------------------------------------------------------------------------------------------------

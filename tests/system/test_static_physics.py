@@ -6,28 +6,12 @@ import ufl
 from dolfinx import fem, mesh as dmesh
 from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
-from scipy.optimize import brentq, fsolve
+from scipy.optimize import brentq
 
 import fem_forms as ff
 from fem_forms.solvers import continuation, snes
-from fem_forms.materials import lame_from_young_poisson
 from fem_forms.model import build_model
-from conftest import beam_scene
-
-E, NU = 1.0e6, 0.3
-MU, LMBDA = lame_from_young_poisson(E, NU)
-
-
-def block_scene(cell, degree, loads, size=(1.0, 1.0, 1.0), cells=(2, 2, 2)):
-    """A block with rollers on x=0, y=0, z=0 (symmetry planes) and the given loads."""
-    return ff.Scene.from_dict({
-        "mesh": {"generator": "box", "size": list(size), "cells": list(cells), "cell": cell},
-        "material": {"model": "neo-hookean", "E": E, "nu": NU},
-        "discretization": {"degree": degree},
-        "fix": [{"where": {"axis": a, "at": 0.0}, "components": [a]} for a in "xyz"],
-        "load": loads,
-        "output": {"probes": {"corner": list(size)}},
-    })
+from helpers import E, LMBDA, MU, beam_scene, block_scene, uniaxial_stretches
 
 
 @pytest.mark.parametrize("cell, degree", [("tetrahedron", 1), ("tetrahedron", 2), ("hexahedron", 1),
@@ -53,16 +37,6 @@ def test_patch_test_reproduces_homogeneous_deformation(cell, degree):
     assert report.converged
     err = np.abs(model.u.x.array - g.x.array).max()
     assert err < 1e-10
-
-
-def uniaxial_stretches(T):
-    """Neo-Hookean uniaxial dead-load tension T (first Piola-Kirchhoff): stretches (l1, l2) with
-    zero lateral stress, solved independently of the FE code."""
-    def eqs(v):
-        l1, l2 = v
-        lnJ = np.log(l1 * l2**2)
-        return [MU * (l1 - 1 / l1) + LMBDA * lnJ / l1 - T, MU * (l2 - 1 / l2) + LMBDA * lnJ / l2]
-    return fsolve(eqs, [1.1, 0.95], xtol=1e-12)
 
 
 @pytest.mark.parametrize("cell, degree", [("tetrahedron", 1), ("hexahedron", 2)])

@@ -6,7 +6,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 import fem_forms as ff
-from conftest import beam_scene
+from helpers import beam_scene
 from fem_forms.solvers import preconditioner_reuse as pr
 
 
