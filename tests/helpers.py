@@ -10,6 +10,9 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import ufl
+from dolfinx import fem
+from mpi4py import MPI
 from scipy.optimize import fsolve
 
 import fem_forms as ff
@@ -108,6 +111,11 @@ def incompressible_beam(nu, formulation, degree, cells=(20, 2, 2)):
                    discretization={"degree": degree, "formulation": formulation},
                    output={"probes": {"tip": [L, h / 2, h / 2]}})
     return ff.Scene.from_dict(d)
+
+
+def mesh_volume(mesh) -> float:
+    one = fem.Constant(mesh, 1.0)
+    return mesh.comm.allreduce(fem.assemble_scalar(fem.form(one * ufl.dx(domain=mesh))), op=MPI.SUM)
 
 
 # --- TOML writers -----------------------------------------------------------------------------

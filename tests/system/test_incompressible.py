@@ -1,7 +1,6 @@
 """Nearly incompressible materials: the mixed (Taylor-Hood P2/P1) formulation neither locks nor fails;
 the displacement formulation locks and warns."""
 import numpy as np
-import pytest
 from scipy.optimize import fsolve
 
 import fem_forms as ff
@@ -61,8 +60,3 @@ def test_mixed_uniaxial_tension_matches_analytic_nearly_incompressible():
     assert res.report.converged
     assert abs(l1 * l2 * l2 - 1) < 1e-3
     np.testing.assert_allclose(res.probes["corner"], [l1 - 1, l2 - 1, l2 - 1], rtol=1e-7)
-
-
-def test_mixed_needs_degree_2_and_static():
-    with pytest.raises(ff.InputError, match="Taylor-Hood"):
-        beam(0.49, "mixed", 1)
