@@ -153,6 +153,7 @@ def test_struck_bar_demo_scene(tmp_path):
     assert min(abs(p - res.frequencies_hz[0]) for p in summary["sound"]["peaks_hz"]) <= 2.0   # 1/0.5 s
 
 
+@pytest.mark.mpi
 def test_two_ranks_give_the_same_frequencies(tmp_path):
     d = beam(count=6, cells=(30, 2, 2),
              sound={"strike": {"point": [0.8, T / 2, T], "direction": [0.0, 0.3, 1.0]},

@@ -27,6 +27,7 @@ SCENES = {
 }
 
 
+@pytest.mark.mpi          # the precondition of every mpi case: deselected with them by -m "not mpi"
 def test_mpirun_is_available():
     assert MPIRUN is not None, "openmpi-bin (mpirun) is part of the stack setup.sh installs"
 
