@@ -1,5 +1,10 @@
 """Shared test setup: quiet JIT logs, collect PETSc objects between tests so that collective
-destructors run at the same point on every rank."""
+destructors run at the same point on every rank.
+
+Layout: tests/unit holds closed forms and small pieces, tests/system whole solves against analytic
+solutions and published references (and every demo, tests/system/test_demos.py). Cases that run
+`mpirun -n 2` carry the `mpi` marker (`pytest -m mpi`, `pytest -m "not mpi"`). Helpers shared by
+both folders live in tests/helpers.py."""
 import gc
 import os
 import sys
@@ -8,10 +13,14 @@ from pathlib import Path
 import pytest
 from mpi4py import MPI
 
-ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
+TESTS = Path(__file__).resolve().parent
+ROOT = TESTS.parent
+for p in (str(ROOT), str(TESTS)):       # fem_forms and helpers importable from any working directory
+    if p not in sys.path:
+        sys.path.insert(0, p)
 
 import fem_forms  # noqa: E402
+from helpers import beam_scene  # noqa: E402,F401  (kept importable as conftest.beam_scene)
 
 fem_forms.quiet_jit()
 os.environ.setdefault("OMPI_ALLOW_RUN_AS_ROOT", "1")
@@ -24,19 +33,3 @@ def _collect():
     yield
     gc.collect()
     MPI.COMM_WORLD.barrier()
-
-
-def beam_scene(**over) -> dict:
-    """A small clamped beam scene as a dict (tests tweak it)."""
-    d = {
-        "title": "test beam",
-        "mesh": {"generator": "box", "size": [1.0, 0.1, 0.1], "cells": [10, 2, 2]},
-        "material": {"model": "neo-hookean", "E": 1e6, "nu": 0.3, "rho": 1000.0},
-        "discretization": {"degree": 1},
-        "fix": [{"where": {"axis": "x", "at": 0.0}}],
-        "load": [{"type": "gravity", "g": [0.0, 0.0, -9.81]}],
-        "output": {"probes": {"tip": [1.0, 0.05, 0.05]}},
-    }
-    for k, v in over.items():
-        d[k] = v
-    return d

@@ -1,21 +1,11 @@
 """Nearly incompressible materials: the mixed (Taylor-Hood P2/P1) formulation neither locks nor fails;
 the displacement formulation locks and warns."""
 import numpy as np
-import pytest
 from scipy.optimize import fsolve
 
 import fem_forms as ff
 from fem_forms.materials import lame_from_young_poisson
-from conftest import beam_scene
-
-
-def beam(nu, formulation, degree, cells=(20, 2, 2)):
-    L, h = 1.0, 0.05
-    d = beam_scene(mesh={"generator": "box", "size": [L, h, h], "cells": list(cells)},
-                   material={"model": "neo-hookean", "E": 1e9, "nu": nu, "rho": 1000.0},
-                   discretization={"degree": degree, "formulation": formulation},
-                   output={"probes": {"tip": [L, h / 2, h / 2]}})
-    return ff.Scene.from_dict(d)
+from helpers import incompressible_beam as beam
 
 
 def euler_bernoulli_timoshenko(nu, E=1e9, rho=1000.0, L=1.0, h=0.05):
@@ -70,8 +60,3 @@ def test_mixed_uniaxial_tension_matches_analytic_nearly_incompressible():
     assert res.report.converged
     assert abs(l1 * l2 * l2 - 1) < 1e-3
     np.testing.assert_allclose(res.probes["corner"], [l1 - 1, l2 - 1, l2 - 1], rtol=1e-7)
-
-
-def test_mixed_needs_degree_2_and_static():
-    with pytest.raises(ff.InputError, match="Taylor-Hood"):
-        beam(0.49, "mixed", 1)

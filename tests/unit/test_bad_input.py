@@ -8,39 +8,7 @@ import pytest
 import tomllib
 
 from fem_forms.cli import main
-from conftest import ROOT, beam_scene
-
-
-def toml_dumps(d: dict, prefix: str = "") -> str:
-    """Minimal TOML writer for the test scenes (tables, arrays of tables, inline values)."""
-    def val(v):
-        if isinstance(v, bool):
-            return "true" if v else "false"
-        if isinstance(v, str):
-            return json.dumps(v)
-        if isinstance(v, dict):
-            return "{ " + ", ".join(f"{k} = {val(x)}" for k, x in v.items()) + " }"
-        if isinstance(v, list):
-            return "[" + ", ".join(val(x) for x in v) + "]"
-        return repr(v)
-    lines, tables = [], []
-    for k, v in d.items():
-        if isinstance(v, dict) and not prefix.startswith("inline"):
-            tables.append((k, v))
-        elif isinstance(v, list) and v and all(isinstance(x, dict) for x in v):
-            tables.append((k, v))
-        else:
-            lines.append(f"{k} = {val(v)}")
-    for k, v in tables:
-        name = f"{prefix}{k}"
-        if isinstance(v, list):
-            for item in v:
-                lines.append(f"[[{name}]]")
-                lines.extend(f"{kk} = {val(vv)}" for kk, vv in item.items())
-        else:
-            lines.append(f"[{name}]")
-            lines.extend(f"{kk} = {val(vv)}" for kk, vv in v.items())
-    return "\n".join(lines) + "\n"
+from helpers import ROOT, beam_scene, toml_dumps, with_
 
 
 def run_cli(tmp_path, scene: dict, capsys, *extra):
@@ -51,21 +19,6 @@ def run_cli(tmp_path, scene: dict, capsys, *extra):
     code = main(["run", str(path), "--out", str(out), *extra])
     err = capsys.readouterr().err
     return code, err, out
-
-
-def with_(d: dict, path: str, value):
-    """Copy of scene d with d[a][b]... = value (value None deletes)."""
-    import copy
-    d = copy.deepcopy(d)
-    keys = path.split(".")
-    node = d
-    for k in keys[:-1]:
-        node = node[int(k)] if isinstance(node, list) else node[k]
-    if value is None:
-        del node[keys[-1]]
-    else:
-        node[keys[-1]] = value
-    return d
 
 
 BASE = beam_scene()

@@ -1,26 +1,11 @@
 """The same answer on 1 and 2 MPI ranks: the CLI under `mpirun -n 2` against a serial solve."""
 import json
-import os
-import shutil
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 
 import fem_forms as ff
-from conftest import ROOT, beam_scene
-from test_bad_input import toml_dumps
-
-MPIRUN = shutil.which("mpirun")
-
-
-def mpirun(args, n=2):
-    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-               OPENBLAS_NUM_THREADS="1")
-    cmd = [MPIRUN, "-n", str(n), "--bind-to", "none", "--oversubscribe", sys.executable, *args]
-    return subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, env=env, timeout=600)
-
+from helpers import MPIRUN, beam_scene, mpirun, toml_dumps
 
 SCENES = {
     "soft P2 beam, gravity + traction": beam_scene(
@@ -42,6 +27,7 @@ SCENES = {
 }
 
 
+@pytest.mark.mpi          # the precondition of every mpi case: deselected with them by -m "not mpi"
 def test_mpirun_is_available():
     assert MPIRUN is not None, "openmpi-bin (mpirun) is part of the stack setup.sh installs"
 

@@ -9,8 +9,7 @@ from dolfinx import fem, mesh as dmesh
 import fem_forms as ff
 from fem_forms.solvers import continuation, snes
 from fem_forms.model import build_model
-from conftest import beam_scene
-from test_static_physics import uniaxial_stretches, block_scene, E as E_BLOCK
+from helpers import beam_scene, uniaxial_stretches, block_scene, E as E_BLOCK
 
 
 def sag_scene(E):

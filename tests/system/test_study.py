@@ -1,13 +1,11 @@
-"""The speed/accuracy study and accuracy on request, against beam theory and exact extrapolation."""
+"""The speed/accuracy study and accuracy on request, against beam theory (the extrapolation arithmetic:
+unit/test_study_arithmetic.py)."""
 import json
 
-import numpy as np
 import pytest
 
 from fem_forms.cli import main
-from fem_forms.study import pareto, richardson, Run
-from conftest import beam_scene
-from test_bad_input import toml_dumps
+from helpers import beam_scene, toml_dumps
 
 L, H, E, RHO = 1.0, 0.05, 1e9, 1000.0
 EB_SAG = RHO * 9.81 * H * H * L**4 / (8 * E * H**4 / 12)
@@ -21,21 +19,6 @@ def scene_file(tmp_path, **extra):
     path = tmp_path / "beam.toml"
     path.write_text(toml_dumps(d))
     return path
-
-
-def test_richardson_recovers_the_limit_of_a_second_order_sequence():
-    limit = np.array([1.0, -2.0])
-    seq = [limit + np.array([0.3, 0.1]) * h**2 for h in (1.0, 0.5, 0.25)]
-    np.testing.assert_allclose(richardson(seq), limit, rtol=1e-12)
-    assert richardson(seq[:2]) is None
-    assert richardson([seq[0], seq[0] + 1, seq[0] + 3]) is None     # diverging: no estimate
-
-
-def test_pareto_front_keeps_only_undominated_runs():
-    runs = [Run(1, 0, {}, None, wall=1.0, error_finest=0.5, ok=True),
-            Run(1, 1, {}, None, wall=2.0, error_finest=0.6, ok=True),     # slower and worse
-            Run(2, 0, {}, None, wall=3.0, error_finest=0.01, ok=True)]
-    assert [r.wall for r in pareto(runs)] == [1.0, 3.0]
 
 
 def test_study_ladder_converges_to_beam_theory(tmp_path, capsys):

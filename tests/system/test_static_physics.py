@@ -1,33 +1,14 @@
 """System tests of static equilibrium against independent references: patch test, uniaxial tension and
-hydrostatic pressure (closed-form neo-Hookean solutions), Euler-Bernoulli cantilever, Taylor tests."""
+hydrostatic pressure (closed-form neo-Hookean solutions), Euler-Bernoulli cantilever, the StVK limit load (Taylor tests of the forms: unit/test_form_derivatives.py)."""
 import numpy as np
 import pytest
-import ufl
 from dolfinx import fem, mesh as dmesh
-from dolfinx.fem import petsc as fpetsc
-from mpi4py import MPI
-from scipy.optimize import brentq, fsolve
+from scipy.optimize import brentq
 
 import fem_forms as ff
 from fem_forms.solvers import continuation, snes
-from fem_forms.materials import lame_from_young_poisson
 from fem_forms.model import build_model
-from conftest import beam_scene
-
-E, NU = 1.0e6, 0.3
-MU, LMBDA = lame_from_young_poisson(E, NU)
-
-
-def block_scene(cell, degree, loads, size=(1.0, 1.0, 1.0), cells=(2, 2, 2)):
-    """A block with rollers on x=0, y=0, z=0 (symmetry planes) and the given loads."""
-    return ff.Scene.from_dict({
-        "mesh": {"generator": "box", "size": list(size), "cells": list(cells), "cell": cell},
-        "material": {"model": "neo-hookean", "E": E, "nu": NU},
-        "discretization": {"degree": degree},
-        "fix": [{"where": {"axis": a, "at": 0.0}, "components": [a]} for a in "xyz"],
-        "load": loads,
-        "output": {"probes": {"corner": list(size)}},
-    })
+from helpers import E, LMBDA, MU, beam_scene, block_scene, uniaxial_stretches
 
 
 @pytest.mark.parametrize("cell, degree", [("tetrahedron", 1), ("tetrahedron", 2), ("hexahedron", 1),
@@ -53,16 +34,6 @@ def test_patch_test_reproduces_homogeneous_deformation(cell, degree):
     assert report.converged
     err = np.abs(model.u.x.array - g.x.array).max()
     assert err < 1e-10
-
-
-def uniaxial_stretches(T):
-    """Neo-Hookean uniaxial dead-load tension T (first Piola-Kirchhoff): stretches (l1, l2) with
-    zero lateral stress, solved independently of the FE code."""
-    def eqs(v):
-        l1, l2 = v
-        lnJ = np.log(l1 * l2**2)
-        return [MU * (l1 - 1 / l1) + LMBDA * lnJ / l1 - T, MU * (l2 - 1 / l2) + LMBDA * lnJ / l2]
-    return fsolve(eqs, [1.1, 0.95], xtol=1e-12)
 
 
 @pytest.mark.parametrize("cell, degree", [("tetrahedron", 1), ("hexahedron", 2)])
@@ -113,50 +84,6 @@ def test_cantilever_under_gravity_matches_euler_bernoulli_with_p2():
     sag = -res.probes["tip"][2]
     assert sag == pytest.approx(timoshenko, rel=0.01)
     assert sag == pytest.approx(eb, rel=0.01)
-
-
-def _vector(form):
-    b = fpetsc.assemble_vector(fem.form(form))
-    b.ghostUpdate(addv=1, mode=1)   # ADD, REVERSE
-    return b
-
-
-@pytest.mark.parametrize("model_name", ["neo-hookean", "mooney-rivlin", "stvk"])
-def test_taylor_residual_is_gradient_of_energy_and_jacobian_its_derivative(model_name):
-    """|Pi(u + h du) - Pi(u) - h R(u).du| = O(h^2) and |R(u + h du) - R(u) - h K(u) du| = O(h^2)."""
-    scene = ff.Scene.from_dict(beam_scene(material={"model": model_name, "E": 1e6, "nu": 0.3, "rho": 1000}))
-    m = build_model(scene)
-    rng = np.random.default_rng(1)
-    m.u.interpolate(lambda X: np.vstack([0.05 * X[0] ** 2, 0.02 * X[1], -0.1 * X[0] ** 2]))
-    u0 = m.u.x.array.copy()
-    du = fem.Function(m.V)
-    du.x.array[:] = rng.uniform(-0.01, 0.01, du.x.array.shape)
-    du.x.scatter_forward()
-    comm = MPI.COMM_WORLD
-    energy = fem.form(m.energy)
-
-    def Pi():
-        return comm.allreduce(fem.assemble_scalar(energy), op=MPI.SUM)
-
-    R0 = _vector(m.residual)
-    K = fpetsc.assemble_matrix(fem.form(m.jacobian))
-    K.assemble()
-    Kdu = R0.duplicate()
-    K.mult(du.vector, Kdu)
-    dPi = R0.dot(du.vector)
-    Pi0 = Pi()
-    e_energy, e_res = [], []
-    for h in [1e-1, 5e-2, 2.5e-2, 1.25e-2]:
-        m.u.x.array[:] = u0 + h * du.x.array
-        e_energy.append(abs(Pi() - Pi0 - h * dPi))
-        R = _vector(m.residual)
-        R.axpy(-1.0, R0)
-        R.axpy(-h, Kdu)
-        e_res.append(R.norm())
-    rates_e = np.log2(np.array(e_energy[:-1]) / np.array(e_energy[1:]))
-    rates_r = np.log2(np.array(e_res[:-1]) / np.array(e_res[1:]))
-    assert np.all(rates_e > 1.9), rates_e
-    assert np.all(rates_r > 1.9), rates_r
 
 
 def test_crushing_a_stvk_block_past_its_limit_load_is_reported_not_answered():

@@ -16,24 +16,14 @@ import pytest
 from scipy.integrate import quad
 from scipy.optimize import brentq
 
-from conftest import ROOT
-from fem_forms import Scene, cli
+from helpers import MODAL_E, MODAL_L, MODAL_RHO, MODAL_T, ROOT, to_toml
+from helpers import modal_beam as beam
+from fem_forms import Scene
 from fem_forms.analyses.modal import solve_modal, write_modal_outputs
 
 PYTHON = str(ROOT / ".venv" / "bin" / "python")
-L, T, E, RHO = 1.0, 0.025, 1.0e8, 1000.0          # slender square beam, nu = 0
+L, T, E, RHO = MODAL_L, MODAL_T, MODAL_E, MODAL_RHO          # slender square beam, nu = 0
 EI, RHO_A = E * T**4 / 12, RHO * T * T
-
-
-def beam(count=4, cells=(20, 1, 1), fix=True, **over) -> dict:
-    d = {"title": "modal beam", "analysis": "modal",
-         "mesh": {"size": [L, T, T], "cells": list(cells)},
-         "material": {"model": "neo-hookean", "E": E, "nu": 0.0, "rho": RHO},
-         "discretization": {"degree": 2},
-         "fix": [{"where": {"axis": "x", "at": 0.0}}] if fix else [],
-         "modal": {"count": count}}
-    d.update(over)
-    return d
 
 
 def eb_frequency(beta_l: float) -> float:
@@ -72,29 +62,6 @@ def tensioned_cantilever_f1(N: float) -> float:
     d = [det(w) for w in ws]
     i = next(i for i in range(len(ws) - 1) if d[i] * d[i + 1] < 0)
     return brentq(det, ws[i], ws[i + 1]) / (2 * math.pi)
-
-
-def to_toml(d: dict) -> str:
-    """Just enough TOML for these scenes: scalars, lists, inline tables, tables, arrays of tables."""
-    def val(v):
-        if isinstance(v, bool):
-            return "true" if v else "false"
-        if isinstance(v, (int, float)):
-            return repr(v)
-        if isinstance(v, str):
-            return json.dumps(v)
-        if isinstance(v, list):
-            return "[" + ", ".join(val(x) for x in v) + "]"
-        return "{" + ", ".join(f"{k} = {val(x)}" for k, x in v.items()) + "}"
-    lines = [f"{k} = {val(v)}" for k, v in d.items() if not isinstance(v, (dict, list)) or
-             (isinstance(v, list) and not (v and isinstance(v[0], dict)))]
-    for k, v in d.items():
-        if isinstance(v, dict):
-            lines += [f"[{k}]"] + [f"{kk} = {val(x)}" for kk, x in v.items()]
-        elif isinstance(v, list) and v and isinstance(v[0], dict):
-            for item in v:
-                lines += [f"[[{k}]]"] + [f"{kk} = {val(x)}" for kk, x in item.items()]
-    return "\n".join(lines) + "\n"
 
 
 # ------------------------------------------------------------------------------------------------
@@ -173,19 +140,7 @@ def test_wav_spectrum_peaks_at_the_modal_frequencies(tmp_path):
         assert (tmp_path / name).stat().st_size > 0
 
 
-def test_struck_bar_demo_scene(tmp_path):
-    """The demo's key number: the free bar's first flexural mode, against Euler-Bernoulli."""
-    scene = Scene.from_file(ROOT / "demos" / "scenes" / "struck_bar.toml")
-    scene.sound.duration = 0.5
-    res = solve_modal(scene)
-    summary = write_modal_outputs(res, tmp_path)
-    length, t = scene.mesh.size[0], scene.mesh.size[2]
-    f_eb = 22.373 / (2 * math.pi * length**2) * math.sqrt(scene.material.E * t**2 / (12 * scene.material.rho))
-    assert res.rigid_modes == 6
-    assert res.frequencies_hz[0] == pytest.approx(f_eb, rel=0.01)
-    assert min(abs(p - res.frequencies_hz[0]) for p in summary["sound"]["peaks_hz"]) <= 2.0   # 1/0.5 s
-
-
+@pytest.mark.mpi
 def test_two_ranks_give_the_same_frequencies(tmp_path):
     d = beam(count=6, cells=(30, 2, 2),
              sound={"strike": {"point": [0.8, T / 2, T], "direction": [0.0, 0.3, 1.0]},
@@ -206,37 +161,3 @@ def test_two_ranks_give_the_same_frequencies(tmp_path):
     assert runs[2]["effective_mass_fraction_sum"] == pytest.approx(runs[1]["effective_mass_fraction_sum"],
                                                                    rel=1e-6)
     assert runs[2]["sound"]["peaks_hz"] == pytest.approx(runs[1]["sound"]["peaks_hz"], rel=1e-6)
-
-
-def test_unconverged_eigensolve_is_exit_3(tmp_path, capsys):
-    d = beam(count=6, solver={"petsc": {"eps_max_it": 1, "eps_tol": 1e-30}})
-    (tmp_path / "scene.toml").write_text(to_toml(d))
-    status = cli.main(["run", str(tmp_path / "scene.toml"), "--out", str(tmp_path / "out")])
-    err = capsys.readouterr().err.strip().splitlines()
-    assert status == 3
-    assert len(err) == 1 and "modes converged" in err[0], err
-
-
-@pytest.mark.parametrize("change, key", [
-    ({"modal": {"count": 0}}, "modal.count"),
-    ({"modal": {"count": 3, "mass": "diagonal"}}, "modal.mass"),
-    ({"modal": {"prestress": "yes"}}, "modal.prestress"),
-    ({"modal": {"modes": 3}}, "modal.modes"),
-    ({"material": {"model": "neo-hookean", "E": E, "nu": 0.0}}, "material.rho"),
-    ({"sound": {"duration": 1.0}}, "sound.strike"),
-    ({"sound": {"strike": {"point": [2.0, 0.0, 0.0], "direction": [0, 0, 1]}}}, "sound.strike.point"),
-    ({"sound": {"strike": {"point": [0.5, 0.0, 0.0], "direction": [0, 0, 0]}}}, "sound.strike.direction"),
-    ({"sound": {"strike": {"point": [0.5, 0.0, 0.0], "direction": [0, 0, 1]}, "sample_rate": 44.1}},
-     "sound.sample_rate"),
-    ({"sound": {"strike": {"point": [0.5, 0.0, 0.0], "direction": [0, 0, 1]},
-                "damping": {"alpha": -1.0}}}, "sound.damping.alpha"),
-])
-def test_bad_modal_and_sound_input_is_one_line_exit_2(tmp_path, capsys, change, key):
-    d = beam(count=2, cells=(4, 1, 1))
-    d.update(change)
-    (tmp_path / "scene.toml").write_text(to_toml(d))
-    status = cli.main(["run", str(tmp_path / "scene.toml"), "--out", str(tmp_path / "out")])
-    err = capsys.readouterr().err.strip().splitlines()
-    assert status == 2
-    assert len(err) == 1 and key in err[0], err
-    assert not (tmp_path / "out" / "results.json").exists()

@@ -1,6 +1,6 @@
 """Inverse rest-shape design against independent references: a forward solve from the designed rest
 shape (read back from its file) must land on the target; methods agree; Taylor test of the adjoint
-gradient; continuation for soft materials; MPI parity; unusable designs and bad settings refused."""
+gradient; continuation for soft materials; MPI parity; unusable designs refused (bad settings: unit/test_inverse_input.py)."""
 import json
 
 import numpy as np
@@ -12,31 +12,9 @@ import fem_forms as ff
 from fem_forms.analyses import inverse
 from fem_forms.design.adjoint import AdjointDesign
 from fem_forms.design.forward_on_rest import ForwardOnRest
-from fem_forms.cli import main
-from conftest import beam_scene
-from test_bad_input import toml_dumps, with_
-from test_mpi import mpirun
+from helpers import beam_scene, inverse_beam, mpirun, run_scene, toml_dumps
 
 comm = MPI.COMM_WORLD
-
-
-def inverse_beam(E=1e7, method="direct", cells=(10, 2, 2), **inv) -> dict:
-    d = beam_scene(mesh={"generator": "box", "size": [1.0, 0.1, 0.1], "cells": list(cells)},
-                   material={"model": "neo-hookean", "E": E, "nu": 0.3, "rho": 1100.0})
-    d["analysis"] = "inverse"
-    d["inverse"] = {"method": method, **inv}
-    d["solver"] = {"steps": 4}
-    return d
-
-
-def run_scene(tmp_path, d, capsys=None):
-    path = tmp_path / "scene.toml"
-    path.write_text(toml_dumps(d))
-    out = tmp_path / "out"
-    code = main(["run", str(path), "--out", str(out)])
-    err = capsys.readouterr().err if capsys else ""
-    data = json.loads((out / "results.json").read_text()) if (out / "results.json").exists() else None
-    return code, data, err, out
 
 
 def test_direct_round_trip_on_a_soft_beam(tmp_path):
@@ -208,20 +186,3 @@ def test_two_ranks_give_the_same_adjoint_design(tmp_path):
     np.testing.assert_allclose(par["probes"]["tip"]["rest_position"], serial["probes"]["tip"]["rest_position"],
                                rtol=0, atol=1e-4 * serial["max_rest_offset"])   # measured: 2e-5
     assert par["matched_mismatch_max"] == pytest.approx(serial["matched_mismatch_max"], rel=1e-4)
-
-
-BAD = [
-    (with_(inverse_beam(), "inverse.method", "magic"), "inverse.method = 'magic'"),
-    (with_(inverse_beam(), "inverse.smoothness", 1.0), "inverse.smoothness: only for method = 'adjoint'"),
-    (with_(inverse_beam(), "inverse.target", "missing.msh"), "inverse.target = 'missing.msh': file not found"),
-    (with_(inverse_beam(method="adjoint"), "inverse.match_region", {"box": [[5, 5, 5], [6, 6, 6]]}),
-     "inverse.match_region: contains no cell"),
-    (with_(inverse_beam(method="adjoint"), "inverse.max_move", -1.0), "inverse.max_move = -1.0"),
-    (with_(beam_scene(), "inverse", {"method": "direct"}), "inverse: only for analysis = 'inverse'"),
-]
-
-
-@pytest.mark.parametrize("scene, fragment", BAD, ids=[b[1][:30] for b in BAD])
-def test_bad_inverse_settings(tmp_path, capsys, scene, fragment):
-    code, _, err, out = run_scene(tmp_path, scene, capsys)
-    assert code == 2 and fragment in err and len(err.strip().splitlines()) == 1, err

@@ -1,0 +1,196 @@
+"""Helpers shared by tests/unit and tests/system: scene builders, a TOML writer, the CLI and mpirun
+runners. Test modules import them with `from helpers import ...` (tests/ is on sys.path through
+tests/conftest.py and the `pythonpath` setting in pyproject.toml)."""
+import copy
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import ufl
+from dolfinx import fem
+from mpi4py import MPI
+from scipy.optimize import fsolve
+
+import fem_forms as ff
+from fem_forms.cli import main
+from fem_forms.materials import lame_from_young_poisson
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+# --- scenes -----------------------------------------------------------------------------------
+def beam_scene(**over) -> dict:
+    """A small clamped beam scene as a dict (tests tweak it)."""
+    d = {
+        "title": "test beam",
+        "mesh": {"generator": "box", "size": [1.0, 0.1, 0.1], "cells": [10, 2, 2]},
+        "material": {"model": "neo-hookean", "E": 1e6, "nu": 0.3, "rho": 1000.0},
+        "discretization": {"degree": 1},
+        "fix": [{"where": {"axis": "x", "at": 0.0}}],
+        "load": [{"type": "gravity", "g": [0.0, 0.0, -9.81]}],
+        "output": {"probes": {"tip": [1.0, 0.05, 0.05]}},
+    }
+    for k, v in over.items():
+        d[k] = v
+    return d
+
+
+def with_(d: dict, path: str, value):
+    """Copy of scene d with d[a][b]... = value (value None deletes)."""
+    d = copy.deepcopy(d)
+    keys = path.split(".")
+    node = d
+    for k in keys[:-1]:
+        node = node[int(k)] if isinstance(node, list) else node[k]
+    if value is None:
+        del node[keys[-1]]
+    else:
+        node[keys[-1]] = value
+    return d
+
+
+# the block of the static system tests: E, nu and the Lame parameters of its neo-Hookean material
+E, NU = 1.0e6, 0.3
+MU, LMBDA = lame_from_young_poisson(E, NU)
+
+
+def block_scene(cell, degree, loads, size=(1.0, 1.0, 1.0), cells=(2, 2, 2)):
+    """A block with rollers on x=0, y=0, z=0 (symmetry planes) and the given loads."""
+    return ff.Scene.from_dict({
+        "mesh": {"generator": "box", "size": list(size), "cells": list(cells), "cell": cell},
+        "material": {"model": "neo-hookean", "E": E, "nu": NU},
+        "discretization": {"degree": degree},
+        "fix": [{"where": {"axis": a, "at": 0.0}, "components": [a]} for a in "xyz"],
+        "load": loads,
+        "output": {"probes": {"corner": list(size)}},
+    })
+
+
+def uniaxial_stretches(T):
+    """Neo-Hookean uniaxial dead-load tension T (first Piola-Kirchhoff): stretches (l1, l2) with
+    zero lateral stress, solved independently of the FE code."""
+    def eqs(v):
+        l1, l2 = v
+        lnJ = np.log(l1 * l2**2)
+        return [MU * (l1 - 1 / l1) + LMBDA * lnJ / l1 - T, MU * (l2 - 1 / l2) + LMBDA * lnJ / l2]
+    return fsolve(eqs, [1.1, 0.95], xtol=1e-12)
+
+
+def inverse_beam(E=1e7, method="direct", cells=(10, 2, 2), **inv) -> dict:
+    d = beam_scene(mesh={"generator": "box", "size": [1.0, 0.1, 0.1], "cells": list(cells)},
+                   material={"model": "neo-hookean", "E": E, "nu": 0.3, "rho": 1100.0})
+    d["analysis"] = "inverse"
+    d["inverse"] = {"method": method, **inv}
+    d["solver"] = {"steps": 4}
+    return d
+
+
+# the slender square beam of the modal tests, nu = 0
+MODAL_L, MODAL_T, MODAL_E, MODAL_RHO = 1.0, 0.025, 1.0e8, 1000.0
+
+
+def modal_beam(count=4, cells=(20, 1, 1), fix=True, **over) -> dict:
+    d = {"title": "modal beam", "analysis": "modal",
+         "mesh": {"size": [MODAL_L, MODAL_T, MODAL_T], "cells": list(cells)},
+         "material": {"model": "neo-hookean", "E": MODAL_E, "nu": 0.0, "rho": MODAL_RHO},
+         "discretization": {"degree": 2},
+         "fix": [{"where": {"axis": "x", "at": 0.0}}] if fix else [],
+         "modal": {"count": count}}
+    d.update(over)
+    return d
+
+
+def incompressible_beam(nu, formulation, degree, cells=(20, 2, 2)):
+    L, h = 1.0, 0.05
+    d = beam_scene(mesh={"generator": "box", "size": [L, h, h], "cells": list(cells)},
+                   material={"model": "neo-hookean", "E": 1e9, "nu": nu, "rho": 1000.0},
+                   discretization={"degree": degree, "formulation": formulation},
+                   output={"probes": {"tip": [L, h / 2, h / 2]}})
+    return ff.Scene.from_dict(d)
+
+
+def mesh_volume(mesh) -> float:
+    one = fem.Constant(mesh, 1.0)
+    return mesh.comm.allreduce(fem.assemble_scalar(fem.form(one * ufl.dx(domain=mesh))), op=MPI.SUM)
+
+
+# --- TOML writers -----------------------------------------------------------------------------
+def toml_dumps(d: dict, prefix: str = "") -> str:
+    """Minimal TOML writer for the test scenes (tables, arrays of tables, inline values)."""
+    def val(v):
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, str):
+            return json.dumps(v)
+        if isinstance(v, dict):
+            return "{ " + ", ".join(f"{k} = {val(x)}" for k, x in v.items()) + " }"
+        if isinstance(v, list):
+            return "[" + ", ".join(val(x) for x in v) + "]"
+        return repr(v)
+    lines, tables = [], []
+    for k, v in d.items():
+        if isinstance(v, dict) and not prefix.startswith("inline"):
+            tables.append((k, v))
+        elif isinstance(v, list) and v and all(isinstance(x, dict) for x in v):
+            tables.append((k, v))
+        else:
+            lines.append(f"{k} = {val(v)}")
+    for k, v in tables:
+        name = f"{prefix}{k}"
+        if isinstance(v, list):
+            for item in v:
+                lines.append(f"[[{name}]]")
+                lines.extend(f"{kk} = {val(vv)}" for kk, vv in item.items())
+        else:
+            lines.append(f"[{name}]")
+            lines.extend(f"{kk} = {val(vv)}" for kk, vv in v.items())
+    return "\n".join(lines) + "\n"
+
+
+def to_toml(d: dict) -> str:
+    """Just enough TOML for these scenes: scalars, lists, inline tables, tables, arrays of tables."""
+    def val(v):
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, (int, float)):
+            return repr(v)
+        if isinstance(v, str):
+            return json.dumps(v)
+        if isinstance(v, list):
+            return "[" + ", ".join(val(x) for x in v) + "]"
+        return "{" + ", ".join(f"{k} = {val(x)}" for k, x in v.items()) + "}"
+    lines = [f"{k} = {val(v)}" for k, v in d.items() if not isinstance(v, (dict, list)) or
+             (isinstance(v, list) and not (v and isinstance(v[0], dict)))]
+    for k, v in d.items():
+        if isinstance(v, dict):
+            lines += [f"[{k}]"] + [f"{kk} = {val(x)}" for kk, x in v.items()]
+        elif isinstance(v, list) and v and isinstance(v[0], dict):
+            for item in v:
+                lines += [f"[[{k}]]"] + [f"{kk} = {val(x)}" for kk, x in item.items()]
+    return "\n".join(lines) + "\n"
+
+
+# --- running the CLI and mpirun ---------------------------------------------------------------
+def run_scene(tmp_path, d, capsys=None):
+    """`fem-forms run` on scene dict d in this process: (status, results.json or None, stderr, out)."""
+    path = tmp_path / "scene.toml"
+    path.write_text(toml_dumps(d))
+    out = tmp_path / "out"
+    code = main(["run", str(path), "--out", str(out)])
+    err = capsys.readouterr().err if capsys else ""
+    data = json.loads((out / "results.json").read_text()) if (out / "results.json").exists() else None
+    return code, data, err, out
+
+
+MPIRUN = shutil.which("mpirun")
+
+
+def mpirun(args, n=2):
+    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+               OPENBLAS_NUM_THREADS="1")
+    cmd = [MPIRUN, "-n", str(n), "--bind-to", "none", "--oversubscribe", sys.executable, *args]
+    return subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, env=env, timeout=600)
