@@ -1,4 +1,4 @@
-"""Command line: `fem-forms run SCENE.toml --out DIR [-snes_monitor ...]`.
+"""Command line: `fem-forms run SCENE.toml --out DIR [-snes_monitor ...]`, `fem-forms schema [--out FILE]`.
 
 Exit status: 0 solved, 2 bad input (one line on stderr naming the key), 3 no convergence."""
 from __future__ import annotations
@@ -13,6 +13,7 @@ from fem_forms.analyses import run_analysis
 from fem_forms.errors import InputError, SolveError
 from fem_forms.logs import quiet_jit
 from fem_forms.scene import Scene, parse_assignment
+from fem_forms.scene.schema import schema_json
 from fem_forms.study import run_study, solve_to_tolerance
 
 
@@ -53,11 +54,23 @@ def _parser() -> argparse.ArgumentParser:
     study.add_argument("--ranks", type=int, default=1, help="MPI ranks per run")
     study.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override a scene key")
     study.add_argument("-v", "--verbose", action="store_true", help="show FFCx/UFL compilation logs")
+    schema = sub.add_parser("schema", help="print the JSON Schema of scene files (for editors: Taplo, "
+                            "Even Better TOML)")
+    schema.add_argument("--out", help="write it to this file instead")
+    schema.set_defaults(verbose=False)
     return p
 
 
 def _run(args, petsc: dict) -> int:
-
+    if args.command == "schema":
+        if not args.out:
+            print(schema_json(), end="")
+            return 0
+        try:
+            Path(args.out).write_text(schema_json())
+        except OSError as e:
+            raise InputError(f"--out {args.out!r}: cannot write ({e.strerror})") from None
+        return 0
     overrides = dict(parse_assignment(a) for a in args.set)
     if args.command == "study":
         if petsc:

@@ -17,7 +17,7 @@ SEL_AXIS = Key("axis", "string", "normal axis of a plane of boundary facets (wit
                choices=tuple(AXES))
 SEL_AT = Key("at", "number", "coordinate of that plane along its axis", unit="m", required=True)
 SEL_BOX = Key("box", "points", "boundary facets inside [[x0, y0, z0], [x1, y1, z1]]", unit="m",
-              length=3, min_items=2, max_items=2)
+              required=True, length=3, min_items=2, max_items=2)
 SEL_GROUP = Key("group", "string", "a gmsh physical group of the mesh file, by name", required=True)
 SELECTOR_KEYS = {"plane": (SEL_AXIS, SEL_AT), "box": (SEL_BOX,), "group": (SEL_GROUP,)}
 

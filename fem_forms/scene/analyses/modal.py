@@ -68,7 +68,7 @@ def _check(scene) -> None:
 
 ANALYSIS = Analysis(
     name="modal",
-    doc="natural frequencies and mode shapes, optionally prestressed; optionally the struck sound",
+    doc="natural frequencies and mode shapes (optionally prestressed) and the sound when struck",
     runner="fem_forms.analyses.modal:run",
     sections=(
         Section("modal", "how many elastic modes, about which state, with which mass matrix", ModalSpec,
