@@ -76,6 +76,10 @@ class Variants:
     key: Key
     cases: dict                       # discriminator value -> tuple of Keys allowed for it
 
+    def __post_init__(self):
+        if tuple(self.cases) != self.key.choices:
+            raise TypeError(f"{self.key.name}: its choices and its cases differ")   # a declaration error
+
     def owners(self, name: str) -> list:
         return [v for v, keys in self.cases.items() if any(k.name == name for k in keys)]
 
@@ -193,9 +197,9 @@ class Table:
         out = {}
         for k in keys:
             if k.kind == "table":
-                sub = self.table(k.name) if (self.has(k.name) or not k.required) else None
-                if sub is None:
+                if k.required and not self.has(k.name):
                     raise InputError(f"{self.key(k.name)}: missing (required table)")
+                sub = self.table(k.name)
                 out.update(sub.read_keys(k.keys))
                 sub.done()
             else:
@@ -255,7 +259,7 @@ def read_value(k: Key, v: Any, key: str, base_dir: Path) -> Any:
         return dict(v)
     if k.kind == "selector":
         return k.parse(v, key, k.choices)
-    raise InputError(f"{key}: no reader for kind {k.kind!r}")   # a declaration error, not user input
+    raise TypeError(f"{key}: no reader for kind {k.kind!r}")   # a declaration error, not user input
 
 
 def read_toml(path: str | Path, overrides: dict | None = None) -> dict:

@@ -1,7 +1,8 @@
 """The one registry of analyses: the scene reader, `run_analysis` and the JSON Schema all ask it.
 
 A new analysis is a module in fem_forms/scene/analyses/ declaring ANALYSIS (its sections, runner,
-outputs), one line in ANALYSES below, and its runner module in fem_forms/analyses/.
+outputs), one entry in ANALYSES below, and its runner module in fem_forms/analyses/. Each of its
+sections is read into scene.<section name> (declare a Scene field there for the type hint).
 """
 from __future__ import annotations
 
