@@ -193,3 +193,12 @@ def test_scene_reading_needs_no_dolfinx():
     p = subprocess.run([sys.executable, "-c", BLOCK_DOLFINX, str(ROOT), *map(str, SCENE_FILES)],
                        capture_output=True, text=True)
     assert p.returncode == 0 and p.stdout.strip() == "True", p.stderr
+
+
+def test_the_material_is_built_once_when_the_scene_is_read():
+    from fem_forms.materials import make_material
+    scene = Scene.from_dict(BASE)
+    assert scene.material.material == make_material("neo-hookean", E=1e6, nu=0.3)
+    mr = Scene.from_dict(changed("material", {"model": "mooney-rivlin", "C10": 1e5, "C01": 2e4, "lambda": 1e6,
+                                              "rho": 1.0}))
+    assert mr.material.material == make_material("mooney-rivlin", C10=1e5, C01=2e4, lmbda=1e6)
