@@ -1,4 +1,5 @@
-"""Command line: `fem-forms run SCENE.toml [--out DIR] [-q] [-snes_monitor ...]`.
+"""Command line: `fem-forms run SCENE.toml [--out DIR] [-q] [-snes_monitor ...]`, `fem-forms study SCENE.toml`,
+`fem-forms schema [--out FILE]`.
 
 Exit status: 0 solved, 2 bad input (one line on stderr naming the key), 3 no convergence, 130 interrupted
 (Ctrl-C), 143 terminated (SIGTERM); an interrupt prints one line, "fem-forms: interrupted", no traceback.
@@ -21,6 +22,7 @@ from fem_forms.logs import quiet_jit
 from fem_forms.output.progress_line import show_progress
 from fem_forms.output.results import forget_results
 from fem_forms.scene import Scene, parse_assignment
+from fem_forms.scene.schema import schema_json
 from fem_forms.study import run_study, solve_to_tolerance
 
 
@@ -64,6 +66,10 @@ def _parser() -> argparse.ArgumentParser:
     study.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override a scene key")
     study.add_argument("-v", "--verbose", action="store_true", help="show FFCx/UFL compilation logs")
     study.add_argument("-q", "--quiet", action="store_true", help="show no progress (the per-run lines)")
+    schema = sub.add_parser("schema", help="print the JSON Schema of scene files (for editors: Taplo, "
+                            "Even Better TOML)")
+    schema.add_argument("--out", help="write it to this file instead")
+    schema.set_defaults(verbose=False, quiet=True)
     return p
 
 
@@ -74,7 +80,15 @@ def default_out(command: str, scene: str) -> Path:
 
 
 def _run(args, petsc: dict) -> int:
-
+    if args.command == "schema":
+        if not args.out:
+            print(schema_json(), end="")
+            return 0
+        try:
+            Path(args.out).write_text(schema_json())
+        except OSError as e:
+            raise InputError(f"--out {args.out!r}: cannot write ({e.strerror})") from None
+        return 0
     overrides = dict(parse_assignment(a) for a in args.set)
     if args.out is None:
         args.out = str(default_out(args.command, args.scene))

@@ -8,7 +8,8 @@ from dolfinx import fem
 from mpi4py import MPI
 import ufl
 
-from fem_forms.materials import Material, set_parameters
+from fem_forms.materials import Material
+from fem_forms.materials.constants import set_parameters
 from fem_forms.meshes import LoadedMesh, load_mesh
 from fem_forms.physics.admissibility import SmallestValue
 from fem_forms.physics.assemble import build_material, equilibrium_forms, scene_physics

@@ -2,16 +2,16 @@
 
 Each analysis module provides ``run(scene, out, echo) -> summary dict``: solve, write outputs
 (results.json last, atomically), print a short summary on rank 0 when echo is set, and raise
-SolveError when it did not reach an answer. ``run_analysis`` dispatches on ``scene.analysis``.
+SolveError when it did not reach an answer. Which runner serves which analysis is declared once,
+in the registry (fem_forms/scene/registry.py); ``run_analysis`` dispatches through it.
 """
 from __future__ import annotations
 
-import importlib
 from pathlib import Path
 
-RUNNERS = {"static": "static", "modal": "modal", "inverse": "inverse"}      # scene.analysis -> module in this package
+from fem_forms.scene import Scene, registry
 
 
-def run_analysis(scene, out: Path, echo: bool = False) -> dict:
-    module = importlib.import_module(f"{__name__}.{RUNNERS[scene.analysis]}")
-    return module.run(scene, Path(out), echo=echo)
+def run_analysis(scene: Scene, out: Path, echo: bool = False) -> dict:
+    """Run the scene's analysis, writing into `out`; its summary dict."""
+    return registry.get(scene.analysis).run_function()(scene, Path(out), echo=echo)

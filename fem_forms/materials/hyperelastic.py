@@ -1,14 +1,10 @@
 """Hyperelastic energy densities psi(F) as UFL expressions: the built-in models and user functions."""
 from __future__ import annotations
 
-import copy
-import dataclasses
 from dataclasses import dataclass
 import math
 from typing import Callable, Protocol
 
-from dolfinx import fem
-from petsc4py import PETSc
 import ufl
 
 from fem_forms.errors import InputError
@@ -163,32 +159,3 @@ def as_material(material) -> Material:
         return UserMaterial(material, getattr(material, "__name__", "user"))
     raise InputError(f"material: {material!r} is neither a material nor a function psi(F)")
 
-
-def bind_constants(material: Material, mesh) -> Material:
-    """The same model with each numeric parameter as a fem.Constant on `mesh` (same values): forms built
-    from it compile once, and a new value (set_parameters) compiles nothing. A user's psi(F) function is
-    returned as it is (its numbers are its own)."""
-    if not dataclasses.is_dataclass(material) or isinstance(material, UserMaterial):
-        return material
-    bound = copy.copy(material)
-    for f in dataclasses.fields(material):
-        value = getattr(material, f.name)
-        if isinstance(value, (int, float)) and not isinstance(value, bool):
-            object.__setattr__(bound, f.name, fem.Constant(mesh, PETSc.ScalarType(value)))
-    return bound
-
-
-def set_parameters(bound: Material, new: Material) -> None:
-    """Give the Constants of a bound material the values of `new`, a validated model of the same kind."""
-    if type(bound) is not type(new):
-        raise InputError(f"material: cannot change a {type(bound).__name__} into a {type(new).__name__} "
-                         "without rebuilding the model")
-    for f in dataclasses.fields(new):
-        target = getattr(bound, f.name)
-        if isinstance(target, fem.Constant):
-            target.value = getattr(new, f.name)
-
-
-def parameter_value(x) -> float:
-    """A material parameter as a float, whether it is a number or a fem.Constant."""
-    return float(x.value) if isinstance(x, fem.Constant) else float(x)

@@ -6,7 +6,7 @@ import copy
 import ufl
 
 from fem_forms.errors import InputError
-from fem_forms.materials.hyperelastic import Material, parameter_value
+from fem_forms.materials.hyperelastic import Material
 
 
 def first_piola_kirchhoff(material: Material, F) -> ufl.core.expr.Expr:
@@ -33,7 +33,7 @@ def mixed_energy(material: Material, F, p):
     if not hasattr(material, "volumetric") or not hasattr(material, "lmbda"):
         raise InputError("discretization.formulation = 'mixed': needs a built-in material model "
                          "(a user psi(F) has no volumetric part to split off)")
-    if parameter_value(material.lmbda) <= 0:
+    if float(getattr(material.lmbda, "value", material.lmbda)) <= 0:   # a number or a Constant
         raise InputError("discretization.formulation = 'mixed': needs lambda > 0 (nu > 0); it is meant "
                          "for nearly incompressible materials")
     deviatoric = copy.copy(material)                 # lambda = 0, without re-validating Constants

@@ -10,22 +10,22 @@ from dataclasses import dataclass
 from dolfinx import fem
 import ufl
 
-from fem_forms.materials import Material, as_material, bind_constants, make_material
+from fem_forms.materials import Material, as_material
+from fem_forms.materials.constants import bind_constants
 from fem_forms.meshes import LoadedMesh
-import fem_forms.physics.loads  # noqa: F401 (registers the load terms)
 from fem_forms.physics.elastic import ElasticEnergy
+import fem_forms.physics.loads
 from fem_forms.physics.parameters import Parameters
 from fem_forms.physics.supports import LoadFactor, load_regions
-from fem_forms.physics.terms import LOAD_TERMS, Context, Term
+from fem_forms.physics.terms import Context, LOAD_TERMS, Term
 from fem_forms.scene import Scene
 
 
 def build_material(scene: Scene, override=None) -> Material:
-    """The scene's material model with float parameters (validated), or the caller's own."""
+    """The scene's material model (validated and built once, when the scene was read), or the caller's own."""
     if override is not None:
         return as_material(override)
-    m = scene.material
-    return make_material(m.model, E=m.E, nu=m.nu, mu=m.mu, lmbda=m.lmbda, C10=m.C10, C01=m.C01)
+    return scene.material.material
 
 
 def scene_physics(scene: Scene, loaded: LoadedMesh, u, material=None, rest_map=None, pressure=None,

@@ -1,0 +1,66 @@
+"""Inverse design analysis: its [inverse] section, whose keys depend on the method."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from fem_forms.errors import InputError
+from fem_forms.scene.analyses import Analysis
+from fem_forms.scene.reader import Key, Section, Table, Variants
+from fem_forms.scene.spec import Selector
+
+METHOD = Key("method", "string", "how the rest shape is found", default="direct",
+             choices=("direct", "adjoint", "fixed-point"))
+COMMON_KEYS = (
+    Key("target", "file", "another mesh file as the target shape (default: the scene's mesh)"),
+    Key("check_tolerance", "number", "the forward check must land within this of the target", unit="m",
+        exclusive_minimum=0, default_note="1e-3 x the body's size"),
+    Key("iterations", "integer", "adjoint / fixed-point iteration limit", default=200, exclusive_minimum=0),
+    Key("tolerance", "number", "adjoint: gradient norm; fixed point: update size (relative)", default=1e-9,
+        exclusive_minimum=0),
+)
+ADJOINT_KEYS = (
+    Key("match_points", "points", "match the target only at these points (snapped to vertices)", unit="m",
+        length=3, min_items=1, note="must be a non-empty list of [x, y, z] points"),
+    Key("match_region", "selector", "match the target only inside this box", choices=("box",),
+        parse=Selector.parse),
+    Key("smoothness", "number", "weight of the integral of |grad d|^2 (d = rest - target)", default=0.0,
+        minimum=0),
+    Key("stay_close", "number", "weight of the integral of |d|^2 (shape preservation)", default=0.0, minimum=0),
+    Key("max_move", "number", "bound on each component of d", unit="m", exclusive_minimum=0),
+    Key("optimizer", "string", "Gauss-Newton, or L-BFGS (PETSc TAO BLMVM)", default="gauss-newton",
+        choices=("gauss-newton", "lbfgs")),
+)
+VARIANTS = Variants(METHOD, {"direct": (), "adjoint": ADJOINT_KEYS, "fixed-point": ()})
+_K = {k.name: k for k in (METHOD,) + COMMON_KEYS + ADJOINT_KEYS}
+
+
+@dataclass
+class InverseSpec:
+    """[inverse]: how to find the rest shape that deforms into the target under the scene's loads."""
+    method: str = _K["method"].field()                     # "direct" | "adjoint" | "fixed-point"
+    target: Path | None = None             # another mesh file as target (default: the scene's mesh)
+    check_tolerance: float | None = None   # forward check must land within this (m); default 1e-3 x size
+    iterations: int = _K["iterations"].field()             # adjoint / fixed-point iteration limit
+    tolerance: float = _K["tolerance"].field()             # adjoint: gradient norm; fixed point: update size
+    match_points: list | None = None       # adjoint: match only these points (snapped to vertices)
+    match_region: Selector | None = None   # adjoint: match only inside this box
+    smoothness: float = _K["smoothness"].field()           # adjoint: weight of int |grad d|^2
+    stay_close: float = _K["stay_close"].field()           # adjoint: weight of int |d|^2
+    max_move: float | None = None          # adjoint: bound on each component of d
+    optimizer: str = _K["optimizer"].field()               # adjoint: "gauss-newton" | "lbfgs"
+
+
+def _rules(s: InverseSpec, t: Table) -> None:
+    if s.match_points is not None and s.match_region is not None:
+        raise InputError(f"{t.path}: give match_points or match_region, not both")
+
+
+ANALYSIS = Analysis(
+    name="inverse",
+    doc="the rest shape that deforms into the given shape under the loads, checked by a forward solve",
+    runner="fem_forms.analyses.inverse:run",
+    sections=(Section("inverse", "how to find the rest shape that deforms into the target", InverseSpec,
+                      keys=COMMON_KEYS, variants=VARIANTS, rules=_rules),),
+    outputs=("results.json", "rest_shape.msh", "rest_shape.stl", "fields.xdmf", "inverse.png"),
+)

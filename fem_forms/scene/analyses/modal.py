@@ -1,0 +1,81 @@
+"""Modal analysis: its [modal] and [sound] sections, their keys and rules."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from fem_forms.errors import InputError
+from fem_forms.scene.analyses import Analysis
+from fem_forms.scene.reader import Key, Section, Table
+
+MODAL_KEYS = (
+    Key("count", "integer", "number of elastic modes", default=6, minimum=1, maximum=500,
+        note="must be a whole number of modes in 1..500"),
+    Key("prestress", "boolean", "modes about the static equilibrium under the scene's loads", default=False),
+    Key("mass", "string", "mass matrix", default="consistent", choices=("consistent", "lumped")),
+)
+_MODAL = {k.name: k for k in MODAL_KEYS}
+
+
+@dataclass
+class ModalSpec:
+    """[modal]: how many elastic modes, about which state, with which mass matrix."""
+    count: int = _MODAL["count"].field()
+    prestress: bool = _MODAL["prestress"].field()   # True: tangent at the static equilibrium under the loads
+    mass: str = _MODAL["mass"].field()              # "consistent" | "lumped"
+
+
+MAX_SAMPLES = 2**26
+SOUND_KEYS = (
+    Key("strike", "table", "where and how the body is struck", required=True, keys=(
+        Key("point", "vector", "struck point", unit="m", required=True, length=3),
+        Key("direction", "vector", "direction of the blow (normalised)", required=True, length=3))),
+    Key("duration", "number", "length of the sound", default=2.0, unit="s", exclusive_minimum=0),
+    Key("sample_rate", "integer", "samples per second of the WAV", default=44100, unit="Hz",
+        minimum=1000, maximum=384000, note="must lie in 1000..384000 Hz"),
+    Key("damping", "table", "Rayleigh damping zeta = alpha / (2 omega) + beta omega / 2", keys=(
+        Key("alpha", "number", "mass-proportional damping", default=1.0, unit="1/s", minimum=0),
+        Key("beta", "number", "stiffness-proportional damping", default=1e-7, unit="s", minimum=0))),
+)
+_SOUND = {k.name: k for k in SOUND_KEYS}
+_DAMPING = {k.name: k for k in _SOUND["damping"].keys}
+
+
+@dataclass
+class SoundSpec:
+    """[sound]: a modal impulse response at a struck point, written as a WAV."""
+    point: list = field(default_factory=lambda: [0.0, 0.0, 0.0])
+    direction: list = field(default_factory=lambda: [0.0, 0.0, 1.0])   # unit length after parsing
+    duration: float = _SOUND["duration"].field()
+    alpha: float = _DAMPING["alpha"].field()      # Rayleigh damping zeta = alpha / (2 omega) + beta omega / 2
+    beta: float = _DAMPING["beta"].field()
+    sample_rate: int = _SOUND["sample_rate"].field()
+
+
+def _sound_rules(s: SoundSpec, t: Table) -> None:
+    norm = math.sqrt(sum(c * c for c in s.direction))
+    if norm == 0:
+        raise InputError(f"sound.strike.direction = {s.direction}: must not be the zero vector")
+    s.direction = [c / norm for c in s.direction]
+    if s.duration * s.sample_rate > MAX_SAMPLES:
+        raise InputError(f"{t.key('duration')} = {s.duration}: too long (at most {MAX_SAMPLES} samples)")
+
+
+def _check(scene) -> None:
+    if scene.material.rho <= 0:
+        raise InputError("material.rho: modal analysis needs a positive density")
+
+
+ANALYSIS = Analysis(
+    name="modal",
+    doc="natural frequencies and mode shapes (optionally prestressed) and the sound when struck",
+    runner="fem_forms.analyses.modal:run",
+    sections=(
+        Section("modal", "how many elastic modes, about which state, with which mass matrix", ModalSpec,
+                keys=MODAL_KEYS),
+        Section("sound", "a modal impulse response at a struck point, written as a WAV", SoundSpec,
+                keys=SOUND_KEYS, rules=_sound_rules, absent=lambda: None),
+    ),
+    outputs=("results.json", "modes.xdmf", "modes.png", "sound.wav", "spectrogram.png"),
+    check=_check,
+)

@@ -1,0 +1,348 @@
+"""Reading scene tables: key declarations, the typed reader that checks values against them, --set.
+
+Every scene key is declared once as a `Key` (type, range, default, unit, one-line doc); the
+reader validates through these declarations and `schema.py` turns the same declarations into
+JSON Schema. Errors are one line naming the key (InputError); unknown keys are refused.
+No string from a scene is ever evaluated as code.
+"""
+from __future__ import annotations
+
+import copy
+import dataclasses
+import math
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable
+
+from fem_forms.errors import InputError
+
+AXES = {"x": 0, "y": 1, "z": 2}
+
+
+@dataclass(frozen=True)
+class Key:
+    """One scene key: its TOML type (`kind`), range, default, unit and a one-line doc.
+
+    kinds: number, integer, string, boolean, vector (numbers; `integer` for whole ones), points
+    (a list of vectors), axes (distinct names from x, y, z -> indices), file (a path that must
+    exist), table (a sub-table of `keys`, read into the same spec), map (name -> `item`), options
+    (PETSc option -> scalar), selector (a boundary selector read by `parse`; `choices` limits its kinds).
+    `note` replaces the generic range message; `attr` names the spec attribute when it differs.
+    """
+    name: str
+    kind: str
+    doc: str
+    default: Any = None
+    unit: str = ""
+    required: bool = False
+    minimum: float | None = None
+    exclusive_minimum: float | None = None
+    maximum: float | None = None
+    exclusive_maximum: float | None = None
+    choices: tuple | None = None
+    length: int | None = None
+    min_items: int | None = None
+    max_items: int | None = None
+    integer: bool = False
+    keys: tuple = ()
+    item: "Key | None" = None
+    attr: str | None = None
+    note: str = ""
+    default_note: str = ""            # a default computed from other keys, said in words
+    parse: Callable | None = None     # selector kind: parse(value, key, allowed kinds) -> Selector
+
+    @property
+    def target(self) -> str:
+        """The spec attribute this key fills."""
+        return self.attr or self.name
+
+    def value_default(self) -> Any:
+        """The default as the spec holds it (axes names become indices; lists are fresh copies)."""
+        if self.kind == "axes" and self.default is not None:
+            return [AXES[c] for c in self.default]
+        return copy.deepcopy(self.default)
+
+    def field(self) -> Any:
+        """A dataclass field whose default is this key's default (so defaults are declared once)."""
+        if isinstance(self.default, (list, dict)):
+            return dataclasses.field(default_factory=self.value_default)
+        return dataclasses.field(default=self.value_default())
+
+
+@dataclass(frozen=True)
+class Variants:
+    """Keys that depend on the value of one discriminator key (load type, mesh generator, method)."""
+    key: Key
+    cases: dict                       # discriminator value -> tuple of Keys allowed for it
+
+    def __post_init__(self):
+        if tuple(self.cases) != self.key.choices:
+            raise TypeError(f"{self.key.name}: its choices and its cases differ")   # a declaration error
+
+    def owners(self, name: str) -> list:
+        return [v for v, keys in self.cases.items() if any(k.name == name for k in keys)]
+
+    def all_keys(self) -> list:
+        seen, out = set(), []
+        for keys in self.cases.values():
+            for k in keys:
+                if id(k) not in seen:
+                    seen.add(id(k))
+                    out.append(k)
+        return out
+
+
+def check_number(v: Any, key: str, *, positive=False, nonneg=False, integer=False):
+    """A finite number (a whole one with `integer`), as float (or int)."""
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        raise InputError(f"{key} = {v!r}: must be a number")
+    if integer and not isinstance(v, int):
+        raise InputError(f"{key} = {v!r}: must be a whole number")
+    if not math.isfinite(v):
+        raise InputError(f"{key} = {v!r}: must be finite")
+    if positive and v <= 0:
+        raise InputError(f"{key} = {v!r}: must be positive")
+    if nonneg and v < 0:
+        raise InputError(f"{key} = {v!r}: must not be negative")
+    return v if integer else float(v)
+
+
+def check_vector(v: Any, key: str, length: int | None = 3, *, positive=False, integer=False) -> list:
+    """A list of `length` finite numbers."""
+    if not isinstance(v, list) or (length is not None and len(v) != length):
+        raise InputError(f"{key} = {v!r}: must be a list of {length} numbers")
+    return [check_number(x, f"{key}[{i}]", positive=positive, integer=integer) for i, x in enumerate(v)]
+
+
+def _range_message(k: Key, v: Any) -> str | None:
+    """Why v is outside k's declared range, or None."""
+    lo, xlo, hi, xhi = k.minimum, k.exclusive_minimum, k.maximum, k.exclusive_maximum
+    bad = ((lo is not None and v < lo) or (xlo is not None and v <= xlo)
+           or (hi is not None and v > hi) or (xhi is not None and v >= xhi))
+    if not bad:
+        return None
+    if k.note:
+        return k.note
+    if xlo == 0 and hi is None and xhi is None:
+        return "must be positive"
+    if lo == 0 and hi is None and xhi is None:
+        return "must not be negative"
+    left = f"[{lo}" if lo is not None else f"({xlo}" if xlo is not None else "(-inf"
+    right = f"{hi}]" if hi is not None else f"{xhi})" if xhi is not None else "inf)"
+    return f"must lie in {left}, {right}"
+
+
+def _scalar(k: Key, v: Any, key: str) -> Any:
+    given = v
+    if k.kind in ("number", "integer"):
+        v = check_number(v, key, integer=k.kind == "integer")
+    elif k.kind == "string" or k.kind == "file":
+        if not isinstance(v, str):
+            raise InputError(f"{key} = {v!r}: must be a string")
+    elif k.kind == "boolean":
+        if not isinstance(v, bool):
+            raise InputError(f"{key} = {v!r}: must be true or false")
+    if k.choices is not None and v not in k.choices:
+        raise InputError(f"{key} = {v!r}: " + (k.note or f"must be one of {', '.join(map(repr, k.choices))}"))
+    if k.kind in ("number", "integer"):
+        why = _range_message(k, v)
+        if why:
+            raise InputError(f"{key} = {given!r}: {why}")
+    return v
+
+
+def _elements(k: Key, v: list, key: str) -> list:
+    """The numbers of a vector, each checked against k's range."""
+    v = check_vector(v, key, k.length, integer=k.integer)
+    for i, x in enumerate(v):
+        why = _range_message(k, x)
+        if why:
+            raise InputError(f"{key}[{i}] = {x!r}: {why}")
+    return v
+
+
+class Table:
+    """A TOML table being read: values checked against Key declarations, and a check for leftovers."""
+
+    def __init__(self, data: Any, path: str, base_dir: Path = Path(".")):
+        if not isinstance(data, dict):
+            raise InputError(f"{path}: must be a table, got {type(data).__name__}")
+        self.data, self.path, self.base_dir, self.used = data, path, Path(base_dir), set()
+
+    def key(self, name: str) -> str:
+        return f"{self.path}.{name}" if self.path else name
+
+    def has(self, name: str) -> bool:
+        return name in self.data
+
+    def raw(self, name: str, default: Any = None) -> Any:
+        self.used.add(name)
+        return self.data.get(name, default)
+
+    def table(self, name: str) -> "Table":
+        return Table(self.raw(name, {}), self.key(name), self.base_dir)
+
+    def read(self, k: Key, needed_by: str = "") -> Any:
+        """The value of key k, validated and converted, or its default when absent."""
+        self.used.add(k.name)
+        if k.name not in self.data:
+            if k.required:
+                raise InputError(f"{self.key(k.name)}: missing (required{needed_by})")
+            return k.value_default()
+        return read_value(k, self.data[k.name], self.key(k.name), self.base_dir)
+
+    def read_keys(self, keys, needed_by: str = "") -> dict:
+        """{attribute: value} for each declared key (sub-table keys flattened into it)."""
+        out = {}
+        for k in keys:
+            if k.kind == "table":
+                if k.required and not self.has(k.name):
+                    raise InputError(f"{self.key(k.name)}: missing (required table)")
+                sub = self.table(k.name)
+                out.update(sub.read_keys(k.keys))
+                sub.done()
+            else:
+                out[k.target] = self.read(k, needed_by)
+        return out
+
+    def read_variant(self, common, variants: Variants) -> dict:
+        """Common keys plus the keys of the case the discriminator names; a key of another case is refused."""
+        case = self.read(variants.key)
+        allowed = {k.name for k in variants.cases[case]}
+        for k in variants.all_keys():
+            if self.has(k.name) and k.name not in allowed:
+                owners = " or ".join(repr(o) for o in variants.owners(k.name))
+                raise InputError(f"{self.key(k.name)}: only for {variants.key.name} = {owners} "
+                                 f"({variants.key.name} is {case!r})")
+        values = {variants.key.target: case}
+        values.update(self.read_keys(common))
+        values.update(self.read_keys(variants.cases[case], f" for {variants.key.name} = {case!r}"))
+        return values
+
+    def done(self) -> None:
+        unknown = sorted(set(self.data) - self.used)
+        if unknown:
+            raise InputError(f"{self.key(unknown[0])}: unknown key")
+
+
+def read_value(k: Key, v: Any, key: str, base_dir: Path) -> Any:
+    """Check one present value against its declaration and convert it for the spec."""
+    if k.kind in ("number", "integer", "string", "boolean"):
+        return _scalar(k, v, key)
+    if k.kind == "vector":
+        return _elements(k, v, key)
+    if k.kind == "points":
+        if not isinstance(v, list) or not (k.min_items or 1) <= len(v) <= (k.max_items or len(v)):
+            raise InputError(f"{key}: " + (k.note or f"must list at least {k.min_items or 1} points"))
+        return [_elements(k, p, f"{key}[{i}]") for i, p in enumerate(v)]
+    if k.kind == "axes":
+        if not isinstance(v, list) or not v or any(c not in AXES for c in v) or len(set(v)) != len(v):
+            raise InputError(f"{key} = {v!r}: must be a list of distinct names from 'x', 'y', 'z'")
+        return [AXES[c] for c in v]
+    if k.kind == "file":
+        _scalar(k, v, key)
+        p = Path(v) if Path(v).is_absolute() else base_dir / v
+        if not p.is_file():
+            raise InputError(f"{key} = {v!r}: file not found")
+        return p
+    if k.kind == "map":
+        if not isinstance(v, dict):
+            raise InputError(f"{key}: must be a table name = {k.item.doc}")
+        return {n: read_value(k.item, x, f"{key}.{n}", base_dir) for n, x in v.items()}
+    if k.kind == "options":
+        if not isinstance(v, dict):
+            raise InputError(f"{key}: must be a table of PETSc options")
+        for n, x in v.items():
+            if isinstance(x, (dict, list)) or not n.replace("_", "").isalnum():
+                raise InputError(f"{key}.{n}: must be a PETSc option name with a scalar value")
+        return dict(v)
+    if k.kind == "selector":
+        return k.parse(v, key, k.choices)
+    raise TypeError(f"{key}: no reader for kind {k.kind!r}")   # a declaration error, not user input
+
+
+def read_toml(path: str | Path, overrides: dict | None = None) -> dict:
+    """The scene file as a dict, with `overrides` {"mesh.cells": [8, 1, 1], ...} applied."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"scene file {str(path)!r}: not found")
+    try:
+        data = tomllib.loads(path.read_text())
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
+        raise InputError(f"scene file {str(path)!r}: not valid TOML ({e})") from None
+    for key, value in (overrides or {}).items():
+        set_key(data, key, value)
+    return data
+
+
+def set_key(data: dict, dotted: str, value: Any) -> None:
+    """data["a"]["b"] = value for dotted = "a.b" (tables are created as needed)."""
+    node = data
+    parts = dotted.split(".")
+    for k in parts[:-1]:
+        node = node.setdefault(k, {})
+        if not isinstance(node, dict):
+            raise InputError(f"--set {dotted}: {k!r} is not a table")
+    node[parts[-1]] = value
+
+
+def parse_assignment(text: str) -> tuple[str, Any]:
+    """'mesh.cells=[8, 1, 1]' -> ("mesh.cells", [8, 1, 1]); the value is read as a TOML value."""
+    key, sep, raw = text.partition("=")
+    if not sep or not key.strip():
+        raise InputError(f"--set {text!r}: must be KEY=VALUE, e.g. --set discretization.degree=1")
+    try:
+        value = tomllib.loads(f"v = {raw.strip()}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = raw.strip()                          # a bare word: a string
+    return key.strip(), value
+
+
+@dataclass(frozen=True)
+class Section:
+    """A scene table ([mesh], [[load]], [modal], ...): its keys, the spec it builds, its cross-key rules.
+
+    The reader checks every key against its declaration first; `rules(spec, table)` then checks
+    what involves several keys (E and nu vs mu and lambda, ...) and may fill computed defaults.
+    """
+    name: str
+    doc: str
+    spec: type                                  # the dataclass built from the keys' values
+    keys: tuple = ()
+    variants: Variants | None = None
+    rules: Callable | None = None
+    array: bool = False                         # [[name]]: an array of tables
+    required: bool = False
+    absent: Callable | None = None              # the value when the table is missing (default: spec())
+
+    def parse(self, data: Any, base_dir: Path = Path(".")) -> Any:
+        """The spec (a list of specs for an array of tables) from the table's data."""
+        if self.array:
+            if not isinstance(data, list):
+                raise InputError(f"{self.name}: must be an array of tables [[{self.name}]]")
+            return [self._one(Table(d, f"{self.name}[{i}]", base_dir)) for i, d in enumerate(data)]
+        return self._one(Table(data, self.name, base_dir))
+
+    def missing(self) -> Any:
+        """The value when the scene has no such table."""
+        if self.required:
+            raise InputError(f"{self.name}: missing (required table)")
+        if self.absent is not None:
+            return self.absent()
+        return [] if self.array else self.spec()
+
+    def all_keys(self) -> list:
+        """Every key declared for this table (common and per case)."""
+        keys = list(self.keys)
+        if self.variants is not None:
+            keys = [self.variants.key] + keys + self.variants.all_keys()
+        return keys
+
+    def _one(self, t: Table) -> Any:
+        values = t.read_variant(self.keys, self.variants) if self.variants else t.read_keys(self.keys)
+        t.done()
+        spec = self.spec(**values)
+        if self.rules is not None:
+            self.rules(spec, t)
+        return spec

@@ -1,0 +1,32 @@
+"""The one registry of analyses: the scene reader, `run_analysis` and the JSON Schema all ask it.
+
+A new analysis is a module in fem_forms/scene/analyses/ declaring ANALYSIS (its sections, runner,
+outputs), one entry in ANALYSES below, and its runner module in fem_forms/analyses/. Each of its
+sections is read into scene.<section name> (declare a Scene field there for the type hint).
+"""
+from __future__ import annotations
+
+from fem_forms.errors import InputError
+from fem_forms.scene.analyses import Analysis, inverse, modal, static
+from fem_forms.scene.reader import Key, Section
+
+ANALYSES: dict[str, Analysis] = {a.name: a for a in (static.ANALYSIS, modal.ANALYSIS, inverse.ANALYSIS)}
+
+ANALYSIS_KEY = Key("analysis", "string", "what to compute: " + "; ".join(
+    f"{a.name}: {a.doc}" for a in ANALYSES.values()), default="static", choices=tuple(ANALYSES))
+
+
+def get(name: str) -> Analysis:
+    """The registered analysis called `name`."""
+    if name not in ANALYSES:
+        raise InputError(f"analysis = {name!r}: must be one of {', '.join(map(repr, ANALYSES))}")
+    return ANALYSES[name]
+
+
+def names() -> tuple[str, ...]:
+    return tuple(ANALYSES)
+
+
+def owned_sections() -> dict[str, tuple[Analysis, Section]]:
+    """Every analysis-owned section by table name, with its owner."""
+    return {s.name: (a, s) for a in ANALYSES.values() for s in a.sections}

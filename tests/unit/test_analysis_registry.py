@@ -1,0 +1,54 @@
+"""The one registry of analyses: each has a runner, owns its sections, and a scene dispatches through it."""
+import inspect
+
+import pytest
+
+from fem_forms.errors import InputError
+from fem_forms.scene import Scene, registry
+from fem_forms.scene.reader import Key
+
+BASE = {"mesh": {"cells": [4, 1, 1]}, "material": {"E": 1e6, "nu": 0.3, "rho": 1000.0}}
+REQUIRED = {"vector": [0.0, 0.0, 1.0], "number": 1.0, "integer": 1, "string": "a"}
+
+
+def required_only(keys) -> dict:
+    """The smallest table of these keys: only the required ones, sub-tables included."""
+    return {k.name: required_only(k.keys) if k.kind == "table" else REQUIRED[k.kind]
+            for k in keys if k.required}
+
+
+@pytest.mark.parametrize("name", registry.names())
+def test_every_analysis_has_a_runner(name):
+    analysis = registry.get(name)
+    run = analysis.run_function()
+    assert callable(run)
+    assert list(inspect.signature(run).parameters)[:3] == ["scene", "out", "echo"]
+    assert analysis.outputs and "results.json" in analysis.outputs
+
+
+@pytest.mark.parametrize("name", registry.names())
+def test_every_section_of_an_analysis_parses(name):
+    analysis = registry.get(name)
+    scene = Scene.from_dict(BASE | {"analysis": name})
+    for section in analysis.sections:
+        assert getattr(scene, section.name) == section.missing()        # absent: its default
+        data = required_only(section.keys)
+        parsed = getattr(Scene.from_dict(BASE | {"analysis": name, section.name: data}), section.name)
+        assert isinstance(parsed, section.spec)
+
+
+def test_a_section_of_another_analysis_is_refused():
+    owned = registry.owned_sections()
+    for name in registry.names():
+        for section, (owner, _) in owned.items():
+            if owner.name != name:
+                with pytest.raises(InputError, match=f"^{section}: only for analysis = '{owner.name}' "
+                                                     f"\\(this scene's analysis is '{name}'\\)$"):
+                    Scene.from_dict(BASE | {"analysis": name, section: {}})
+
+
+def test_analysis_key_lists_the_registry():
+    assert registry.ANALYSIS_KEY.choices == registry.names() == tuple(registry.ANALYSES)
+    with pytest.raises(InputError, match="analysis = 'dance'"):
+        registry.get("dance")
+    assert isinstance(registry.ANALYSIS_KEY, Key)
