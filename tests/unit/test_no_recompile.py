@@ -101,3 +101,11 @@ def test_density_is_a_cellwise_field():
     half = model.mesh.comm.allreduce(fem.assemble_scalar(mass), op=MPI.SUM)
     assert half == pytest.approx(0.5 * full, rel=1e-12)
     del ufl
+
+
+def test_every_load_type_the_scene_accepts_has_a_term():
+    """A new [[load]] type is a Term class registered under its name plus its keys in LOAD_TYPES:
+    neither can be forgotten without this failing."""
+    from fem_forms.physics.terms import LOAD_TERMS
+    from fem_forms.scene.spec import LOAD_TYPES
+    assert set(LOAD_TERMS) == set(LOAD_TYPES)
