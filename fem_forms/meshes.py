@@ -285,15 +285,32 @@ def load_mesh(spec: MeshSpec, comm: MPI.Comm = MPI.COMM_WORLD) -> LoadedMesh:
         lo = np.array(spec.origin, dtype=float)
         hi = lo + np.array(spec.size, dtype=float)
         ct = dmesh.CellType.tetrahedron if spec.cell == "tetrahedron" else dmesh.CellType.hexahedron
-        return LoadedMesh(dmesh.create_box(comm, [lo, hi], list(spec.cells), cell_type=ct), None, {})
-    key = "mesh.file" if spec.generator == "file" else f"mesh ({spec.generator})"
+        loaded = LoadedMesh(dmesh.create_box(comm, [lo, hi], list(spec.cells), cell_type=ct), None, {})
+    else:
+        key = "mesh.file" if spec.generator == "file" else f"mesh ({spec.generator})"
 
-    def build():
-        arrays = read_mesh_file(spec.file) if spec.generator == "file" else _generate(spec)
-        check_cells(arrays, key)
-        return arrays
+        def build():
+            arrays = read_mesh_file(spec.file) if spec.generator == "file" else _generate(spec)
+            check_cells(arrays, key)
+            return arrays
 
-    return distribute(comm, _on_root(comm, build))
+        loaded = distribute(comm, _on_root(comm, build))
+    settle_coordinate_element(loaded.mesh)
+    return loaded
+
+
+def settle_coordinate_element(mesh: dmesh.Mesh) -> None:
+    """Give the mesh's coordinate element the "equispaced" variant now. FFCx sets it the first time it
+    compiles a form on the mesh (ffcx/analysis.py), which changes the mesh's repr and so the signature
+    of every form built on that mesh afterwards: without this, forms of the second model in a process
+    and of the next run carry other signatures than the first's and compile again (measured: the
+    tangent and the energy of a neo-Hookean beam compiled twice)."""
+    domain = mesh.ufl_domain()
+    element = domain._ufl_coordinate_element
+    if element._sub_element._variant is None:
+        sub = ufl.FiniteElement(element.family(), element.cell(), element.degree(),
+                                element.quadrature_scheme(), variant="equispaced")
+        domain._ufl_coordinate_element = ufl.VectorElement(sub)
 
 
 def mesh_size(mesh: dmesh.Mesh) -> float:
