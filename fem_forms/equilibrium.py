@@ -11,6 +11,8 @@ import numpy as np
 
 from fem_forms.model import Model, build_model
 from fem_forms.output import probes
+from fem_forms.output.quantities import Quantities
+from fem_forms.output.reactions import reaction_report
 from fem_forms.scene import Scene
 from fem_forms.solvers import continuation, snes
 from fem_forms.solvers.linear import rigid_body_modes
@@ -24,6 +26,9 @@ class StaticResult:
     energy: float = float("nan")
     max_displacement: float = float("nan")
     probes: dict = field(default_factory=dict)
+    probe_stresses: dict = field(default_factory=dict)   # probe -> stress, von_mises, strain (recovered)
+    reactions: dict = field(default_factory=dict)        # reactions, applied_load, equilibrium_error
+    quantities: Quantities | None = None                 # recovered stresses and strains
     wall_time_s: float = 0.0
 
     @property
@@ -56,8 +61,9 @@ class StaticResult:
             "physics": self.model.physics,
             "peak_memory_mb": peak_memory_mb(self.model.mesh.comm),
             "warnings": self.model.warnings,
-            "probes": {n: {"point": self.model.scene.output.probes[n], "displacement": v}
-                       for n, v in self.probes.items()},
+            "probes": {n: {"point": self.model.scene.output.probes[n], "displacement": v,
+                           **self.probe_stresses.get(n, {})} for n, v in self.probes.items()},
+            **self.reactions,
             "message": r.message,
         }
 
@@ -96,6 +102,9 @@ def solve_static(scene: Scene, material=None, model: Model | None = None) -> Sta
         result.energy = model.mesh.comm.allreduce(fem.assemble_scalar(fem.form(model.energy)), op=MPI.SUM)
         result.max_displacement = max_norm(model.u)
         result.probes = probes.evaluate(model.u, scene.output.probes)
+        result.quantities = Quantities(model)
+        result.probe_stresses = result.quantities.at_probes(scene.output.probes)
+        result.reactions = reaction_report(model)
     result.wall_time_s = time.perf_counter() - t0
     return result
 

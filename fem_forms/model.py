@@ -47,6 +47,7 @@ class Model:
     parameters: Parameters
     state: State
     warnings: list = field(default_factory=list)
+    support_owners: list = field(default_factory=list)   # (fix index, component) of each of bcs
 
     def __post_init__(self):
         self._det_F: SmallestValue | None = None
@@ -108,7 +109,7 @@ def build_model(scene: Scene, material=None, comm: MPI.Comm = MPI.COMM_WORLD) ->
     mesh = loaded.mesh
     disc = scene.discretization
     load = LoadFactor(mesh)
-    warnings = []
+    warnings, owners = [], []
     if disc.formulation == "mixed":
         cell = mesh.ufl_cell()
         Wspace = fem.FunctionSpace(mesh, ufl.MixedElement([ufl.VectorElement("Lagrange", cell, 2),
@@ -117,13 +118,13 @@ def build_model(scene: Scene, material=None, comm: MPI.Comm = MPI.COMM_WORLD) ->
         u_form, pressure = ufl.split(unknown)
         V, _ = Wspace.sub(0).collapse()
         u = fem.Function(V, name="displacement")
-        bcs = supports(Wspace.sub(0), loaded, scene.fix, load)
+        bcs = supports(Wspace.sub(0), loaded, scene.fix, load, owners=owners)
         v = ufl.split(ufl.TestFunction(Wspace))[0]
     else:
         V = fem.VectorFunctionSpace(mesh, ("Lagrange", disc.degree))
         u = unknown = u_form = fem.Function(V, name="displacement")
         pressure = None
-        bcs = supports(V, loaded, scene.fix, load)
+        bcs = supports(V, loaded, scene.fix, load, owners=owners)
         v = ufl.TestFunction(V)
         nu = scene.material.nu
         if material is None and nu is not None and nu >= NEARLY_INCOMPRESSIBLE_NU:
@@ -136,4 +137,4 @@ def build_model(scene: Scene, material=None, comm: MPI.Comm = MPI.COMM_WORLD) ->
     mat = terms[0].material
     return Model(scene, loaded, V, u, mat, context.dx, load, bcs, forms.energy, forms.residual, forms.jacobian,
                  conservative, unknown, u_form, context, terms, context.parameters,
-                 State({"unknown": unknown}), warnings)
+                 State({"unknown": unknown}), warnings, owners)

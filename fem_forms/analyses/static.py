@@ -8,9 +8,8 @@ from mpi4py import MPI
 
 from fem_forms.equilibrium import StaticResult, solve_static
 from fem_forms.errors import SolveError
-from fem_forms.kinematics import deformation_gradient
-from fem_forms.materials import cauchy_stress, von_mises
 from fem_forms.output import fields, pictures, results
+from fem_forms.output.quantities import output_fields
 from fem_forms.scene import Scene
 
 
@@ -27,14 +26,13 @@ def write_static_outputs(result: StaticResult, out: "Path") -> dict:
     if result.report.converged:
         scene = result.model.scene
         if scene.output.fields:
-            F = deformation_gradient(result.u)
-            sigma = cauchy_stress(result.model.material, F)
-            vm = fields.cellwise(von_mises(sigma), result.model.mesh, "von_mises")
-            fields.write_fields(out / "fields.xdmf", result.model.mesh,
-                                [fields.p1_interpolant(result.u, "displacement"), vm])
+            written = output_fields(result.quantities, scene.output.fields)
+            fields.write_fields(out / "fields.xdmf", result.model.mesh, written)
+            files["fields"] = "fields.xdmf"
+        if "von_mises" in scene.output.fields:
+            vm = result.quantities.field("von_mises")
             summary["max_von_mises"] = comm.allreduce(
                 float(vm.x.array.max()) if vm.x.array.size else 0.0, op=MPI.MAX)
-            files["fields"] = "fields.xdmf"
         if scene.output.picture:
             pictures.picture(out / "deformed.png", result.u, scene.title)
             files["picture"] = "deformed.png"

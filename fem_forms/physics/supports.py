@@ -64,9 +64,10 @@ class LoadFactor:
 
 
 def supports(V: fem.FunctionSpace, loaded: LoadedMesh, fixes: list[Fix], load: LoadFactor,
-             sign: float = 1.0) -> list:
+             sign: float = 1.0, owners: list | None = None) -> list:
     """Dirichlet conditions u_i = sign * lambda * value_i on each fix's facets and components
-    (sign -1 for the inverse problem, whose unknown is rest minus deformed position)."""
+    (sign -1 for the inverse problem, whose unknown is rest minus deformed position). If `owners` is
+    given, (fix index, component) of each condition is appended to it (reactions are reported per fix)."""
     fdim = loaded.mesh.topology.dim - 1
     bcs = []
     for i, fix in enumerate(fixes):
@@ -75,6 +76,8 @@ def supports(V: fem.FunctionSpace, loaded: LoadedMesh, fixes: list[Fix], load: L
             dofs = fem.locate_dofs_topological(V.sub(c), fdim, facets)
             value = load.scaled(loaded.mesh, sign * fix.value[c], key=(i, c))
             bcs.append(fem.dirichletbc(value, dofs, V.sub(c)))
+            if owners is not None:
+                owners.append((i, c))
     return bcs
 
 

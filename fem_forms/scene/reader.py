@@ -27,7 +27,8 @@ class Key:
     kinds: number, integer, string, boolean, vector (numbers; `integer` for whole ones), points
     (a list of vectors), axes (distinct names from x, y, z -> indices), file (a path that must
     exist), table (a sub-table of `keys`, read into the same spec), map (name -> `item`), options
-    (PETSc option -> scalar), selector (a boundary selector read by `parse`; `choices` limits its kinds).
+    (PETSc option -> scalar), selector (a boundary selector read by `parse`; `choices` limits its kinds),
+    selection (distinct names from `choices`; true means the default list, false none).
     `note` replaces the generic range message; `attr` names the spec attribute when it differs.
     """
     name: str
@@ -259,7 +260,29 @@ def read_value(k: Key, v: Any, key: str, base_dir: Path) -> Any:
         return dict(v)
     if k.kind == "selector":
         return k.parse(v, key, k.choices)
+    if k.kind == "selection":
+        return read_selection(k, v, key)
     raise TypeError(f"{key}: no reader for kind {k.kind!r}")   # a declaration error, not user input
+
+
+def read_selection(k: Key, v: Any, key: str) -> list:
+    """A list of distinct names from k.choices; true gives k's default list, false an empty one."""
+    if isinstance(v, bool):
+        return k.value_default() if v else []
+    if not isinstance(v, list) or any(not isinstance(x, str) for x in v):
+        raise InputError(f"{key}: must be true, false or a list of names")
+    for x in v:
+        if x not in k.choices:
+            raise InputError(f"{key}: unknown name {shorten(x)!r} (known: {', '.join(k.choices)})")
+    if len(set(v)) != len(v):
+        raise InputError(f"{key}: names must not repeat")
+    return list(v)
+
+
+def shorten(text: str, limit: int = 40) -> str:
+    """text cut to `limit` characters, one line (for messages that quote a user's value)."""
+    text = " ".join(str(text).split())
+    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 def read_toml(path: str | Path, overrides: dict | None = None) -> dict:

@@ -66,9 +66,12 @@ def key_schema(k: Key) -> dict:
              "additionalProperties": {"type": ["string", "number", "boolean"]}}
     elif k.kind == "selector":
         s = _selector(k.choices)
+    elif k.kind == "selection":
+        s = {"anyOf": [{"type": "boolean"},
+                       {"type": "array", "items": {"enum": list(k.choices)}, "uniqueItems": True}]}
     else:
         raise ValueError(f"{k.name}: no schema for kind {k.kind!r}")
-    if k.choices is not None and k.kind != "selector":
+    if k.choices is not None and k.kind not in ("selector", "selection"):
         s["enum"] = list(k.choices)
     s["description"] = describe(k)
     if k.default is not None:

@@ -203,6 +203,7 @@ def _discretization_rules(d: Discretization, t: Table) -> None:
 
 # --- supports and loads ---------------------------------------------------------------------
 FIX_KEYS = (
+    Key("name", "string", "the support's name in results.json reactions", default_note="fix0, fix1, ... in scene order"),
     where("boundary facets held"),
     Key("components", "axes", "displacement components held", default=["x", "y", "z"]),
     Key("value", "vector", "prescribed displacement of the held components", default=[0.0, 0.0, 0.0],
@@ -216,6 +217,19 @@ class Fix:
     where: Selector
     components: list = _FIX["components"].field()
     value: list = _FIX["value"].field()
+    name: str | None = None
+
+
+def fix_names(fixes: list[Fix]) -> list[str]:
+    """Each support's name: its `name`, else fix<i> (i its place in the scene); a repeated name is an error."""
+    names, seen = [], {}
+    for i, fix in enumerate(fixes):
+        name = fix.name if fix.name is not None else f"fix{i}"
+        if name in seen:
+            raise InputError(f"fix[{i}].name: {name!r} already names fix[{seen[name]}]")
+        seen[name] = i
+        names.append(name)
+    return names
 
 
 LOAD_WHERE = where("boundary facets loaded")
@@ -260,11 +274,16 @@ class SolverSpec:
     petsc: dict = _SOLVER["petsc"].field()
 
 
+# fields [output] fields may name (fem_forms/output/quantities.py computes each)
+FIELD_NAMES = ("displacement", "von_mises", "cauchy_stress", "pk1_stress", "pk2_stress", "principal_stresses",
+               "green_strain", "biot_strain", "hencky_strain", "infinitesimal_strain", "deformation_gradient")
 OUTPUT_KEYS = (
     Key("probes", "map", "named points where results are reported", default={},
         item=Key("point", "vector", "[x, y, z]", unit="m", length=3)),
     Key("picture", "boolean", "write a PNG picture", default=True),
-    Key("fields", "boolean", "write fields for ParaView (XDMF)", default=True),
+    Key("fields", "selection", "fields for ParaView (XDMF, P1 nodal values of recovered stresses and strains): "
+        "a list of names, true (the default list) or false (none)", default=["displacement", "von_mises"],
+        choices=FIELD_NAMES),
 )
 _OUTPUT = {k.name: k for k in OUTPUT_KEYS}
 
@@ -273,7 +292,7 @@ _OUTPUT = {k.name: k for k in OUTPUT_KEYS}
 class OutputSpec:
     probes: dict = _OUTPUT["probes"].field()
     picture: bool = _OUTPUT["picture"].field()
-    fields: bool = _OUTPUT["fields"].field()
+    fields: list = _OUTPUT["fields"].field()
 
 
 # --- the core sections, in reading order ----------------------------------------------------
