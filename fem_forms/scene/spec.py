@@ -70,11 +70,11 @@ GENERATOR = Key("generator", "string", "how the mesh is made: a built-in shape o
 CELL = Key("cell", "string", "cell type (cylinder, sphere and revolve make tetrahedra only)",
            default="tetrahedron", choices=("tetrahedron", "hexahedron"))
 SIZE = Key("size", "vector", "box edge lengths [lx, ly, lz]", default=[1.0, 0.1, 0.1], unit="m",
-           length=3, exclusive_minimum=0)
+           length=3, exclusive_minimum=0, maximum=1e6, note="must be positive and at most 1e6 m")
 ORIGIN = Key("origin", "vector", "lowest corner of the box, centre of a sphere, base of a cylinder",
              default=[0.0, 0.0, 0.0], unit="m", length=3)
 CELLS = Key("cells", "vector", "cells along x, y, z of the box", default=[20, 2, 2], length=3,
-            integer=True, exclusive_minimum=0)
+            integer=True, exclusive_minimum=0, maximum=10**7, note="must be positive and at most 10^7")
 RADIUS = Key("radius", "number", "radius of the cylinder or sphere", unit="m", required=True,
              exclusive_minimum=0)
 HEIGHT = Key("height", "number", "height of the cylinder (along z)", unit="m", required=True,
@@ -111,7 +111,15 @@ class MeshSpec:
     file: Path | None = None
 
 
+MAX_CELL_ASPECT = 1e5      # box cells longer than this many times their width defeat point location
+
+
 def _mesh_rules(m: MeshSpec, t: Table) -> None:
+    if m.generator == "box":
+        edges = [s / n for s, n in zip(m.size, m.cells)]
+        if max(edges) > MAX_CELL_ASPECT * min(edges):
+            raise InputError(f"{t.path}: box cells of {' x '.join(f'{e:.3g}' for e in edges)} m are too "
+                             f"elongated (aspect above {MAX_CELL_ASPECT:.0e}); change size or cells")
     if m.generator in ("cylinder", "sphere", "revolve"):
         if m.cell != "tetrahedron":
             raise InputError(f"{t.key('cell')} = {m.cell!r}: the {m.generator} generator makes tetrahedra only")
