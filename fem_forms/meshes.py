@@ -15,6 +15,7 @@ from mpi4py import MPI
 import numpy as np
 import ufl
 
+from fem_forms import mesh_groups
 from fem_forms.errors import InputError
 from fem_forms.scene import MeshSpec
 
@@ -26,13 +27,27 @@ class MeshArrays:
     cells: np.ndarray
     cell_type: str                                     # "tetrahedron" | "hexahedron"
     facet_groups: dict = field(default_factory=dict)   # name -> (f, 3|4) vertex indices
+    cell_groups: dict = field(default_factory=dict)    # volume group name -> rows of cells
+    curve_groups: dict = field(default_factory=dict)   # curve group name -> (k, 2, 3) edge end points
+    point_groups: dict = field(default_factory=dict)   # point group name -> (k, 3) coordinates
+    info: dict = field(default_factory=dict)           # what results.json says about the mesh
 
 
 @dataclass
 class LoadedMesh:
     mesh: dmesh.Mesh
     facet_tags: object | None      # MeshTags of the named groups, or None
-    groups: dict                   # group name -> tag value
+    groups: dict                   # surface group name -> tag value
+    cells: dict = field(default_factory=dict)    # volume group name -> local cell indices
+    curves: dict = field(default_factory=dict)   # curve group name -> (k, 2, 3) edge end points (all ranks)
+    points: dict = field(default_factory=dict)   # point group name -> (k, 3) coordinates (all ranks)
+    info: dict = field(default_factory=dict)     # cell count, source, quality (results.json "mesh")
+
+    def group_names(self) -> str:
+        """The mesh's named groups by kind, for messages."""
+        kinds = (("volumes", self.cells), ("surfaces", self.groups), ("curves", self.curves),
+                 ("points", self.points))
+        return "; ".join(f"{k} {', '.join(sorted(g))}" for k, g in kinds if g) or "none"
 
 
 # ----------------------------------------------------------------------------- quality checks
@@ -97,7 +112,7 @@ def _gmsh_arrays(gmsh) -> MeshArrays:
     tags, points = tags[order], coords.reshape(-1, 3)[order]
     index = np.full(int(tags.max()) + 1, -1, dtype=np.int64)
     index[tags] = np.arange(len(tags))
-    types, _, nodes = gmsh.model.mesh.getElements(3)
+    types, element_tags, nodes = gmsh.model.mesh.getElements(3)
     kinds = {4: ("tetrahedron", 4), 5: ("hexahedron", 8), 11: ("tetrahedron", 4), 12: ("hexahedron", 8)}
     found = [gmsh.model.mesh.getElementProperties(t)[0] for t in types]
     usable = [(t, n) for t, n in zip(types, nodes) if t in kinds]
@@ -108,6 +123,8 @@ def _gmsh_arrays(gmsh) -> MeshArrays:
     nv = kinds[usable[0][0]][1]
     per = [gmsh.model.mesh.getElementProperties(t)[3] for t, _ in usable]
     cells = np.vstack([index[n.reshape(-1, k)[:, :nv]] for (t, n), k in zip(usable, per)])
+    volumes = mesh_groups.cell_groups(gmsh, np.concatenate([np.asarray(t) for t in element_tags]))
+    curves, points_named = mesh_groups.curve_and_point_groups(gmsh, points, index)
     groups = {}
     for dim, tag in gmsh.model.getPhysicalGroups(2):
         name = gmsh.model.getPhysicalName(dim, tag) or str(tag)
@@ -120,7 +137,7 @@ def _gmsh_arrays(gmsh) -> MeshArrays:
                 facets.append(index[fn.reshape(-1, k)[:, :corner]])
         if facets:
             groups[name] = np.vstack(facets)
-    return _compact(MeshArrays(points, cells, cell_type, groups))
+    return _compact(MeshArrays(points, cells, cell_type, groups, volumes, curves, points_named))
 
 
 def _compact(a: MeshArrays) -> MeshArrays:
@@ -132,7 +149,8 @@ def _compact(a: MeshArrays) -> MeshArrays:
     new[used] = np.arange(len(used))
     # facets touching unused nodes (degenerate surfaces, e.g. the revolution axis) are dropped
     groups = {n: new[f][np.all(new[f] >= 0, axis=1)] for n, f in a.facet_groups.items()}
-    return MeshArrays(a.points[used], new[a.cells], a.cell_type, {n: f for n, f in groups.items() if len(f)})
+    return MeshArrays(a.points[used], new[a.cells], a.cell_type, {n: f for n, f in groups.items() if len(f)},
+                      a.cell_groups, a.curve_groups, a.point_groups, a.info)
 
 
 def _generate(spec: MeshSpec) -> MeshArrays:
@@ -250,8 +268,9 @@ def _on_root(comm: MPI.Comm, build):
 
 def distribute(comm: MPI.Comm, arrays: MeshArrays | None) -> LoadedMesh:
     """Create a distributed dolfinx mesh (and facet tags of the named groups) from rank-0 arrays."""
-    cell_type, names = comm.bcast((arrays.cell_type, list(arrays.facet_groups)) if comm.rank == 0
-                                  else None, root=0)
+    cell_type, names, volumes, curves, points, info = comm.bcast(
+        (arrays.cell_type, list(arrays.facet_groups), list(arrays.cell_groups), arrays.curve_groups,
+         arrays.point_groups, arrays.info) if comm.rank == 0 else None, root=0)
     nv = 4 if cell_type == "tetrahedron" else 8
     domain = ufl.Mesh(ufl.VectorElement("Lagrange", ufl.Cell(cell_type), 1))
     dtype = dmesh.to_type(cell_type)
@@ -261,8 +280,12 @@ def distribute(comm: MPI.Comm, arrays: MeshArrays | None) -> LoadedMesh:
     else:
         cells, x = np.empty((0, nv), dtype=np.int64), np.empty((0, 3))
     mesh = dmesh.create_mesh(comm, cells, x, domain)
+    cell_sets = mesh_groups.distribute_cell_groups(
+        mesh, arrays.cells if comm.rank == 0 else None, arrays.cell_groups if comm.rank == 0 else None,
+        volumes, cell_type) if volumes else {}
+    extra = dict(cells=cell_sets, curves=curves, points=points, info=info)
     if not names:
-        return LoadedMesh(mesh, None, {})
+        return LoadedMesh(mesh, None, {}, **extra)
     fdim = mesh.topology.dim - 1
     fnv = 3 if cell_type == "tetrahedron" else 4
     fperm = gmshio.cell_perm_array(cpp.mesh.cell_entity_type(dtype, fdim, 0), fnv)
@@ -276,7 +299,7 @@ def distribute(comm: MPI.Comm, arrays: MeshArrays | None) -> LoadedMesh:
     mesh.topology.create_connectivity(fdim, mesh.topology.dim)
     tags = dmesh.meshtags_from_entities(mesh, fdim, cpp.graph.AdjacencyList_int32(ents),
                                         vals.astype(np.int32))
-    return LoadedMesh(mesh, tags, {n: i + 1 for i, n in enumerate(names)})
+    return LoadedMesh(mesh, tags, {n: i + 1 for i, n in enumerate(names)}, **extra)
 
 
 def load_mesh(spec: MeshSpec, comm: MPI.Comm = MPI.COMM_WORLD) -> LoadedMesh:
