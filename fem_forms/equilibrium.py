@@ -36,6 +36,7 @@ class StaticResult:
             "analysis": "static",
             "title": self.model.scene.title,
             "dofs": self.model.dofs,
+            "mesh": self.model.loaded.info,
             "converged": r.converged,
             "newton_iterations": r.newton_iterations,
             "load_steps": r.load_steps,

@@ -15,7 +15,7 @@ from mpi4py import MPI
 import numpy as np
 import ufl
 
-from fem_forms import mesh_groups
+from fem_forms import mesh_groups, resources, surface_meshes
 from fem_forms.errors import InputError
 from fem_forms.scene import MeshSpec
 
@@ -218,8 +218,24 @@ def _name_surfaces(gmsh, spec: MeshSpec) -> None:
 
 
 # ----------------------------------------------------------------------------- files
+def read_surface_file(path: Path, h: float | None, limit: float, degree: int) -> MeshArrays:
+    """A closed surface (STL, OBJ, PLY, OFF) filled with tetrahedra of size h (default: the surface's
+    mean edge length), after checking that it is closed and that the mesh will fit in memory."""
+    key = f"mesh.file = {str(path)!r}"
+    points, tris = surface_meshes.read_surface(path)
+    surface_meshes.check_closed(points, tris, key)
+    h = h or surface_meshes.mean_edge(points, tris)
+    cells, dofs = resources.tetrahedra_counts(surface_meshes.enclosed_volume(points, tris), h, degree)
+    resources.check_fits(cells, dofs, "tetrahedron", degree, f"{key} at h = {h:.3g}", limit)
+    x, tets = surface_meshes.tetrahedralise(points, tris, h, key)
+    arrays = _compact(MeshArrays(x, tets, "tetrahedron"))
+    arrays.info = {"source": f"{path.name} (surface, {len(tris)} triangles) meshed by gmsh at h = {h:.4g}",
+                   **surface_meshes.quality(arrays.points, arrays.cells)}
+    return arrays
+
+
 def read_mesh_file(path: Path) -> MeshArrays:
-    """A gmsh .msh (with its named surface groups) or any meshio-readable volume mesh."""
+    """A gmsh .msh (with its named groups of every dimension) or any meshio-readable volume mesh."""
     if path.suffix == ".msh":
         gmsh = _gmsh_session()
         try:
@@ -230,11 +246,7 @@ def read_mesh_file(path: Path) -> MeshArrays:
             return _gmsh_arrays(gmsh)
         finally:
             gmsh.finalize()
-    import meshio
-    try:
-        m = meshio.read(path)
-    except Exception as e:
-        raise InputError(f"mesh.file = {str(path)!r}: cannot read it ({type(e).__name__}: {e})") from None
+    m = surface_meshes.read_meshio(path)
     kinds = {"tetra": ("tetrahedron", 4), "tetra10": ("tetrahedron", 4),
              "hexahedron": ("hexahedron", 8), "hexahedron20": ("hexahedron", 8),
              "hexahedron27": ("hexahedron", 8)}
@@ -302,21 +314,49 @@ def distribute(comm: MPI.Comm, arrays: MeshArrays | None) -> LoadedMesh:
     return LoadedMesh(mesh, tags, {n: i + 1 for i, n in enumerate(names)}, **extra)
 
 
-def load_mesh(spec: MeshSpec, comm: MPI.Comm = MPI.COMM_WORLD) -> LoadedMesh:
-    """The one mesh loader every analysis uses."""
+def load_mesh(spec: MeshSpec, comm: MPI.Comm = MPI.COMM_WORLD, degree: int = 1) -> LoadedMesh:
+    """The one mesh loader every analysis uses. A mesh whose estimated memory (with elements of
+    `degree`) exceeds the machine's is refused before it is built."""
+    limit = resources.machine_memory(comm)
     if spec.generator == "box":
+        counts = resources.box_counts(spec.cells, spec.cell, degree)
+        resources.check_fits(*counts, spec.cell, degree, f"mesh.cells = {list(spec.cells)}", limit)
         lo = np.array(spec.origin, dtype=float)
         hi = lo + np.array(spec.size, dtype=float)
         ct = dmesh.CellType.tetrahedron if spec.cell == "tetrahedron" else dmesh.CellType.hexahedron
-        return LoadedMesh(dmesh.create_box(comm, [lo, hi], list(spec.cells), cell_type=ct), None, {})
+        box = dmesh.create_box(comm, [lo, hi], list(spec.cells), cell_type=ct)
+        return LoadedMesh(box, None, {}, info={"source": "box", "cells": counts[0]})
     key = "mesh.file" if spec.generator == "file" else f"mesh ({spec.generator})"
 
     def build():
-        arrays = read_mesh_file(spec.file) if spec.generator == "file" else _generate(spec)
+        if spec.generator == "file" and spec.file.suffix.lower() in surface_meshes.SURFACE_SUFFIXES:
+            arrays = read_surface_file(spec.file, spec.h, limit, degree)
+        elif spec.generator == "file":
+            arrays = read_mesh_file(spec.file)
+            arrays.info = {"source": spec.file.name, "cells": len(arrays.cells)}
+        else:
+            resources.check_fits(*resources.tetrahedra_counts(_solid_volume(spec), spec.h, degree),
+                                 "tetrahedron", degree, f"mesh.h = {spec.h}", limit)
+            arrays = _generate(spec)
+            arrays.info = {"source": f"{spec.generator} meshed by gmsh at h = {spec.h:.4g}",
+                           **surface_meshes.quality(arrays.points, arrays.cells)}
         check_cells(arrays, key)
         return arrays
 
     return distribute(comm, _on_root(comm, build))
+
+
+def _solid_volume(spec: MeshSpec) -> float:
+    """Volume of a generated solid (revolve: Pappus, outline area times the path of its centroid)."""
+    if spec.generator == "cylinder":
+        return math.pi * spec.radius**2 * spec.height
+    if spec.generator == "sphere":
+        return 4.0 / 3.0 * math.pi * spec.radius**3
+    r, z = np.array(spec.profile, dtype=float).T
+    cross = r * np.roll(z, -1) - np.roll(r, -1) * z
+    area = cross.sum() / 2.0
+    centroid = ((r + np.roll(r, -1)) * cross).sum() / (6.0 * area) if area else 0.0
+    return abs(2.0 * math.pi * centroid * area)
 
 
 def mesh_size(mesh: dmesh.Mesh) -> float:

@@ -10,6 +10,7 @@ from typing import Any
 
 from fem_forms.errors import InputError
 from fem_forms.materials import MODELS, Material, make_material
+from fem_forms.surface_meshes import SURFACE_SUFFIXES
 from fem_forms.scene.reader import AXES, Key, Section, Table, Variants, brief, check_vector
 
 # --- selectors ------------------------------------------------------------------------------
@@ -103,18 +104,19 @@ RADIUS = Key("radius", "number", "radius of the cylinder or sphere", unit="m", r
 HEIGHT = Key("height", "number", "height of the cylinder (along z)", unit="m", required=True,
              exclusive_minimum=0)
 H = Key("h", "number", "target cell size of the gmsh mesh", unit="m", exclusive_minimum=0,
-        default_note="radius / 4 (0.025 m for revolve)")
+        default_note="radius / 4 (0.025 m for revolve; a surface file's mean edge length)")
 PROFILE = Key("profile", "points", "closed outline [[r, z], ...] revolved about the z axis", unit="m",
               required=True, length=2, min_items=3,
               note="must list at least 3 points [r, z] of a closed outline")
-FILE = Key("file", "file", "mesh file (gmsh .msh or any meshio format), relative to the scene file",
+FILE = Key("file", "file", "mesh file, relative to the scene file: a volume mesh (gmsh .msh or any meshio "
+           "format) or a closed surface (.stl, .obj, .ply, .off) that gmsh fills with tetrahedra of size h",
            required=True)
 MESH_VARIANTS = Variants(GENERATOR, {
     "box": (SIZE, ORIGIN, CELLS),
     "cylinder": (ORIGIN, RADIUS, HEIGHT, H),
     "sphere": (ORIGIN, RADIUS, H),
     "revolve": (ORIGIN, PROFILE, H),
-    "file": (FILE,),
+    "file": (FILE, H),
 })
 GENERATORS = GENERATOR.choices
 CELL_TYPES = CELL.choices
@@ -143,6 +145,11 @@ def _mesh_rules(m: MeshSpec, t: Table) -> None:
         if max(edges) > MAX_CELL_ASPECT * min(edges):
             raise InputError(f"{t.path}: box cells of {' x '.join(f'{e:.3g}' for e in edges)} m are too "
                              f"elongated (aspect above {MAX_CELL_ASPECT:.0e}); change size or cells")
+    if m.generator == "file" and m.h is not None and m.file.suffix.lower() not in SURFACE_SUFFIXES:
+        raise InputError(f"{t.key('h')}: only for surface files ({', '.join(SURFACE_SUFFIXES)}); "
+                         f"{m.file.name!r} is meshed already")
+    if m.generator == "file" and m.file.suffix.lower() in SURFACE_SUFFIXES and m.cell != "tetrahedron":
+        raise InputError(f"{t.key('cell')} = {m.cell!r}: a surface file is filled with tetrahedra only")
     if m.generator in ("cylinder", "sphere", "revolve"):
         if m.cell != "tetrahedron":
             raise InputError(f"{t.key('cell')} = {m.cell!r}: the {m.generator} generator makes tetrahedra only")
