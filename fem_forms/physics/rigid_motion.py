@@ -109,6 +109,8 @@ def check_supports_hold_loads(model, r0: PETSc.Vec) -> None:
     """One-line InputError when the loads push a rigid motion the supports leave free."""
     pushed = free_modes_pushed(model, r0)
     if pushed:
+        other = ("[modal] prestress = false" if model.scene.analysis == "modal"
+                 else "use analysis = \"modal\"")
         raise InputError(f"fix: the supports leave the body free ({', '.join(pushed)}) and the loads push it "
                          "that way, so no static equilibrium exists; hold more components (another [[fix]], "
-                         "e.g. where = { point = [x, y, z] }) or use analysis = \"modal\"")
+                         f"e.g. where = {{ point = [x, y, z] }}) or {other}")
