@@ -22,6 +22,7 @@ from fem_forms.logs import quiet_jit
 from fem_forms.output.progress_line import show_progress
 from fem_forms.output.results import forget_results
 from fem_forms.scene import Scene, parse_assignment
+from fem_forms.scene.petsc_options import check_options
 from fem_forms.scene.schema import schema_json
 from fem_forms.study import run_study, solve_to_tolerance
 
@@ -99,7 +100,7 @@ def _run(args, petsc: dict) -> int:
                   echo=not args.quiet)
         return 0
     scene = Scene.from_file(args.scene, overrides)
-    scene.solver.petsc.update(petsc)
+    scene.solver.petsc.update(check_options(petsc, "command line: -", sep=""))
     forget_results(Path(args.out) / "results.json")
     if scene.discretization.tolerance is not None and not args.no_adapt:
         if petsc or MPI.COMM_WORLD.size > 1:

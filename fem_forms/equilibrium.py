@@ -13,6 +13,7 @@ from fem_forms.model import Model, build_model
 from fem_forms.output import probes
 from fem_forms.output.quantities import Quantities
 from fem_forms.output.reactions import reaction_report
+from fem_forms.physics import rigid_motion
 from fem_forms.scene import Scene
 from fem_forms.solvers import continuation, snes
 from fem_forms.solvers.linear import rigid_body_modes
@@ -41,6 +42,7 @@ class StaticResult:
             "analysis": "static",
             "title": self.model.scene.title,
             "dofs": self.model.dofs,
+            "mesh": self.model.loaded.info,
             "converged": r.converged,
             "newton_iterations": r.newton_iterations,
             "load_steps": r.load_steps,
@@ -93,9 +95,17 @@ def solve_static(scene: Scene, material=None, model: Model | None = None) -> Sta
         energy=model.energy if model.conservative else None,
         set_load=model.load.set, inadmissible=model.inadmissible, state=model.state)
     linear_kind = "direct" if scene.discretization.formulation == "mixed" else scene.solver.linear
-    report = continuation.solve(problem, scene.solver.petsc, steps=scene.solver.steps,
-                                max_cutbacks=scene.solver.max_cutbacks, linear_kind=linear_kind,
-                                near_nullspace=lambda: rigid_body_modes(model.V))
+    r0 = rigid_motion.rest_residual(model)
+    if rigid_motion.nothing_to_solve(model, r0):
+        model.unknown.x.array[:] = 0.0
+        report = snes.SolveReport(True, 1.0, 0, r0.norm(), linear_solver="none",
+                                  message="converged: nothing to solve (no loads, no prescribed displacement): u = 0")
+    else:
+        rigid_motion.check_supports_hold_loads(model, r0)
+        report = continuation.solve(problem, scene.solver.petsc, steps=scene.solver.steps,
+                                    max_cutbacks=scene.solver.max_cutbacks, linear_kind=linear_kind,
+                                    near_nullspace=lambda: rigid_body_modes(model.V))
+    r0.destroy()
     result = StaticResult(model, report)
     if report.converged:
         model.sync_displacement()

@@ -15,6 +15,7 @@ from mpi4py import MPI
 import numpy as np
 import ufl
 
+from fem_forms import mesh_groups, resources, surface_meshes
 from fem_forms.errors import InputError
 from fem_forms.scene import MeshSpec
 
@@ -26,13 +27,27 @@ class MeshArrays:
     cells: np.ndarray
     cell_type: str                                     # "tetrahedron" | "hexahedron"
     facet_groups: dict = field(default_factory=dict)   # name -> (f, 3|4) vertex indices
+    cell_groups: dict = field(default_factory=dict)    # volume group name -> rows of cells
+    curve_groups: dict = field(default_factory=dict)   # curve group name -> (k, 2, 3) edge end points
+    point_groups: dict = field(default_factory=dict)   # point group name -> (k, 3) coordinates
+    info: dict = field(default_factory=dict)           # what results.json says about the mesh
 
 
 @dataclass
 class LoadedMesh:
     mesh: dmesh.Mesh
     facet_tags: object | None      # MeshTags of the named groups, or None
-    groups: dict                   # group name -> tag value
+    groups: dict                   # surface group name -> tag value
+    cells: dict = field(default_factory=dict)    # volume group name -> local cell indices
+    curves: dict = field(default_factory=dict)   # curve group name -> (k, 2, 3) edge end points (all ranks)
+    points: dict = field(default_factory=dict)   # point group name -> (k, 3) coordinates (all ranks)
+    info: dict = field(default_factory=dict)     # cell count, source, quality (results.json "mesh")
+
+    def group_names(self) -> str:
+        """The mesh's named groups by kind, for messages."""
+        kinds = (("volumes", self.cells), ("surfaces", self.groups), ("curves", self.curves),
+                 ("points", self.points))
+        return "; ".join(f"{k} {', '.join(sorted(g))}" for k, g in kinds if g) or "none"
 
 
 # ----------------------------------------------------------------------------- quality checks
@@ -97,7 +112,7 @@ def _gmsh_arrays(gmsh) -> MeshArrays:
     tags, points = tags[order], coords.reshape(-1, 3)[order]
     index = np.full(int(tags.max()) + 1, -1, dtype=np.int64)
     index[tags] = np.arange(len(tags))
-    types, _, nodes = gmsh.model.mesh.getElements(3)
+    types, element_tags, nodes = gmsh.model.mesh.getElements(3)
     kinds = {4: ("tetrahedron", 4), 5: ("hexahedron", 8), 11: ("tetrahedron", 4), 12: ("hexahedron", 8)}
     found = [gmsh.model.mesh.getElementProperties(t)[0] for t in types]
     usable = [(t, n) for t, n in zip(types, nodes) if t in kinds]
@@ -108,6 +123,8 @@ def _gmsh_arrays(gmsh) -> MeshArrays:
     nv = kinds[usable[0][0]][1]
     per = [gmsh.model.mesh.getElementProperties(t)[3] for t, _ in usable]
     cells = np.vstack([index[n.reshape(-1, k)[:, :nv]] for (t, n), k in zip(usable, per)])
+    volumes = mesh_groups.cell_groups(gmsh, np.concatenate([np.asarray(t) for t in element_tags]))
+    curves, points_named = mesh_groups.curve_and_point_groups(gmsh, points, index)
     groups = {}
     for dim, tag in gmsh.model.getPhysicalGroups(2):
         name = gmsh.model.getPhysicalName(dim, tag) or str(tag)
@@ -120,7 +137,7 @@ def _gmsh_arrays(gmsh) -> MeshArrays:
                 facets.append(index[fn.reshape(-1, k)[:, :corner]])
         if facets:
             groups[name] = np.vstack(facets)
-    return _compact(MeshArrays(points, cells, cell_type, groups))
+    return _compact(MeshArrays(points, cells, cell_type, groups, volumes, curves, points_named))
 
 
 def _compact(a: MeshArrays) -> MeshArrays:
@@ -132,7 +149,8 @@ def _compact(a: MeshArrays) -> MeshArrays:
     new[used] = np.arange(len(used))
     # facets touching unused nodes (degenerate surfaces, e.g. the revolution axis) are dropped
     groups = {n: new[f][np.all(new[f] >= 0, axis=1)] for n, f in a.facet_groups.items()}
-    return MeshArrays(a.points[used], new[a.cells], a.cell_type, {n: f for n, f in groups.items() if len(f)})
+    return MeshArrays(a.points[used], new[a.cells], a.cell_type, {n: f for n, f in groups.items() if len(f)},
+                      a.cell_groups, a.curve_groups, a.point_groups, a.info)
 
 
 def _generate(spec: MeshSpec) -> MeshArrays:
@@ -200,8 +218,24 @@ def _name_surfaces(gmsh, spec: MeshSpec) -> None:
 
 
 # ----------------------------------------------------------------------------- files
+def read_surface_file(path: Path, h: float | None, limit: float, degree: int) -> MeshArrays:
+    """A closed surface (STL, OBJ, PLY, OFF) filled with tetrahedra of size h (default: the surface's
+    mean edge length), after checking that it is closed and that the mesh will fit in memory."""
+    key = f"mesh.file = {str(path)!r}"
+    points, tris = surface_meshes.read_surface(path)
+    surface_meshes.check_closed(points, tris, key)
+    h = h or surface_meshes.mean_edge(points, tris)
+    cells, dofs = resources.tetrahedra_counts(surface_meshes.enclosed_volume(points, tris), h, degree)
+    resources.check_fits(cells, dofs, "tetrahedron", degree, f"{key} at h = {h:.3g}", limit)
+    x, tets = surface_meshes.tetrahedralise(points, tris, h, key)
+    arrays = _compact(MeshArrays(x, tets, "tetrahedron"))
+    arrays.info = {"source": f"{path.name} (surface, {len(tris)} triangles) meshed by gmsh at h = {h:.4g}",
+                   **surface_meshes.quality(arrays.points, arrays.cells)}
+    return arrays
+
+
 def read_mesh_file(path: Path) -> MeshArrays:
-    """A gmsh .msh (with its named surface groups) or any meshio-readable volume mesh."""
+    """A gmsh .msh (with its named groups of every dimension) or any meshio-readable volume mesh."""
     if path.suffix == ".msh":
         gmsh = _gmsh_session()
         try:
@@ -212,11 +246,7 @@ def read_mesh_file(path: Path) -> MeshArrays:
             return _gmsh_arrays(gmsh)
         finally:
             gmsh.finalize()
-    import meshio
-    try:
-        m = meshio.read(path)
-    except Exception as e:
-        raise InputError(f"mesh.file = {str(path)!r}: cannot read it ({type(e).__name__}: {e})") from None
+    m = surface_meshes.read_meshio(path)
     kinds = {"tetra": ("tetrahedron", 4), "tetra10": ("tetrahedron", 4),
              "hexahedron": ("hexahedron", 8), "hexahedron20": ("hexahedron", 8),
              "hexahedron27": ("hexahedron", 8)}
@@ -250,8 +280,9 @@ def _on_root(comm: MPI.Comm, build):
 
 def distribute(comm: MPI.Comm, arrays: MeshArrays | None) -> LoadedMesh:
     """Create a distributed dolfinx mesh (and facet tags of the named groups) from rank-0 arrays."""
-    cell_type, names = comm.bcast((arrays.cell_type, list(arrays.facet_groups)) if comm.rank == 0
-                                  else None, root=0)
+    cell_type, names, volumes, curves, points, info = comm.bcast(
+        (arrays.cell_type, list(arrays.facet_groups), list(arrays.cell_groups), arrays.curve_groups,
+         arrays.point_groups, arrays.info) if comm.rank == 0 else None, root=0)
     nv = 4 if cell_type == "tetrahedron" else 8
     domain = ufl.Mesh(ufl.VectorElement("Lagrange", ufl.Cell(cell_type), 1))
     dtype = dmesh.to_type(cell_type)
@@ -261,8 +292,12 @@ def distribute(comm: MPI.Comm, arrays: MeshArrays | None) -> LoadedMesh:
     else:
         cells, x = np.empty((0, nv), dtype=np.int64), np.empty((0, 3))
     mesh = dmesh.create_mesh(comm, cells, x, domain)
+    cell_sets = mesh_groups.distribute_cell_groups(
+        mesh, arrays.cells if comm.rank == 0 else None, arrays.cell_groups if comm.rank == 0 else None,
+        volumes, cell_type) if volumes else {}
+    extra = dict(cells=cell_sets, curves=curves, points=points, info=info)
     if not names:
-        return LoadedMesh(mesh, None, {})
+        return LoadedMesh(mesh, None, {}, **extra)
     fdim = mesh.topology.dim - 1
     fnv = 3 if cell_type == "tetrahedron" else 4
     fperm = gmshio.cell_perm_array(cpp.mesh.cell_entity_type(dtype, fdim, 0), fnv)
@@ -276,25 +311,41 @@ def distribute(comm: MPI.Comm, arrays: MeshArrays | None) -> LoadedMesh:
     mesh.topology.create_connectivity(fdim, mesh.topology.dim)
     tags = dmesh.meshtags_from_entities(mesh, fdim, cpp.graph.AdjacencyList_int32(ents),
                                         vals.astype(np.int32))
-    return LoadedMesh(mesh, tags, {n: i + 1 for i, n in enumerate(names)})
+    return LoadedMesh(mesh, tags, {n: i + 1 for i, n in enumerate(names)}, **extra)
 
 
-def load_mesh(spec: MeshSpec, comm: MPI.Comm = MPI.COMM_WORLD) -> LoadedMesh:
-    """The one mesh loader every analysis uses."""
+def load_mesh(spec: MeshSpec, comm: MPI.Comm = MPI.COMM_WORLD, degree: int = 1) -> LoadedMesh:
+    """The one mesh loader every analysis uses. A mesh whose estimated memory (with elements of
+    `degree`) exceeds the machine's is refused before it is built."""
+    limit = resources.machine_memory(comm)
     if spec.generator == "box":
+        counts = resources.box_counts(spec.cells, spec.cell, degree)
+        resources.check_fits(*counts, spec.cell, degree, f"mesh.cells = {list(spec.cells)}", limit)
         lo = np.array(spec.origin, dtype=float)
         hi = lo + np.array(spec.size, dtype=float)
         ct = dmesh.CellType.tetrahedron if spec.cell == "tetrahedron" else dmesh.CellType.hexahedron
-        loaded = LoadedMesh(dmesh.create_box(comm, [lo, hi], list(spec.cells), cell_type=ct), None, {})
-    else:
-        key = "mesh.file" if spec.generator == "file" else f"mesh ({spec.generator})"
+        box = dmesh.create_box(comm, [lo, hi], list(spec.cells), cell_type=ct)
+        loaded = LoadedMesh(box, None, {}, info={"source": "box", "cells": counts[0]})
+        settle_coordinate_element(loaded.mesh)
+        return loaded
+    key = "mesh.file" if spec.generator == "file" else f"mesh ({spec.generator})"
 
-        def build():
-            arrays = read_mesh_file(spec.file) if spec.generator == "file" else _generate(spec)
-            check_cells(arrays, key)
-            return arrays
+    def build():
+        if spec.generator == "file" and spec.file.suffix.lower() in surface_meshes.SURFACE_SUFFIXES:
+            arrays = read_surface_file(spec.file, spec.h, limit, degree)
+        elif spec.generator == "file":
+            arrays = read_mesh_file(spec.file)
+            arrays.info = {"source": spec.file.name, "cells": len(arrays.cells)}
+        else:
+            resources.check_fits(*resources.tetrahedra_counts(_solid_volume(spec), spec.h, degree),
+                                 "tetrahedron", degree, f"mesh.h = {spec.h}", limit)
+            arrays = _generate(spec)
+            arrays.info = {"source": f"{spec.generator} meshed by gmsh at h = {spec.h:.4g}",
+                           **surface_meshes.quality(arrays.points, arrays.cells)}
+        check_cells(arrays, key)
+        return arrays
 
-        loaded = distribute(comm, _on_root(comm, build))
+    loaded = distribute(comm, _on_root(comm, build))
     settle_coordinate_element(loaded.mesh)
     return loaded
 
@@ -311,6 +362,19 @@ def settle_coordinate_element(mesh: dmesh.Mesh) -> None:
         sub = ufl.FiniteElement(element.family(), element.cell(), element.degree(),
                                 element.quadrature_scheme(), variant="equispaced")
         domain._ufl_coordinate_element = ufl.VectorElement(sub)
+
+
+def _solid_volume(spec: MeshSpec) -> float:
+    """Volume of a generated solid (revolve: Pappus, outline area times the path of its centroid)."""
+    if spec.generator == "cylinder":
+        return math.pi * spec.radius**2 * spec.height
+    if spec.generator == "sphere":
+        return 4.0 / 3.0 * math.pi * spec.radius**3
+    r, z = np.array(spec.profile, dtype=float).T
+    cross = r * np.roll(z, -1) - np.roll(r, -1) * z
+    area = cross.sum() / 2.0
+    centroid = ((r + np.roll(r, -1)) * cross).sum() / (6.0 * area) if area else 0.0
+    return abs(2.0 * math.pi * centroid * area)
 
 
 def mesh_size(mesh: dmesh.Mesh) -> float:

@@ -1,4 +1,8 @@
-"""Boundary selectors, the load factor and supports (Dirichlet conditions with Constant values)."""
+"""Selectors, the load factor and supports (Dirichlet conditions with Constant values).
+
+The one selector mechanism: boundary facets (plane, box, surface group) for loads and supports;
+for supports also cells (volume group) and positions (the nearest node to a point, nodes on a line
+segment, on a gmsh curve group's edges or at a point group's points)."""
 from __future__ import annotations
 
 from dolfinx import fem, mesh as dmesh
@@ -6,6 +10,7 @@ from mpi4py import MPI
 import numpy as np
 from petsc4py import PETSc
 
+from fem_forms import mesh_groups
 from fem_forms.errors import InputError
 from fem_forms.meshes import LoadedMesh, bounding_box, mesh_size
 from fem_forms.scene import Fix, Load, Selector
@@ -22,16 +27,94 @@ def locate_facets(loaded: LoadedMesh, sel: Selector) -> np.ndarray:
         lo, hi = np.array(sel.lo)[:, None] - tol, np.array(sel.hi)[:, None] + tol
         facets = dmesh.locate_entities_boundary(
             mesh, fdim, lambda x: np.all((x >= lo) & (x <= hi), axis=0))
-    else:
-        if sel.group not in loaded.groups:
-            known = ", ".join(sorted(loaded.groups)) or "none"
-            raise InputError(f"{sel.key}.group = {sel.group!r}: no such boundary group (the mesh has: {known})")
+    elif sel.kind == "group":
+        kind = _group(loaded, sel)
+        if kind != "surface":
+            raise InputError(f"{sel.key}.group = {sel.group!r}: a {kind} group; a traction or pressure "
+                             "needs a surface group")
         facets = loaded.facet_tags.indices[loaded.facet_tags.values == loaded.groups[sel.group]]
+    else:
+        raise InputError(f"{sel.key}: a {sel.kind} has no area; select facets with axis/at, box or group")
     if mesh.comm.allreduce(len(facets), op=MPI.SUM) == 0:
         lo, hi = bounding_box(mesh)
         raise InputError(f"{sel.key}: matches no boundary facet (mesh spans {np.round(lo, 6).tolist()} "
                          f"to {np.round(hi, 6).tolist()})")
     return np.asarray(facets, dtype=np.int32)
+
+
+def _group(loaded: LoadedMesh, sel: Selector) -> str:
+    for kind, groups in (("surface", loaded.groups), ("volume", loaded.cells), ("curve", loaded.curves),
+                         ("point", loaded.points)):
+        if sel.group in groups:
+            return kind
+    raise InputError(f"{sel.key}.group = {sel.group!r}: no such group (the mesh has: {loaded.group_names()})")
+
+
+def nearest_node(mesh: dmesh.Mesh, point) -> np.ndarray:
+    """The mesh vertex nearest `point` over all ranks; ties go to the lexicographically smallest
+    coordinates, so every rank count picks the same node."""
+    x = mesh.geometry.x
+    d = np.linalg.norm(x - np.asarray(point, dtype=float), axis=1) if len(x) else np.empty(0)
+    dmin = mesh.comm.allreduce(float(d.min()) if len(d) else np.inf, op=MPI.MIN)
+    tie = 1e-12 * mesh_size(mesh)
+    local = x[d <= dmin + tie] if len(d) else np.empty((0, 3))
+    candidates = np.vstack([c for c in mesh.comm.allgather(local) if len(c)])
+    return candidates[np.lexsort(candidates.T[::-1])][0]
+
+
+def _geometric_marker(loaded: LoadedMesh, sel: Selector):
+    """A marker x (3, n) -> bool for selectors resolved by position (point, line, curve and point
+    groups), with a description of what it selects for the nothing-found message."""
+    mesh = loaded.mesh
+    tol = 1e-6 * mesh_size(mesh)
+    if sel.kind == "point":
+        lo, hi = bounding_box(mesh)
+        p = np.asarray(sel.point)
+        if np.any(p < lo - tol) or np.any(p > hi + tol):
+            raise InputError(f"{sel.key}.point = {list(sel.point)}: lies outside the mesh (which spans "
+                             f"{np.round(lo, 6).tolist()} to {np.round(hi, 6).tolist()}), selects no node")
+        node = nearest_node(mesh, p)
+        return lambda x: np.linalg.norm(x.T - node, axis=1) <= 1e-9 * mesh_size(mesh)
+    if sel.kind == "line":
+        seg = np.array([sel.line])
+        return lambda x: mesh_groups.distance_to_segments(x.T, seg) <= tol
+    if sel.group in loaded.curves:
+        segs = loaded.curves[sel.group]
+        return lambda x: mesh_groups.distance_to_segments(x.T, segs) <= tol
+    pts = loaded.points[sel.group]
+    return lambda x: mesh_groups.distance_to_points(x.T, pts) <= tol
+
+
+def support_dofs(V: fem.FunctionSpace, loaded: LoadedMesh, sel: Selector, components: list) -> list:
+    """For each component c, the dofs of V.sub(c) (in V's numbering) the selector holds: on facets
+    (plane, box, surface group), in cells (volume group) or at positions (point, line, curve and point
+    groups); an error when nothing is selected on any rank."""
+    mesh = loaded.mesh
+    tdim = mesh.topology.dim
+    kind = _group(loaded, sel) if sel.kind == "group" else sel.kind
+    if kind in ("plane", "box", "surface"):
+        facets = locate_facets(loaded, sel)
+        return [fem.locate_dofs_topological(V.sub(c), tdim - 1, facets) for c in components]
+    if kind == "volume":
+        cells = loaded.cells[sel.group]
+        if mesh.comm.allreduce(len(cells), op=MPI.SUM) == 0:
+            raise InputError(f"{sel.key}.group = {sel.group!r}: the volume group has no cells")
+        return [fem.locate_dofs_topological(V.sub(c), tdim, cells) for c in components]
+    marker = _geometric_marker(loaded, sel)
+    out = []
+    for c in components:
+        sub = V.sub(c)
+        collapsed, _ = sub.collapse()
+        out.append(np.asarray(fem.locate_dofs_geometrical((sub, collapsed), marker)[0], dtype=np.int32))
+    if mesh.comm.allreduce(len(out[0]), op=MPI.SUM) == 0:
+        what = (f"the line from {list(sel.line[0])} to {list(sel.line[1])}" if sel.kind == "line"
+                else f"the {kind} group {sel.group!r}")
+        raise InputError(f"{sel.key}: {what} passes through no mesh node (tolerance {tol_text(mesh)})")
+    return out
+
+
+def tol_text(mesh: dmesh.Mesh) -> str:
+    return f"{1e-6 * mesh_size(mesh):.3g} m"
 
 
 class LoadFactor:
@@ -65,15 +148,13 @@ class LoadFactor:
 
 def supports(V: fem.FunctionSpace, loaded: LoadedMesh, fixes: list[Fix], load: LoadFactor,
              sign: float = 1.0, owners: list | None = None) -> list:
-    """Dirichlet conditions u_i = sign * lambda * value_i on each fix's facets and components
+    """Dirichlet conditions u_i = sign * lambda * value_i on each fix's selection and components
     (sign -1 for the inverse problem, whose unknown is rest minus deformed position). If `owners` is
     given, (fix index, component) of each condition is appended to it (reactions are reported per fix)."""
-    fdim = loaded.mesh.topology.dim - 1
     bcs = []
     for i, fix in enumerate(fixes):
-        facets = locate_facets(loaded, fix.where)
-        for c in fix.components:
-            dofs = fem.locate_dofs_topological(V.sub(c), fdim, facets)
+        held = support_dofs(V, loaded, fix.where, fix.components)
+        for c, dofs in zip(fix.components, held):
             value = load.scaled(loaded.mesh, sign * fix.value[c], key=(i, c))
             bcs.append(fem.dirichletbc(value, dofs, V.sub(c)))
             if owners is not None:

@@ -10,12 +10,14 @@ from __future__ import annotations
 import copy
 import dataclasses
 import math
+import re
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
 
 from fem_forms.errors import InputError
+from fem_forms.scene.petsc_options import check_options
 
 AXES = {"x": 0, "y": 1, "z": 2}
 
@@ -94,25 +96,41 @@ class Variants:
         return out
 
 
+def brief(v: Any, limit: int = 60) -> str:
+    """repr(v) on one line and at most `limit` characters (a message must never repeat a huge value)."""
+    text = repr(v)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+_PLAIN_NAME = re.compile(r"^[A-Za-z0-9_-]{1,40}$")
+
+
+def key_name(name: Any) -> str:
+    """A table key as it appears in messages: plain names as they are, anything else quoted and shortened."""
+    return name if isinstance(name, str) and _PLAIN_NAME.match(name) else brief(name, 40)
+
+
 def check_number(v: Any, key: str, *, positive=False, nonneg=False, integer=False):
     """A finite number (a whole one with `integer`), as float (or int)."""
     if isinstance(v, bool) or not isinstance(v, (int, float)):
-        raise InputError(f"{key} = {v!r}: must be a number")
+        raise InputError(f"{key} = {brief(v)}: must be a number")
     if integer and not isinstance(v, int):
-        raise InputError(f"{key} = {v!r}: must be a whole number")
+        raise InputError(f"{key} = {brief(v)}: must be a whole number")
+    if isinstance(v, int) and abs(v) > 2**63 - 1:
+        raise InputError(f"{key} = {brief(v)}: too large")
     if not math.isfinite(v):
-        raise InputError(f"{key} = {v!r}: must be finite")
+        raise InputError(f"{key} = {brief(v)}: must be finite")
     if positive and v <= 0:
-        raise InputError(f"{key} = {v!r}: must be positive")
+        raise InputError(f"{key} = {brief(v)}: must be positive")
     if nonneg and v < 0:
-        raise InputError(f"{key} = {v!r}: must not be negative")
+        raise InputError(f"{key} = {brief(v)}: must not be negative")
     return v if integer else float(v)
 
 
 def check_vector(v: Any, key: str, length: int | None = 3, *, positive=False, integer=False) -> list:
     """A list of `length` finite numbers."""
     if not isinstance(v, list) or (length is not None and len(v) != length):
-        raise InputError(f"{key} = {v!r}: must be a list of {length} numbers")
+        raise InputError(f"{key} = {brief(v)}: must be a list of {length} numbers")
     return [check_number(x, f"{key}[{i}]", positive=positive, integer=integer) for i, x in enumerate(v)]
 
 
@@ -140,16 +158,16 @@ def _scalar(k: Key, v: Any, key: str) -> Any:
         v = check_number(v, key, integer=k.kind == "integer")
     elif k.kind == "string" or k.kind == "file":
         if not isinstance(v, str):
-            raise InputError(f"{key} = {v!r}: must be a string")
+            raise InputError(f"{key} = {brief(v)}: must be a string")
     elif k.kind == "boolean":
         if not isinstance(v, bool):
-            raise InputError(f"{key} = {v!r}: must be true or false")
+            raise InputError(f"{key} = {brief(v)}: must be true or false")
     if k.choices is not None and v not in k.choices:
-        raise InputError(f"{key} = {v!r}: " + (k.note or f"must be one of {', '.join(map(repr, k.choices))}"))
+        raise InputError(f"{key} = {brief(v)}: " + (k.note or f"must be one of {', '.join(map(repr, k.choices))}"))
     if k.kind in ("number", "integer"):
         why = _range_message(k, v)
         if why:
-            raise InputError(f"{key} = {given!r}: {why}")
+            raise InputError(f"{key} = {brief(given)}: {why}")
     return v
 
 
@@ -159,7 +177,7 @@ def _elements(k: Key, v: list, key: str) -> list:
     for i, x in enumerate(v):
         why = _range_message(k, x)
         if why:
-            raise InputError(f"{key}[{i}] = {x!r}: {why}")
+            raise InputError(f"{key}[{i}] = {brief(x)}: {why}")
     return v
 
 
@@ -171,7 +189,8 @@ class Table:
             raise InputError(f"{path}: must be a table, got {type(data).__name__}")
         self.data, self.path, self.base_dir, self.used = data, path, Path(base_dir), set()
 
-    def key(self, name: str) -> str:
+    def key(self, name: Any) -> str:
+        name = key_name(name)
         return f"{self.path}.{name}" if self.path else name
 
     def has(self, name: str) -> bool:
@@ -222,7 +241,7 @@ class Table:
         return values
 
     def done(self) -> None:
-        unknown = sorted(set(self.data) - self.used)
+        unknown = sorted(set(self.data) - self.used, key=str)
         if unknown:
             raise InputError(f"{self.key(unknown[0])}: unknown key")
 
@@ -238,26 +257,28 @@ def read_value(k: Key, v: Any, key: str, base_dir: Path) -> Any:
             raise InputError(f"{key}: " + (k.note or f"must list at least {k.min_items or 1} points"))
         return [_elements(k, p, f"{key}[{i}]") for i, p in enumerate(v)]
     if k.kind == "axes":
-        if not isinstance(v, list) or not v or any(c not in AXES for c in v) or len(set(v)) != len(v):
-            raise InputError(f"{key} = {v!r}: must be a list of distinct names from 'x', 'y', 'z'")
+        if (not isinstance(v, list) or not v or any(not isinstance(c, str) or c not in AXES for c in v)
+                or len(set(v)) != len(v)):
+            raise InputError(f"{key} = {brief(v)}: must be a list of distinct names from 'x', 'y', 'z'")
         return [AXES[c] for c in v]
     if k.kind == "file":
         _scalar(k, v, key)
         p = Path(v) if Path(v).is_absolute() else base_dir / v
-        if not p.is_file():
-            raise InputError(f"{key} = {v!r}: file not found")
+        try:
+            found = p.is_file()
+        except (OSError, ValueError):                # a name too long, or one the system cannot hold
+            found = False
+        if not found:
+            raise InputError(f"{key} = {brief(v)}: file not found")
         return p
     if k.kind == "map":
         if not isinstance(v, dict):
             raise InputError(f"{key}: must be a table name = {k.item.doc}")
-        return {n: read_value(k.item, x, f"{key}.{n}", base_dir) for n, x in v.items()}
+        return {n: read_value(k.item, x, f"{key}.{key_name(n)}", base_dir) for n, x in v.items()}
     if k.kind == "options":
         if not isinstance(v, dict):
             raise InputError(f"{key}: must be a table of PETSc options")
-        for n, x in v.items():
-            if isinstance(x, (dict, list)) or not n.replace("_", "").isalnum():
-                raise InputError(f"{key}.{n}: must be a PETSc option name with a scalar value")
-        return dict(v)
+        return check_options(v, key)
     if k.kind == "selector":
         return k.parse(v, key, k.choices)
     if k.kind == "selection":

@@ -10,7 +10,8 @@ from typing import Any
 
 from fem_forms.errors import InputError
 from fem_forms.materials import MODELS, Material, make_material
-from fem_forms.scene.reader import AXES, Key, Section, Table, Variants, check_vector
+from fem_forms.surface_meshes import SURFACE_SUFFIXES
+from fem_forms.scene.reader import AXES, Key, Section, Table, Variants, brief, check_vector
 
 # --- selectors ------------------------------------------------------------------------------
 SEL_AXIS = Key("axis", "string", "normal axis of a plane of boundary facets (with at)", required=True,
@@ -18,50 +19,73 @@ SEL_AXIS = Key("axis", "string", "normal axis of a plane of boundary facets (wit
 SEL_AT = Key("at", "number", "coordinate of that plane along its axis", unit="m", required=True)
 SEL_BOX = Key("box", "points", "boundary facets inside [[x0, y0, z0], [x1, y1, z1]]", unit="m",
               required=True, length=3, min_items=2, max_items=2)
-SEL_GROUP = Key("group", "string", "a gmsh physical group of the mesh file, by name", required=True)
-SELECTOR_KEYS = {"plane": (SEL_AXIS, SEL_AT), "box": (SEL_BOX,), "group": (SEL_GROUP,)}
+SEL_GROUP = Key("group", "string", "a gmsh physical group of the mesh file, by name (volume, surface, curve "
+                "or point)", required=True)
+SEL_POINT = Key("point", "vector", "the mesh node nearest to [x, y, z] (supports only)", unit="m", required=True,
+                length=3)
+SEL_LINE = Key("line", "points", "the mesh nodes on the segment [[x0, y0, z0], [x1, y1, z1]] (supports only)",
+               unit="m", required=True, length=3, min_items=2, max_items=2,
+               note="must be two points [[x0, y0, z0], [x1, y1, z1]]")
+SELECTOR_KEYS = {"plane": (SEL_AXIS, SEL_AT), "box": (SEL_BOX,), "group": (SEL_GROUP,), "point": (SEL_POINT,),
+                 "line": (SEL_LINE,)}
+_SELECTOR_OF = {"axis": "plane", "box": "box", "group": "group", "point": "point", "line": "line"}
+AREA_SELECTORS = ("plane", "box", "group")        # what a traction or pressure may act on
 
 
 @dataclass
 class Selector:
-    """Where on the boundary: a plane (axis, at), a box [[lo], [hi]] or a gmsh physical group."""
-    kind: str                      # "plane" | "box" | "group"
+    """Where: a plane (axis, at), a box [[lo], [hi]] or a gmsh physical group of boundary facets, or (for
+    supports) the mesh node nearest a point or the nodes on a line segment."""
+    kind: str                      # "plane" | "box" | "group" | "point" | "line"
     axis: int = 0
     at: float = 0.0
     lo: tuple = ()
     hi: tuple = ()
     group: str = ""
+    point: tuple = ()
+    line: tuple = ()               # (start, end)
     key: str = "where"             # the scene key, for messages
 
     @staticmethod
     def parse(data: Any, key: str, kinds: tuple | None = None) -> "Selector":
-        """A selector from {axis, at}, {box} or {group}; `kinds` limits which are allowed."""
+        """A selector from {axis, at}, {box}, {group}, {point} or {line}; `kinds` limits which are allowed."""
         t = Table(data, key)
-        present = [k for k in ("axis", "box", "group") if t.has(k)]
+        present = [k for k in _SELECTOR_OF if t.has(k)]
         if len(present) != 1:
-            raise InputError(f"{key}: give exactly one of axis/at, box or group")
-        kind = {"axis": "plane", "box": "box", "group": "group"}[present[0]]
+            raise InputError(f"{key}: give exactly one of axis/at, box, group, point or line")
+        kind = _SELECTOR_OF[present[0]]
         if kinds is not None and kind not in kinds:
-            raise InputError(f"{key}: must be a box = [[x0, y0, z0], [x1, y1, z1]]" if kinds == ("box",)
-                             else f"{key}: must be one of {', '.join(kinds)}")
+            if kinds == ("box",):
+                raise InputError(f"{key}: must be a box = [[x0, y0, z0], [x1, y1, z1]]")
+            if kind in ("point", "line") and kinds == AREA_SELECTORS:
+                raise InputError(f"{key}: a {kind} has no area to carry a traction or pressure; "
+                                 "select facets with axis/at, box or group")
+            raise InputError(f"{key}: must be one of {', '.join(kinds)}")
         if kind == "plane":
             sel = Selector("plane", axis=AXES[t.read(SEL_AXIS)], at=t.read(SEL_AT), key=key)
         elif kind == "box":
             box = t.raw("box")
             if not (isinstance(box, list) and len(box) == 2):
-                raise InputError(f"{key}.box = {box!r}: must be [[x0, y0, z0], [x1, y1, z1]]")
+                raise InputError(f"{key}.box = {brief(box)}: must be [[x0, y0, z0], [x1, y1, z1]]")
             lo, hi = (check_vector(b, f"{key}.box[{i}]") for i, b in enumerate(box))
             if any(a > b for a, b in zip(lo, hi)):
                 raise InputError(f"{key}.box: lower corner {lo} exceeds upper corner {hi}")
             sel = Selector("box", lo=tuple(lo), hi=tuple(hi), key=key)
+        elif kind == "point":
+            sel = Selector("point", point=tuple(t.read(SEL_POINT)), key=key)
+        elif kind == "line":
+            a, b = t.read(SEL_LINE)
+            if a == b:
+                raise InputError(f"{key}.line: its two ends coincide; use point = {a}")
+            sel = Selector("line", line=(tuple(a), tuple(b)), key=key)
         else:
             sel = Selector("group", group=t.read(SEL_GROUP), key=key)
         t.done()
         return sel
 
 
-def where(doc: str, required: bool = True) -> Key:
-    return Key("where", "selector", doc, required=required, parse=Selector.parse)
+def where(doc: str, required: bool = True, kinds: tuple | None = None) -> Key:
+    return Key("where", "selector", doc, required=required, parse=Selector.parse, choices=kinds)
 
 
 # --- mesh -----------------------------------------------------------------------------------
@@ -70,28 +94,29 @@ GENERATOR = Key("generator", "string", "how the mesh is made: a built-in shape o
 CELL = Key("cell", "string", "cell type (cylinder, sphere and revolve make tetrahedra only)",
            default="tetrahedron", choices=("tetrahedron", "hexahedron"))
 SIZE = Key("size", "vector", "box edge lengths [lx, ly, lz]", default=[1.0, 0.1, 0.1], unit="m",
-           length=3, exclusive_minimum=0)
+           length=3, exclusive_minimum=0, maximum=1e6, note="must be positive and at most 1e6 m")
 ORIGIN = Key("origin", "vector", "lowest corner of the box, centre of a sphere, base of a cylinder",
              default=[0.0, 0.0, 0.0], unit="m", length=3)
 CELLS = Key("cells", "vector", "cells along x, y, z of the box", default=[20, 2, 2], length=3,
-            integer=True, exclusive_minimum=0)
+            integer=True, exclusive_minimum=0, maximum=10**7, note="must be positive and at most 10^7")
 RADIUS = Key("radius", "number", "radius of the cylinder or sphere", unit="m", required=True,
              exclusive_minimum=0)
 HEIGHT = Key("height", "number", "height of the cylinder (along z)", unit="m", required=True,
              exclusive_minimum=0)
 H = Key("h", "number", "target cell size of the gmsh mesh", unit="m", exclusive_minimum=0,
-        default_note="radius / 4 (0.025 m for revolve)")
+        default_note="radius / 4 (0.025 m for revolve; a surface file's mean edge length)")
 PROFILE = Key("profile", "points", "closed outline [[r, z], ...] revolved about the z axis", unit="m",
               required=True, length=2, min_items=3,
               note="must list at least 3 points [r, z] of a closed outline")
-FILE = Key("file", "file", "mesh file (gmsh .msh or any meshio format), relative to the scene file",
+FILE = Key("file", "file", "mesh file, relative to the scene file: a volume mesh (gmsh .msh or any meshio "
+           "format) or a closed surface (.stl, .obj, .ply, .off) that gmsh fills with tetrahedra of size h",
            required=True)
 MESH_VARIANTS = Variants(GENERATOR, {
     "box": (SIZE, ORIGIN, CELLS),
     "cylinder": (ORIGIN, RADIUS, HEIGHT, H),
     "sphere": (ORIGIN, RADIUS, H),
     "revolve": (ORIGIN, PROFILE, H),
-    "file": (FILE,),
+    "file": (FILE, H),
 })
 GENERATORS = GENERATOR.choices
 CELL_TYPES = CELL.choices
@@ -111,7 +136,20 @@ class MeshSpec:
     file: Path | None = None
 
 
+MAX_CELL_ASPECT = 1e5      # box cells longer than this many times their width defeat point location
+
+
 def _mesh_rules(m: MeshSpec, t: Table) -> None:
+    if m.generator == "box":
+        edges = [s / n for s, n in zip(m.size, m.cells)]
+        if max(edges) > MAX_CELL_ASPECT * min(edges):
+            raise InputError(f"{t.path}: box cells of {' x '.join(f'{e:.3g}' for e in edges)} m are too "
+                             f"elongated (aspect above {MAX_CELL_ASPECT:.0e}); change size or cells")
+    if m.generator == "file" and m.h is not None and m.file.suffix.lower() not in SURFACE_SUFFIXES:
+        raise InputError(f"{t.key('h')}: only for surface files ({', '.join(SURFACE_SUFFIXES)}); "
+                         f"{m.file.name!r} is meshed already")
+    if m.generator == "file" and m.file.suffix.lower() in SURFACE_SUFFIXES and m.cell != "tetrahedron":
+        raise InputError(f"{t.key('cell')} = {m.cell!r}: a surface file is filled with tetrahedra only")
     if m.generator in ("cylinder", "sphere", "revolve"):
         if m.cell != "tetrahedron":
             raise InputError(f"{t.key('cell')} = {m.cell!r}: the {m.generator} generator makes tetrahedra only")
@@ -204,7 +242,7 @@ def _discretization_rules(d: Discretization, t: Table) -> None:
 # --- supports and loads ---------------------------------------------------------------------
 FIX_KEYS = (
     Key("name", "string", "the support's name in results.json reactions", default_note="fix0, fix1, ... in scene order"),
-    where("boundary facets held"),
+    where("where the displacement is held: boundary facets, a group of any dimension, a point or a line"),
     Key("components", "axes", "displacement components held", default=["x", "y", "z"]),
     Key("value", "vector", "prescribed displacement of the held components", default=[0.0, 0.0, 0.0],
         unit="m", length=3),
@@ -232,7 +270,7 @@ def fix_names(fixes: list[Fix]) -> list[str]:
     return names
 
 
-LOAD_WHERE = where("boundary facets loaded")
+LOAD_WHERE = where("boundary facets loaded", kinds=AREA_SELECTORS)
 # Each load type and its keys: a new load type is one entry here (and its term in physics/).
 LOAD_TYPES = {
     "gravity": (Key("g", "vector", "gravitational acceleration", default=[0.0, 0.0, -9.81], unit="m/s^2",

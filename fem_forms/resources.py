@@ -1,0 +1,75 @@
+"""Will a mesh fit? Memory estimated from cell and dof counts, before anything is allocated, against
+the memory of the machine(s) the ranks run on.
+
+The estimate is a lower bound on what a solve needs: mesh and dofmap (about 0.5 kB per cell) and the
+assembled tangent, a few copies of it (BAIJ matrix, the solver's work arrays), 12 bytes per stored
+entry. A direct factorisation needs far more; the estimate only refuses what cannot possibly fit,
+naming the number, instead of a MemoryError traceback or a machine brought to a halt by swapping.
+"""
+from __future__ import annotations
+
+import os
+import socket
+
+from mpi4py import MPI
+
+from fem_forms.errors import InputError
+
+BYTES_PER_CELL = 500
+BYTES_PER_ENTRY = 12            # a double and a column index
+MATRIX_COPIES = 3
+# coupled nodes per node (each with 3 components): the stencil of one row block
+STENCIL = {("tetrahedron", 1): 15, ("tetrahedron", 2): 30, ("hexahedron", 1): 27, ("hexahedron", 2): 80}
+CELLS_PER_CUBE = {"tetrahedron": 6, "hexahedron": 1}
+
+
+def host_memory() -> int:
+    """Physical memory of this machine in bytes (MemTotal of /proc/meminfo, else sysconf)."""
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemTotal:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+
+
+def machine_memory(comm: MPI.Comm = MPI.COMM_WORLD) -> int:
+    """Memory of all the hosts the ranks of comm run on (each host counted once)."""
+    per_host = comm.allgather((socket.gethostname(), host_memory()))
+    return sum(dict(per_host).values())
+
+
+def box_counts(cells: list, cell_type: str, degree: int) -> tuple[int, int]:
+    """(cells, dofs) of the built-in box before it is built."""
+    nx, ny, nz = (int(n) for n in cells)
+    if degree == 1:
+        nodes = (nx + 1) * (ny + 1) * (nz + 1)
+    elif cell_type == "hexahedron":
+        nodes = (2 * nx + 1) * (2 * ny + 1) * (2 * nz + 1)
+    else:                     # vertices + edges: 7 edges per cube of 6 tetrahedra, plus the boundary's
+        nodes = (nx + 1) * (ny + 1) * (nz + 1) + 7 * nx * ny * nz + 3 * (nx * ny + ny * nz + nx * nz)
+    return CELLS_PER_CUBE[cell_type] * nx * ny * nz, 3 * nodes
+
+
+def tetrahedra_counts(volume: float, h: float, degree: int) -> tuple[int, int]:
+    """(cells, dofs) of a tetrahedral mesh of size h filling `volume` (regular tetrahedra of edge h)."""
+    cells = int(volume / (h**3 / 8.485))
+    nodes = cells / 5.5 if degree == 1 else cells * 1.4
+    return cells, int(3 * nodes)
+
+
+def estimate_bytes(cells: int, dofs: int, cell_type: str, degree: int) -> float:
+    """Lower bound of the memory a static solve needs."""
+    stencil = STENCIL[(cell_type, min(max(degree, 1), 2))]
+    return BYTES_PER_CELL * cells + MATRIX_COPIES * BYTES_PER_ENTRY * dofs * 3 * stencil
+
+
+def check_fits(cells: int, dofs: int, cell_type: str, degree: int, key: str, limit: int) -> None:
+    """Refuse a mesh whose estimated memory exceeds `limit` bytes, naming the estimate."""
+    need = estimate_bytes(cells, dofs, cell_type, degree)
+    if need > limit:
+        raise InputError(f"{key}: {cells:.3g} cells, {dofs:.3g} dofs (P{degree}) need at least "
+                         f"{need / 2**30:.3g} GiB, more than this machine's {limit / 2**30:.3g} GiB; "
+                         "use fewer cells or a coarser h")
