@@ -52,3 +52,15 @@ def leaning_figure(path, h=0.006, lean=0.085):
         out, _ = occ.fuse([(3, foot)], [(3, col)])
         return [t for d, t in out if d == 3]
     return _mesh(path, build, h)
+
+
+def lopsided_top(path, h=0.005):
+    """A cone standing on its tip at the origin (radius 0.04, height 0.03), a disc on it (0.03 thick) and an
+    off-axis lump 0.02 x 0.02 x 0.01 on the disc: its CoM is off the z axis."""
+    def build(occ):
+        cone = occ.addCone(0, 0, 0.03, 0, 0, -0.03, 0.04, 0)
+        disc = occ.addCylinder(0, 0, 0.03, 0, 0, 0.03, 0.04)
+        lump = occ.addBox(0.005, -0.01, 0.06, 0.02, 0.02, 0.01)
+        out, _ = occ.fuse([(3, cone)], [(3, disc), (3, lump)])
+        return [t for d, t in out if d == 3]
+    return _mesh(path, build, h)

@@ -5,8 +5,8 @@ they can lose). Every requirement is a row w with w . M(s) <= b; each goal adds 
 - stand: the CoM inside the support polygon shrunk by h tan(margin angle): for each edge k,
   A_k = m (d_k - h tan a) >= 0 (d_k the distance inside edge k, h the CoM height). Largest margin
   (maximise min_k A_k, in kg m), then least carved mass keeping 98 % of that margin.
-- spin: the CoM on the axis (within 1e-3 of the part's size), the axis principal (products of inertia
-  with the axis within 1e-3 of the spin moment), then Spin-It's objective, the spin moment over the
+- spin: the CoM on the axis (within 2e-4 of the part's size), the axis principal (products of inertia
+  with the axis within 1e-4 of the spin moment), then Spin-It's objective, the spin moment over the
   largest other moment, by Dinkelbach steps (maximise I_a - r w, w >= I_11 + |I_12|, I_22 + |I_12|, a
   bound on the other principal moments). A top's moments are taken about its tip, so the objective
   also lowers its CoM; a yo-yo's about its centre, where its CoM must lie.
@@ -24,8 +24,8 @@ import numpy as np
 from fem_forms.analyses.balance import lp, rows
 from fem_forms.errors import SolveError
 
-CENTER_TOLERANCE = 1e-3      # x the part's size: CoM off the axis / vertical
-PRODUCT_TOLERANCE = 1e-3     # x the spin moment: products of inertia with the axis
+CENTER_TOLERANCE = 2e-4      # x the part's size: CoM off the axis / vertical
+PRODUCT_TOLERANCE = 1e-4     # x the spin moment: products of inertia with the axis
 MASS_TOLERANCE = 1e-3        # relative: mass against the displaced water
 KEEP_MARGIN = 0.98           # stand: stage 2 keeps this share of the largest margin
 DINKELBACH_STEPS = 4
