@@ -87,7 +87,9 @@ def _milp_on(p: Program, fixed: np.ndarray, free: np.ndarray) -> np.ndarray | No
     keep[free] = False
     A_cells = p.A_ub[:, :n]
     b = p.b_ub - A_cells[:, keep] @ fixed[keep]
-    cols = np.concatenate([free, np.arange(n, p.A_ub.shape[1])])
+    cols = np.concatenate([free, np.arange(n, p.A_ub.shape[1])]).astype(np.int64)
+    if not len(cols):                          # nothing left free: the rounded design must hold as it is
+        return fixed.copy() if np.all(b >= -1e-12 * (1 + np.abs(p.b_ub))) else None
     A = p.A_ub[:, cols]
     c = p.c[cols]
     ne = p.A_ub.shape[1] - n
