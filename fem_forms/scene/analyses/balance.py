@@ -72,8 +72,6 @@ def _rules(s: BalanceSpec, t: Table) -> None:
             n = math.sqrt(sum(c * c for c in v))
             if n == 0:
                 raise InputError(f"{t.key(name)} = {v}: must not be the zero vector")
-    if s.goal == "swim" and s.waterline is None:
-        raise InputError(f"{t.key('waterline')}: missing (required for goal = 'swim')")
     s.axis = [c / math.sqrt(sum(c * c for c in s.axis)) for c in s.axis]
 
 
@@ -84,6 +82,8 @@ def _check(scene) -> None:
     if b.fill_density >= scene.material.rho and b.goal != "check":
         raise InputError(f"balance.fill_density = {b.fill_density}: must be below material.rho "
                          f"({scene.material.rho}) to move mass by carving")
+    if b.goal == "swim" and b.waterline is None:
+        raise InputError("balance.waterline: missing (required for goal = 'swim')")
     if b.elastic and not scene.fix:
         raise InputError("balance.elastic = true: needs [[fix]] supports that hold the part (e.g. its foot)")
 
