@@ -35,7 +35,8 @@ DEMOS = ROOT / "demos"
 CHECKS = {"loaded_vs_unloaded_modes": "test_loaded_vs_unloaded_modes_demo",    # longest first
           "sagging_beam": "test_demo_scene_solves_and_writes_outputs",
           "inverse_design": "test_inverse_design_demo",
-          "struck_bar": "test_struck_bar_demo_scene"}
+          "struck_bar": "test_struck_bar_demo_scene",
+          "leaning_figure": "test_leaning_figure_demo"}
 NUMBER = r"[-+]?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?"
 
 
@@ -44,7 +45,7 @@ class DemoRuns:
 
     def __init__(self, names, tmp):
         env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-                   OPENBLAS_NUM_THREADS="1")
+                   OPENBLAS_NUM_THREADS="1", PYTHONPATH=str(ROOT))      # this tree's package
         self.out = {name: tmp / name for name in names}
         self._pool = ThreadPoolExecutor(max_workers=2)
         self._runs = {name: self._pool.submit(
@@ -214,3 +215,23 @@ def test_inverse_design_demo(demo):
     res = ff.solve_static(ff.Scene.from_dict(forward))
     assert res.report.converged
     np.testing.assert_allclose(rest + np.array(res.probes["tip"]), target, rtol=0, atol=1e-6)
+
+
+# --- balance: the leaning figure (Make It Stand) -------------------------------------------------
+def test_leaning_figure_demo(demo):
+    """The solid figure's toppling angle against the closed form of its two boxes (the column sheared by
+    `lean`, which keeps its volume and moves its centroid by lean / 2), and the carved one standing with
+    the 2 degree margin, its mass the solid mass less the carved share."""
+    text, out = demo("leaning_figure")
+    lean = 0.085
+    vf, xf, zf = 0.09 * 0.04 * 0.03, 0.015, 0.015
+    vc, xc, zc = 0.04 * 0.04 * 0.14, 0.04 + lean / 2, 0.03 + 0.07
+    x = (vf * xf + vc * xc) / (vf + vc)
+    z = (vf * zf + vc * zc) / (vf + vc)
+    solid_angle, = grab(rf"solid: toppling angle ({NUMBER}) deg, stands False", text)
+    assert solid_angle == pytest.approx(math.degrees(math.atan2(0.06 - x, z)), abs=1e-5)
+    angle, frac, mass = grab(rf"carved: toppling angle ({NUMBER}) deg, stands True, carved fraction ({NUMBER}), "
+                             rf"mass ({NUMBER}) kg", text)
+    assert angle >= 2.0
+    assert mass == pytest.approx(1000.0 * (vf + vc) * (1 - frac), rel=1e-4)
+    assert (out / "stand" / "balance.png").stat().st_size > 0

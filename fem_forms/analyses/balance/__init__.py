@@ -1,0 +1,151 @@
+"""Balance design (issue 14): mass properties, and carving the interior so that the part stands, spins,
+floats upright or rocks back (Make It Stand, Spin-It, buoyancy design, Make it swing), optionally on the
+shape sagging under gravity. Each design is a linear program in the carvable cells' solid fractions
+(goals.py), binarised and checked from the binary carving's own mass properties (evaluate.py).
+
+run(scene, out, echo): results.json, void.stl, outer.stl, density.xdmf, balance.png.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+import sys
+import time
+
+from mpi4py import MPI
+import numpy as np
+
+from fem_forms.analyses.balance.body import Body
+from fem_forms.analyses.balance.design import Setting, design
+from fem_forms.analyses.balance.elastic import SagModel
+from fem_forms.analyses.balance.evaluate import evaluate, unmet
+from fem_forms.analyses.balance.output import picture, write_outputs
+from fem_forms.errors import SolveError
+from fem_forms.meshes import load_mesh, mesh_size
+from fem_forms.output import results
+from fem_forms.scene import Scene
+
+MAX_STATIC_SOLVES = 4
+
+
+def _gravity(scene: Scene) -> np.ndarray:
+    """[balance] gravity, else the scene's gravity load, else -z."""
+    g = scene.balance.gravity or next((ld.g for ld in scene.load if ld.type == "gravity"), [0.0, 0.0, -9.81])
+    return np.asarray(g, dtype=float)
+
+
+def setting(scene: Scene, mesh) -> Setting:
+    return Setting(scene.balance, scene.material.rho, _gravity(scene), mesh_size(mesh))
+
+
+def _rigid(scene: Scene, st: Setting, body: Body) -> dict:
+    t0 = time.perf_counter()
+    solid = np.ones(int(body.carvable.sum()))
+    before = evaluate(body, st, solid)
+    timing = None
+    if st.spec.goal != "check":
+        solid, P = design(body, st)
+        timing = P.timing if P is not None else None
+    after = evaluate(body, st, solid)
+    return {"solid": solid, "before": before, "after": after, "timing": timing,
+            "design_time_s": time.perf_counter() - t0}
+
+
+def _elastic(scene: Scene) -> dict:
+    """Design on the sagging shape: solve, redesign on X + u, repeat to a fixed point (<= 4 solves)."""
+    sag = SagModel(scene, _gravity(scene))
+    st = setting(scene, sag.mesh)
+    rest = Body.rest(sag.mesh, st.spec.shell)
+    solid = np.ones(int(rest.carvable.sum()))
+    history = []
+    rigid_before = evaluate(rest, st, solid)
+    if st.spec.goal != "check":
+        solid, _ = design(rest, st)                        # start from the rigid design
+    deformed_before = None
+    for k in range(MAX_STATIC_SOLVES):
+        stiff = np.where(rest.carvable, 1.0, 1.0)
+        stiff[rest.carvable] = np.where(solid > 0.5, 1.0, st.spec.fill_stiffness)
+        result = sag.solve(rest.density(solid, st.rho, st.spec.fill_density), stiff)
+        bent = rest.deformed(sag.model.u)
+        numbers = evaluate(bent, st, solid, rest)
+        history.append({"static_solve": k + 1, "max_displacement": result.max_displacement,
+                        "carved_fraction": numbers["carved_fraction"],
+                        "stability_margin": numbers["stability_margin"]})
+        if k == 0 and st.spec.goal == "check":
+            deformed_before = numbers
+        if st.spec.goal == "check" or k == MAX_STATIC_SOLVES - 1:
+            break
+        new, _ = design(bent, st, rest)
+        changed = bent.mesh.comm.allreduce(int(np.sum(new != solid)), op=MPI.SUM)
+        history[-1]["cells_changed_by_redesign"] = changed
+        if changed == 0:
+            break
+        solid = new
+    after = evaluate(rest, st, solid)
+    after["deformed"] = numbers
+    after["deformed"]["max_displacement"] = result.max_displacement
+    return {"solid": solid, "before": rigid_before, "after": after, "mesh": sag.mesh, "rest": rest, "setting": st,
+            "history": history, "u": sag.model.u, "deformed_before": deformed_before}
+
+
+def run(scene: Scene, out, echo: bool = False) -> dict:
+    """Mass properties and the goal's design; results.json last. SolveError (exit 3) when no design
+    exists or the binary design misses a requirement."""
+    t0 = time.perf_counter()
+    out = Path(out)
+    b = scene.balance
+    if b.elastic:
+        r = _elastic(scene)
+        mesh, body, st = r["mesh"], r["rest"], r["setting"]
+    else:
+        mesh = load_mesh(scene.mesh).mesh
+        st = setting(scene, mesh)
+        body = Body.rest(mesh, b.shell)
+        r = _rigid(scene, st, body)
+    after = r["after"]
+    if b.goal != "check":
+        why = unmet(after.get("deformed", after), st)
+        if why:
+            raise SolveError(f"balance: the binary design misses its goal: {why}")
+    comm = mesh.comm
+    if comm.rank == 0:
+        out.mkdir(parents=True, exist_ok=True)
+    comm.barrier()
+    carved = np.zeros(len(body.ids), dtype=bool)
+    carved[body.carvable] = r["solid"] < 0.5
+    files = write_outputs(out, mesh, body.density(r["solid"], st.rho, b.fill_density), carved)
+    picture(out / "balance.png", mesh, carved, r["before"], after, scene.title, f" ({b.goal})")
+    files["picture"] = "balance.png"
+    summary = {"analysis": "balance", "title": scene.title, "goal": b.goal, "elastic": b.elastic,
+               **after, "before": r["before"], "cells": comm.allreduce(len(body.ids)),
+               "carvable_cells": comm.allreduce(int(body.carvable.sum())), "mpi_ranks": comm.size,
+               "wall_time_s": time.perf_counter() - t0, "files": files}
+    if r.get("timing") is not None:
+        tm = r["timing"]
+        summary["lp"] = {"setup_s": tm.setup_s, "solve_s": tm.solve_s, "lps": tm.lps,
+                         "binarise_s": tm.binarise_s, "fractional_cells": tm.fractional}
+    if "design_time_s" in r:
+        summary["design_time_s"] = r["design_time_s"]
+    if b.elastic:
+        summary["elastic_iterations"] = r["history"]
+        if r["deformed_before"] is not None:
+            summary["deformed"] = r["deformed_before"]
+    results.write_json_atomic(out / "results.json", summary, comm)
+    if echo and comm.rank == 0:
+        _echo(summary, out)
+    return summary
+
+
+def _echo(s: dict, out: Path) -> None:
+    line = (f"{s['title']}: balance {s['goal']}: mass {s['mass']:.6g} kg, CoM "
+            f"[{', '.join(f'{v:.4g}' for v in s['center_of_mass'])}], carved {100 * s['carved_fraction']:.1f} %")
+    if "stands" in s:
+        line += f", toppling angle {s['toppling_angle_deg']:.3g} deg ({'stands' if s['stands'] else 'topples'})"
+    if "deformed" in s:
+        d = s["deformed"]
+        line += f"; deformed: toppling angle {d['toppling_angle_deg']:.3g} deg"
+        if "stands" in d:
+            line += f" ({'stands' if d['stands'] else 'topples'})"
+    print(line + f" -> {out}")
+    if s.get("warnings"):
+        for w in s["warnings"]:
+            print(f"fem-forms: warning: {w}", file=sys.stderr)

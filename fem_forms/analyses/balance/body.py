@@ -1,0 +1,86 @@
+"""The part as the balance design sees it, on each rank: owned cells (global ids, corners, moment
+integrals on the current shape), which of them may be carved, and the geometry nodes (for contact)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from dolfinx import cpp, fem, mesh as dmesh
+from mpi4py import MPI
+import numpy as np
+from scipy.spatial import cKDTree
+
+from fem_forms.design.mass_properties import cell_moments
+from fem_forms.output.fields import node_values
+
+
+def _cell_nodes(mesh) -> np.ndarray:
+    n = mesh.topology.index_map(3).size_local
+    dofs = mesh.geometry.dofmap.array.reshape(-1, len(mesh.geometry.dofmap.links(0)))
+    return dofs[:n]
+
+
+def surface_points(mesh) -> np.ndarray:
+    """Points sampled on the boundary (facet corners, edge midpoints, facet centroids) of all ranks."""
+    tdim = mesh.topology.dim
+    mesh.topology.create_connectivity(tdim - 1, tdim)
+    facets = dmesh.exterior_facet_indices(mesh.topology)
+    nodes = cpp.mesh.entities_to_geometry(mesh._mesh, tdim - 1, facets, False)
+    x = mesh.geometry.x
+    if len(nodes):
+        p = x[nodes]
+        k = p.shape[1]
+        mids = [(p[:, i] + p[:, (i + 1) % k]) / 2 for i in range(k)]
+        local = np.vstack([p.reshape(-1, 3), *mids, p.mean(axis=1)])
+    else:
+        local = np.empty((0, 3))
+    return np.vstack(mesh.comm.allgather(local))
+
+
+@dataclass
+class Body:
+    """One rank's share of the part on one shape (rest, or deformed by u)."""
+    mesh: object
+    ids: np.ndarray              # global (input) index of each owned cell
+    carvable: np.ndarray         # owned cells that may be carved
+    moments: np.ndarray          # (owned cells, 10) on this shape
+    corners: np.ndarray          # (owned cells, 4 or 8, 3) on this shape
+    nodes: np.ndarray            # owned geometry nodes on this shape
+
+    @classmethod
+    def rest(cls, mesh, shell: float) -> "Body":
+        n = mesh.topology.index_map(3).size_local
+        cn = _cell_nodes(mesh)
+        corners = mesh.geometry.x[cn]
+        tree = cKDTree(surface_points(mesh))
+        dist, _ = tree.query(corners.reshape(-1, 3))
+        carvable = dist.reshape(len(cn), -1).min(axis=1) > shell if len(cn) else np.zeros(0, bool)
+        ids = np.asarray(mesh.topology.original_cell_index[:n], dtype=np.int64)
+        nown = mesh.geometry.index_map().size_local
+        return cls(mesh, ids, carvable, cell_moments(mesh), corners, mesh.geometry.x[:nown].copy())
+
+    def deformed(self, u: fem.Function) -> "Body":
+        """The same cells on the shape X + u."""
+        d = node_values(u)
+        x = self.mesh.geometry.x + d
+        nown = self.mesh.geometry.index_map().size_local
+        return Body(self.mesh, self.ids, self.carvable, cell_moments(self.mesh, u), x[_cell_nodes(self.mesh)],
+                    x[:nown].copy())
+
+    def centroids(self) -> np.ndarray:
+        return self.corners.mean(axis=1)
+
+    def contact_points(self, up: np.ndarray, tolerance: float) -> np.ndarray:
+        """Nodes of all ranks within `tolerance` of the lowest point along -up."""
+        h = self.nodes @ up
+        low = self.mesh.comm.allreduce(float(h.min()) if len(h) else np.inf, op=MPI.MIN)
+        return np.vstack(self.mesh.comm.allgather(self.nodes[h <= low + tolerance]))
+
+    def lowest(self, direction: np.ndarray) -> float:
+        h = self.nodes @ direction
+        return self.mesh.comm.allreduce(float(h.min()) if len(h) else np.inf, op=MPI.MIN)
+
+    def density(self, solid: np.ndarray, rho: float, fill: float) -> np.ndarray:
+        """Density per owned cell for the solid fractions of the carvable ones."""
+        d = np.full(len(self.ids), rho)
+        d[self.carvable] = fill + (rho - fill) * solid
+        return d

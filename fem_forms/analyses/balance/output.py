@@ -1,0 +1,116 @@
+"""Balance outputs: the void and the outer surface as closed STL files, the density as a DG0 XDMF field,
+and one picture of the part before and after carving (CoM, support polygon, axis or waterline)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from dolfinx import fem
+import numpy as np
+
+from fem_forms.output.fields import gather_mesh, write_fields
+
+# faces of a tetrahedron and of a VTK-ordered hexahedron, outward for a positively oriented cell
+TET_FACES = [(1, 2, 3), (0, 3, 2), (0, 1, 3), (0, 2, 1)]
+HEX_FACES = [(0, 3, 2, 1), (4, 5, 6, 7), (0, 1, 5, 4), (1, 2, 6, 5), (2, 3, 7, 6), (3, 0, 4, 7)]
+
+
+def boundary_faces(cells: np.ndarray) -> np.ndarray:
+    """Triangles of the faces that belong to exactly one of the cells (the closed surface of the set)."""
+    faces = TET_FACES if cells.shape[1] == 4 else HEX_FACES
+    allf = np.concatenate([cells[:, list(f)] for f in faces])
+    key = np.sort(allf, axis=1)
+    _, inv, cnt = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    once = allf[cnt[inv.ravel()] == 1]
+    if once.shape[1] == 4:
+        once = np.vstack([once[:, [0, 1, 2]], once[:, [0, 2, 3]]])
+    return once
+
+
+def write_stl(path: Path, points: np.ndarray, triangles: np.ndarray, name: str) -> None:
+    """Binary STL."""
+    p = points[triangles]
+    n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    rec = np.zeros(len(p), dtype=[("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")])
+    rec["n"], rec["v"] = n, p
+    with open(path, "wb") as f:
+        f.write(name.encode()[:80].ljust(80, b" "))
+        f.write(np.uint32(len(p)).tobytes())
+        f.write(rec.tobytes())
+
+
+def density_function(mesh, density: np.ndarray) -> fem.Function:
+    f = fem.Function(fem.FunctionSpace(mesh, ("DG", 0)), name="density")
+    n = len(density)
+    f.x.array[f.function_space.dofmap.list.array[:n]] = density
+    f.x.scatter_forward()
+    return f
+
+
+def write_outputs(out: Path, mesh, density: np.ndarray, carved: np.ndarray, shift=None) -> dict:
+    """void.stl, outer.stl (rank 0, from the gathered mesh), density.xdmf; their names."""
+    write_fields(out / "density.xdmf", mesh, [density_function(mesh, density)])
+    flags = mesh.comm.gather(carved, root=0)
+    g = gather_mesh(mesh)
+    if mesh.comm.rank == 0:
+        points, cells, _ = g
+        carved_all = np.concatenate(flags)
+        write_stl(out / "outer.stl", points, boundary_faces(cells), "outer surface")
+        void = boundary_faces(cells[carved_all]) if carved_all.any() else np.empty((0, 3), dtype=np.int64)
+        # the void's faces, turned to point into the void (outward normals of the solid that remains)
+        write_stl(out / "void.stl", points, void[:, ::-1], "carved void")
+    mesh.comm.barrier()
+    return {"density": "density.xdmf", "outer_surface": "outer.stl", "void_surface": "void.stl"}
+
+
+def picture(path: Path, mesh, carved: np.ndarray, before: dict, after: dict, title: str,
+            extra: str = "") -> None:
+    """Two panels: the part solid and carved, each with its CoM, support polygon and axis/waterline."""
+    flags = mesh.comm.gather(carved, root=0)
+    g = gather_mesh(mesh)
+    if mesh.comm.rank != 0:
+        mesh.comm.barrier()
+        return
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from fem_forms.output.pictures import style_axes
+
+    points, cells, _ = g
+    outer = boundary_faces(cells)
+    carved_all = np.concatenate(flags)
+    void = boundary_faces(cells[carved_all]) if carved_all.any() else None
+    fig = plt.figure(figsize=(11, 5.5))
+    for k, (label, nums, show_void) in enumerate((("solid", before, False), ("carved", after, True))):
+        ax = fig.add_subplot(1, 2, k + 1, projection="3d")
+        ax.plot_trisurf(points[:, 0], points[:, 1], points[:, 2], triangles=outer, color=(0.7, 0.7, 0.75, 0.15),
+                        edgecolor=(0.3, 0.3, 0.3, 0.05), linewidth=0.1)
+        if show_void and void is not None and len(void):
+            ax.plot_trisurf(points[:, 0], points[:, 1], points[:, 2], triangles=void, color=(0.9, 0.4, 0.2, 0.5),
+                            linewidth=0)
+        c = np.asarray(nums["center_of_mass"])
+        ax.scatter(*c, color="k", s=40, depthshade=False, label="CoM")
+        poly = np.asarray(nums.get("support_polygon") or [])
+        if len(poly) >= 2:
+            loop = np.vstack([poly, poly[:1]])
+            ax.plot(loop[:, 0], loop[:, 1], loop[:, 2], color="tab:blue", lw=2, label="support polygon")
+            down = np.array([c[0], c[1], poly[:, 2].mean()])
+            ax.plot(*np.stack([c, down]).T, "k--", lw=1)
+        if "curvature_center" in nums:
+            ax.scatter(*nums["curvature_center"], color="tab:green", s=40, label="rocking centre")
+        if "center_of_buoyancy" in nums and nums["center_of_buoyancy"][0] is not None:
+            ax.scatter(*nums["center_of_buoyancy"], color="tab:cyan", s=40, label="buoyancy")
+        if "tip" in nums:
+            a = np.asarray(nums["spin_axis"])
+            t = np.asarray(nums["tip"])
+            L = np.ptp(points, axis=0).max()
+            ax.plot(*np.stack([t, t + L * a]).T, color="tab:red", lw=1.5, label="spin axis")
+        style_axes(ax, points.min(axis=0), points.max(axis=0))
+        ang = nums.get("toppling_angle_deg")
+        ax.set_title(f"{label}: m = {nums['mass']:.4g} kg" + (f", topple {ang:.1f} deg" if ang is not None else ""))
+        ax.legend(loc="upper left", fontsize=7)
+    fig.suptitle(title + extra)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    mesh.comm.barrier()

@@ -1,0 +1,99 @@
+"""Balance design analysis: its [balance] section (goal, gravity, contact, margin, shell, elastic, and the
+keys of each goal). Declared once here; the reader, the JSON Schema and the runner all read these."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import math
+
+from fem_forms.errors import InputError
+from fem_forms.scene.analyses import Analysis
+from fem_forms.scene.reader import Key, Section, Table, Variants
+
+GOAL = Key("goal", "string", "check: report only; stand, spin, swim, swing: carve the interior so the part "
+           "stands, spins, floats upright or rocks back", default="stand",
+           choices=("check", "stand", "spin", "swim", "swing"))
+COMMON_KEYS = (
+    Key("gravity", "vector", "gravitational acceleration for the balance", unit="m/s^2", length=3,
+        default_note="the scene's gravity load, else [0, 0, -9.81]"),
+    Key("contact_tolerance", "number", "mesh points this close to the lowest point (along gravity) touch the "
+        "ground", default=1e-3, unit="m", exclusive_minimum=0),
+    Key("margin_angle", "number", "stand: the CoM must lie inside the support polygon shrunk by h tan(angle); "
+        "swing: the CoM at least R sin(angle) below the rocking centre", default=5.0, unit="deg",
+        minimum=0, exclusive_maximum=90),
+    Key("shell", "number", "cells closer than this to the surface stay solid (the wall kept)", default=0.004,
+        unit="m", minimum=0),
+    Key("elastic", "boolean", "evaluate and design on the shape deformed under gravity (held by [[fix]])",
+        default=False),
+    Key("fill_density", "number", "density of carved cells (0: empty; else a second, lighter material)",
+        default=0.0, unit="kg/m^3", minimum=0),
+    Key("fill_stiffness", "number", "elastic: stiffness of carved cells relative to the solid (ersatz "
+        "material)", default=1e-6, exclusive_minimum=0, maximum=1),
+)
+SPIN_KEYS = (
+    Key("axis", "vector", "spin axis direction (normalised)", default=[0.0, 0.0, 1.0], length=3),
+    Key("kind", "string", "top: spins on its lowest point along the axis; yoyo: about its centre",
+        default="top", choices=("top", "yoyo")),
+)
+SWIM_KEYS = (
+    Key("water_density", "number", "density of the liquid", default=1000.0, unit="kg/m^3",
+        exclusive_minimum=0),
+    Key("waterline", "number", "height of the water surface above the lowest point, floating upright",
+        unit="m", exclusive_minimum=0, note="must be positive (required for goal = \"swim\")"),
+    Key("min_metacentric_height", "number", "GM must be at least this", unit="m", minimum=0,
+        default_note="1 % of the part's size"),
+)
+VARIANTS = Variants(GOAL, {"check": SWIM_KEYS[:2], "stand": (), "spin": SPIN_KEYS, "swim": SWIM_KEYS,
+                           "swing": ()})
+_K = {k.name: k for k in (GOAL,) + COMMON_KEYS + SPIN_KEYS + SWIM_KEYS}
+
+
+@dataclass
+class BalanceSpec:
+    """[balance]: which balance goal, under which gravity, with which contact, margin and wall."""
+    goal: str = _K["goal"].field()
+    gravity: list | None = None                    # None: the scene's gravity load, else -z
+    contact_tolerance: float = _K["contact_tolerance"].field()
+    margin_angle: float = _K["margin_angle"].field()
+    shell: float = _K["shell"].field()
+    elastic: bool = _K["elastic"].field()
+    fill_density: float = _K["fill_density"].field()
+    fill_stiffness: float = _K["fill_stiffness"].field()
+    axis: list = field(default_factory=lambda: [0.0, 0.0, 1.0])     # spin: unit length after parsing
+    kind: str = _K["kind"].field()
+    water_density: float = _K["water_density"].field()
+    waterline: float | None = None                 # swim (and check, if given): m above the lowest point
+    min_metacentric_height: float | None = None    # swim; None: 1 % of the part's size
+
+
+def _rules(s: BalanceSpec, t: Table) -> None:
+    for name in ("gravity", "axis"):
+        v = getattr(s, name)
+        if v is not None:
+            n = math.sqrt(sum(c * c for c in v))
+            if n == 0:
+                raise InputError(f"{t.key(name)} = {v}: must not be the zero vector")
+    s.axis = [c / math.sqrt(sum(c * c for c in s.axis)) for c in s.axis]
+
+
+def _check(scene) -> None:
+    b = scene.balance
+    if scene.material.rho <= 0:
+        raise InputError("material.rho: balance design needs a positive density")
+    if b.fill_density >= scene.material.rho and b.goal != "check":
+        raise InputError(f"balance.fill_density = {b.fill_density}: must be below material.rho "
+                         f"({scene.material.rho}) to move mass by carving")
+    if b.goal == "swim" and b.waterline is None:
+        raise InputError("balance.waterline: missing (required for goal = 'swim')")
+    if b.elastic and not scene.fix:
+        raise InputError("balance.elastic = true: needs [[fix]] supports that hold the part (e.g. its foot)")
+
+
+ANALYSIS = Analysis(
+    name="balance",
+    doc="mass properties, and carving the interior so the part stands, spins, floats upright or rocks back",
+    runner="fem_forms.analyses.balance:run",
+    sections=(Section("balance", "what must balance and how the interior may be carved", BalanceSpec,
+                      keys=COMMON_KEYS, variants=VARIANTS, rules=_rules),),
+    outputs=("results.json", "void.stl", "outer.stl", "density.xdmf", "balance.png"),
+    check=_check,
+)

@@ -1,0 +1,94 @@
+"""Balance designs end to end: a leaning part that topples and stands after carving with the requested
+margin; a lopsided top whose spin axis becomes principal with the CoM on it; a box that floats upright at
+its waterline (mass = displaced water, GM against the box formula); no design -> exit 3 with the reason;
+the same design on 2 MPI ranks."""
+import json
+import math
+
+import numpy as np
+import pytest
+
+import balance_shapes
+from helpers import mpirun, run_scene
+
+
+def run(path, d):
+    path.mkdir(parents=True, exist_ok=True)
+    return run_scene(path, d)
+
+
+def scene(mesh, **balance):
+    return {"title": "balance test", "analysis": "balance", "mesh": mesh,
+            "material": {"model": "neo-hookean", "E": 1e6, "nu": 0.3, "rho": 1000.0}, "balance": balance}
+
+
+@pytest.fixture(scope="module")
+def leaning(tmp_path_factory):
+    return balance_shapes.leaning_figure(tmp_path_factory.mktemp("mesh") / "lean.msh")
+
+
+def test_leaning_part_topples_then_stands_with_margin(tmp_path, leaning):
+    mesh = {"generator": "file", "file": str(leaning)}
+    code, check, _, _ = run(tmp_path / "c", scene(mesh, goal="check"))
+    assert code == 0 and not check["stands"] and check["toppling_angle_deg"] < 0
+    code, d, _, out = run(tmp_path / "s", scene(mesh, goal="stand", margin_angle=2.0, shell=0.003))
+    assert code == 0 and d["stands"] and d["meets_margin"]
+    # the margin: CoM inside the polygon shrunk by h tan(2 deg), from the reported numbers
+    h = d["center_of_mass"][2]
+    assert d["stability_margin"] >= h * math.tan(math.radians(2.0))
+    assert d["toppling_angle_deg"] == pytest.approx(math.degrees(math.atan2(d["stability_margin"], h)))
+    assert 0 < d["carved_fraction"] < 1 and d["mass"] < check["mass"]
+    # the carving mass checks out against the solid part: removed mass = rho x carved volume
+    assert check["mass"] - d["mass"] == pytest.approx(check["mass"] * d["carved_fraction"], rel=1e-9)
+    for f in ("void.stl", "outer.stl", "density.xdmf", "balance.png"):
+        assert (out / f).stat().st_size > 0
+
+
+def test_stand_needs_an_area_and_a_reachable_margin(tmp_path, leaning):
+    mesh = {"generator": "file", "file": str(leaning)}
+    code, d, _, _ = run(tmp_path, scene(mesh, goal="stand", margin_angle=30.0))
+    assert code == 3 and d is None
+
+
+def test_top_axis_becomes_principal_with_com_on_it(tmp_path):
+    top = balance_shapes.lopsided_top(tmp_path / "top.msh")
+    code, d, _, _ = run(tmp_path, scene({"generator": "file", "file": str(top)}, goal="spin", kind="top",
+                                              axis=[0.0, 0.0, 1.0], shell=0.003))
+    assert code == 0
+    c = np.array(d["center_of_mass"])
+    assert abs(d["before"]["center_of_mass"][0]) > 1e-4          # off the axis before
+    assert np.hypot(c[0], c[1]) < 2e-4 * 0.12
+    I = np.array(d["inertia"])
+    assert abs(I[0, 2]) < 3e-3 * I[2, 2] and abs(I[1, 2]) < 3e-3 * I[2, 2]     # about the CoM
+    assert d["spin_ratio"] == pytest.approx(I[2, 2] / max(np.linalg.eigvalsh(I[:2, :2])))
+
+
+def test_box_floats_upright_at_its_waterline(tmp_path):
+    L, B, H, T = 0.2, 0.1, 0.06, 0.03
+    box = {"generator": "box", "size": [L, B, H], "cells": [20, 10, 6]}
+    light = lambda **b: dict(scene(box, **b), material={"model": "neo-hookean", "E": 1e6, "nu": 0.3, "rho": 600.0})
+    code, d, _, _ = run(tmp_path, light(goal="swim", waterline=T, shell=0.01))
+    assert code == 0
+    assert d["mass"] == pytest.approx(1000.0 * L * B * T, rel=1.1e-3)
+    KG = d["center_of_mass"][2]
+    assert d["metacentric_height"] == pytest.approx(T / 2 + B * B / (12 * T) - KG, rel=1e-9)
+    assert d["metacentric_height"] > 0.01 * math.sqrt(L * L + B * B + H * H) * (1 - 1e-6)
+    assert np.allclose(d["center_of_mass"][:2], [L / 2, B / 2], atol=3e-4 * 0.25)
+    code, d, _, _ = run(tmp_path / "deep", light(goal="swim", waterline=0.055, shell=0.01))
+    assert code == 3 and d is None                    # too light even solid
+    code, d, _, _ = run(tmp_path / "shallow", light(goal="swim", waterline=0.01, shell=0.01))
+    assert code == 3 and d is None                    # too heavy even carved
+
+
+@pytest.mark.mpi
+def test_two_ranks_same_design(tmp_path, leaning):
+    from helpers import toml_dumps
+    d = scene({"generator": "file", "file": str(leaning)}, goal="stand", margin_angle=2.0, shell=0.003)
+    (tmp_path / "s.toml").write_text(toml_dumps(d))
+    for n in (1, 2):
+        p = mpirun(["-m", "fem_forms", "run", str(tmp_path / "s.toml"), "--out", str(tmp_path / f"o{n}")], n=n)
+        assert p.returncode == 0, p.stderr
+    r1, r2 = (json.loads((tmp_path / f"o{n}" / "results.json").read_text()) for n in (1, 2))
+    assert r2["mpi_ranks"] == 2
+    assert r1["carved_fraction"] == pytest.approx(r2["carved_fraction"], rel=1e-12)
+    assert np.allclose(r1["center_of_mass"], r2["center_of_mass"], rtol=1e-10)
