@@ -66,6 +66,8 @@ def key_schema(k: Key) -> dict:
              "additionalProperties": {"type": ["string", "number", "boolean"]}}
     elif k.kind == "selector":
         s = _selector(k.choices)
+    elif k.kind == "either":
+        s = {"oneOf": [key_schema(a) for a in k.keys]}
     else:
         raise ValueError(f"{k.name}: no schema for kind {k.kind!r}")
     if k.choices is not None and k.kind != "selector":
