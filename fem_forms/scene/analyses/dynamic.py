@@ -88,6 +88,8 @@ class DampingSpec:
 
 
 def _check(scene) -> None:
+    if scene.dynamic is None:
+        raise InputError("dynamic: missing (required table for analysis = \"dynamic\": duration and dt)")
     if scene.material.rho <= 0:
         raise InputError("material.rho: dynamic analysis needs a positive density")
     n = len(scene.load)
@@ -105,7 +107,7 @@ ANALYSIS = Analysis(
     runner="fem_forms.analyses.dynamic:run",
     sections=(
         Section("dynamic", "time span, step, scheme, mass matrix and initial state", DynamicSpec,
-                keys=DYNAMIC_KEYS, rules=_dynamic_rules, required=True),
+                keys=DYNAMIC_KEYS, rules=_dynamic_rules, absent=lambda: None),
         Section("damping", "Rayleigh and viscous (Kelvin-Voigt) damping", DampingSpec, keys=DAMPING_KEYS),
     ),
     outputs=("results.json", "probes.csv", "energy.csv", "motion.xdmf", "motion.gif", "history.png",
