@@ -41,7 +41,7 @@ class Scene:
     modal: ModalSpec = field(default_factory=ModalSpec)
     sound: SoundSpec | None = None     # None: no sound
     inverse: InverseSpec = field(default_factory=InverseSpec)
-    dynamic: DynamicSpec | None = None     # None: not a dynamic analysis
+    dynamic: DynamicSpec = field(default_factory=DynamicSpec)
     damping: DampingSpec = field(default_factory=DampingSpec)
     source: Path | None = None
 

@@ -17,7 +17,7 @@ from fem_forms.analyses.dynamic.energy import EnergyAccount
 from fem_forms.analyses.dynamic.explicit import ExplicitStepper, check_stable
 from fem_forms.analyses.dynamic.implicit import ImplicitStepper
 from fem_forms.analyses.dynamic.system import DynamicSystem, build_system
-from fem_forms.errors import SolveError
+from fem_forms.errors import InputError, SolveError
 from fem_forms.output import probes
 from fem_forms.physics.inertia import Inertia
 from fem_forms.scene import Scene
@@ -138,6 +138,8 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
     t = 0); checkpoints into out/checkpoint every checkpoint_every steps; `restart` continues from one."""
     t0 = time.perf_counter()
     dyn = scene.dynamic
+    if scene.material.rho <= 0:
+        raise InputError("material.rho: dynamic analysis needs a positive density")
     system = build_system(scene)
     released = set(dyn.initial_loads) if dyn.initial == "static" else set()
     probes.evaluate(system.u, scene.output.probes)          # a probe outside the mesh is bad input

@@ -9,8 +9,8 @@ from fem_forms.scene.reader import Key, Section, Table
 
 SCHEMES = ("newmark", "generalized-alpha", "central-difference")
 DYNAMIC_KEYS = (
-    Key("duration", "number", "simulated time", unit="s", required=True, exclusive_minimum=0),
-    Key("dt", "number", "time step (implicit schemes may cut or adapt it)", unit="s", required=True,
+    Key("duration", "number", "simulated time", default=1.0, unit="s", exclusive_minimum=0),
+    Key("dt", "number", "time step (implicit schemes may cut or adapt it)", default=1e-3, unit="s",
         exclusive_minimum=0),
     Key("scheme", "string", "newmark (average acceleration), generalized-alpha (Chung-Hulbert) or "
         "central-difference (explicit, lumped mass)", default="newmark", choices=SCHEMES),
@@ -42,8 +42,8 @@ _D = {k.name: k for k in DYNAMIC_KEYS}
 @dataclass
 class DynamicSpec:
     """[dynamic]: how long, with which step and scheme, from which initial state."""
-    duration: float = 1.0
-    dt: float = 1e-3
+    duration: float = _D["duration"].field()
+    dt: float = _D["dt"].field()
     scheme: str = _D["scheme"].field()
     rho_inf: float = _D["rho_inf"].field()
     mass: str = _D["mass"].field()
@@ -88,10 +88,6 @@ class DampingSpec:
 
 
 def _check(scene) -> None:
-    if scene.dynamic is None:
-        raise InputError("dynamic: missing (required table for analysis = \"dynamic\": duration and dt)")
-    if scene.material.rho <= 0:
-        raise InputError("material.rho: dynamic analysis needs a positive density")
     n = len(scene.load)
     for i in scene.dynamic.initial_loads:
         if i >= n:
@@ -107,7 +103,7 @@ ANALYSIS = Analysis(
     runner="fem_forms.analyses.dynamic:run",
     sections=(
         Section("dynamic", "time span, step, scheme, mass matrix and initial state", DynamicSpec,
-                keys=DYNAMIC_KEYS, rules=_dynamic_rules, absent=lambda: None),
+                keys=DYNAMIC_KEYS, rules=_dynamic_rules),
         Section("damping", "Rayleigh and viscous (Kelvin-Voigt) damping", DampingSpec, keys=DAMPING_KEYS),
     ),
     outputs=("results.json", "probes.csv", "energy.csv", "motion.xdmf", "motion.gif", "history.png",
