@@ -55,6 +55,7 @@ def _parser() -> argparse.ArgumentParser:
                      help="override a scene key, e.g. --set mesh.cells=[8,1,1] (TOML value)")
     run.add_argument("--no-adapt", action="store_true",
                      help="solve the discretization as given, ignoring [discretization] tolerance")
+    run.add_argument("--restart", metavar="DIR", help="continue the stopped dynamic run in DIR from its checkpoint")
     run.add_argument("-v", "--verbose", action="store_true", help="show FFCx/UFL compilation logs")
     run.add_argument("-q", "--quiet", action="store_true", help="show no progress on stderr")
     study = sub.add_parser("study", help="solve a scene on a ladder of meshes and degrees; error vs cost")
@@ -101,6 +102,8 @@ def _run(args, petsc: dict) -> int:
         return 0
     scene = Scene.from_file(args.scene, overrides)
     scene.solver.petsc.update(check_options(petsc, "command line: -", sep=""))
+    if args.restart and scene.analysis != "dynamic":
+        raise InputError(f"--restart: only for analysis = \"dynamic\" (this scene's is {scene.analysis!r})")
     forget_results(Path(args.out) / "results.json")
     if scene.discretization.tolerance is not None and not args.no_adapt:
         if petsc or MPI.COMM_WORLD.size > 1:
@@ -110,7 +113,7 @@ def _run(args, petsc: dict) -> int:
               f"tolerance {s['tolerance']} (estimated error {s['error_estimate']:.2e}), {s['dofs']} dofs "
               f"-> {args.out}")
         return 0
-    run_analysis(scene, Path(args.out), echo=True)
+    run_analysis(scene, Path(args.out), echo=True, **({"restart": Path(args.restart)} if args.restart else {}))
     return 0
 
 

@@ -12,6 +12,7 @@ from pathlib import Path
 from fem_forms.scene import Scene, registry
 
 
-def run_analysis(scene: Scene, out: Path, echo: bool = False) -> dict:
-    """Run the scene's analysis, writing into `out`; its summary dict."""
-    return registry.get(scene.analysis).run_function()(scene, Path(out), echo=echo)
+def run_analysis(scene: Scene, out: Path, echo: bool = False, **options) -> dict:
+    """Run the scene's analysis, writing into `out`; its summary dict (`options`: e.g. a dynamic
+    run's restart folder)."""
+    return registry.get(scene.analysis).run_function()(scene, Path(out), echo=echo, **options)

@@ -1,10 +1,12 @@
 """Inertia: the kinetic energy 1/2 int rho |u_dot|^2 dX, whose second variation is the mass form.
-Modal analysis assembles its mass matrix from it; transient dynamics will add its time-discrete form."""
+Modal analysis assembles its mass matrix from it; transient dynamics adds its time-discrete form, an
+energy in the unknown u_{n+1} (so the implicit step keeps an energy line search)."""
 from __future__ import annotations
 
 import ufl
 
 from fem_forms.physics.terms import Context, Term
+from fem_forms.physics.time_discrete import TimeDiscrete
 
 
 class Inertia(Term):
@@ -18,3 +20,20 @@ class Inertia(Term):
     def kinetic_energy(self, ctx: Context, velocity) -> ufl.Form:
         """1/2 int rho |velocity|^2 dX."""
         return 0.5 * ctx.volume(ctx.parameters.density * ufl.inner(velocity, velocity))
+
+
+class DiscreteInertia(Inertia):
+    """The generalized-alpha inertia force (1 - alpha_m) M a(u) + alpha_m M a_n as the gradient in u of
+    (1 - alpha_m) / (2 beta dt^2) int rho |u - u~|^2 dX + alpha_m int rho a_n . u dX
+    (consistent mass; a lumped mass is added to the assembled system by the time stepper)."""
+    name = "inertia"
+
+    def __init__(self, td: TimeDiscrete, unknown):
+        self.td, self.unknown = td, unknown
+
+    def energy(self, ctx: Context) -> ufl.Form:
+        td, u = self.td, self.unknown
+        d = u - td.predictor()
+        rho = ctx.parameters.density
+        return ctx.volume(rho * ((1 - td.alpha_m) / (2 * td.beta * td.dt * td.dt) * ufl.inner(d, d)
+                                 + td.alpha_m * ufl.inner(td.a_old, u)))

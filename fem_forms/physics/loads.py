@@ -1,6 +1,8 @@
 """External loads as terms, one class per [[load]] type, each registered under its type name.
 
-All values are Constants scaled by the load factor: a new g, traction or pressure compiles nothing.
+All values are Constants scaled by the load factor (all loads together, static continuation) and by
+each load's own `factor` Constant (its time history in dynamics; 1 otherwise): a new g, traction,
+pressure or time compiles nothing.
 Dead loads (gravity per rest volume, traction per rest area) have an energy, minus their work; follower
 pressure acts on the deformed surface and has none: it adds its virtual work to the residual.
 """
@@ -22,12 +24,13 @@ class Gravity(Term):
     def __init__(self, spec: Load, index: int, mesh: dmesh.Mesh):
         self.index = index
         self.g = fem.Constant(mesh, PETSc.ScalarType(tuple(spec.g)))
+        self.factor = fem.Constant(mesh, PETSc.ScalarType(1.0))   # this load's time history
 
     def set_values(self, spec: Load) -> None:
         self.g.value = spec.g
 
     def energy(self, ctx: Context) -> ufl.Form:
-        return -ctx.load.constant * ctx.volume(ctx.parameters.density * ufl.dot(self.g, ctx.u))
+        return -ctx.load.constant * self.factor * ctx.volume(ctx.parameters.density * ufl.dot(self.g, ctx.u))
 
 
 @register_load("traction")
@@ -38,12 +41,14 @@ class Traction(Term):
     def __init__(self, spec: Load, index: int, mesh: dmesh.Mesh):
         self.index = index
         self.value = fem.Constant(mesh, PETSc.ScalarType(tuple(spec.value)))
+        self.factor = fem.Constant(mesh, PETSc.ScalarType(1.0))   # this load's time history
 
     def set_values(self, spec: Load) -> None:
         self.value.value = spec.value
 
     def energy(self, ctx: Context) -> ufl.Form:
-        return -ctx.load.constant * sum(ctx.area(ufl.dot(self.value, ctx.u), k) for k in ctx.regions[self.index])
+        return -ctx.load.constant * self.factor * sum(ctx.area(ufl.dot(self.value, ctx.u), k)
+                                                      for k in ctx.regions[self.index])
 
 
 @register_load("pressure")
@@ -55,6 +60,7 @@ class Pressure(Term):
     def __init__(self, spec: Load, index: int, mesh: dmesh.Mesh):
         self.index = index
         self.value = fem.Constant(mesh, PETSc.ScalarType(spec.pressure))
+        self.factor = fem.Constant(mesh, PETSc.ScalarType(1.0))   # this load's time history
 
     def set_values(self, spec: Load) -> None:
         self.value.value = spec.pressure
@@ -62,4 +68,4 @@ class Pressure(Term):
     def virtual_work(self, ctx: Context, v) -> ufl.Form:
         F = ctx.F
         traction = self.value * ufl.det(F) * ufl.inv(F).T * ctx.rest_area_vector()
-        return ctx.load.constant * sum(ufl.dot(traction, v) * ctx.ds(k) for k in ctx.regions[self.index])
+        return ctx.load.constant * self.factor * sum(ufl.dot(traction, v) * ctx.ds(k) for k in ctx.regions[self.index])

@@ -12,6 +12,7 @@ from pathlib import Path
 from fem_forms.errors import InputError
 from fem_forms.scene import registry
 from fem_forms.scene.analyses.balance import BalanceSpec
+from fem_forms.scene.analyses.dynamic import DampingSpec, DynamicSpec
 from fem_forms.scene.analyses.inverse import InverseSpec
 from fem_forms.scene.analyses.modal import ModalSpec, SoundSpec
 from fem_forms.scene.reader import (AXES, Key, Section, Table, Variants, check_number, check_vector,
@@ -42,6 +43,8 @@ class Scene:
     sound: SoundSpec | None = None     # None: no sound
     inverse: InverseSpec = field(default_factory=InverseSpec)
     balance: BalanceSpec = field(default_factory=BalanceSpec)
+    dynamic: DynamicSpec = field(default_factory=DynamicSpec)
+    damping: DampingSpec = field(default_factory=DampingSpec)
     source: Path | None = None
 
     @classmethod

@@ -30,7 +30,8 @@ class Key:
     (a list of vectors), axes (distinct names from x, y, z -> indices), file (a path that must
     exist), table (a sub-table of `keys`, read into the same spec), map (name -> `item`), options
     (PETSc option -> scalar), selector (a boundary selector read by `parse`; `choices` limits its kinds),
-    selection (distinct names from `choices`; true means the default list, false none).
+    selection (distinct names from `choices`; true means the default list, false none),
+    either (one of the alternatives in `keys`, told apart by shape: a list or a table).
     `note` replaces the generic range message; `attr` names the spec attribute when it differs.
     """
     name: str
@@ -283,6 +284,16 @@ def read_value(k: Key, v: Any, key: str, base_dir: Path) -> Any:
         return k.parse(v, key, k.choices)
     if k.kind == "selection":
         return read_selection(k, v, key)
+    if k.kind == "either":
+        for alt in k.keys:
+            if isinstance(v, dict) == (alt.kind == "table"):
+                if alt.kind != "table":
+                    return read_value(alt, v, key, base_dir)
+                t = Table(v, key, base_dir)
+                out = t.read_keys(alt.keys)
+                t.done()
+                return out
+        raise InputError(f"{key} = {v!r}: must be " + " or ".join(a.doc for a in k.keys))
     raise TypeError(f"{key}: no reader for kind {k.kind!r}")   # a declaration error, not user input
 
 

@@ -7,11 +7,11 @@ sections is read into scene.<section name> (declare a Scene field there for the 
 from __future__ import annotations
 
 from fem_forms.errors import InputError
-from fem_forms.scene.analyses import Analysis, balance, inverse, modal, static
+from fem_forms.scene.analyses import Analysis, balance, dynamic, inverse, modal, static
 from fem_forms.scene.reader import Key, Section
 
 ANALYSES: dict[str, Analysis] = {a.name: a for a in (static.ANALYSIS, modal.ANALYSIS, inverse.ANALYSIS,
-                                                     balance.ANALYSIS)}
+                                                     balance.ANALYSIS, dynamic.ANALYSIS)}
 
 ANALYSIS_KEY = Key("analysis", "string", "what to compute: " + "; ".join(
     f"{a.name}: {a.doc}" for a in ANALYSES.values()), default="static", choices=tuple(ANALYSES))

@@ -69,6 +69,8 @@ def key_schema(k: Key) -> dict:
     elif k.kind == "selection":
         s = {"anyOf": [{"type": "boolean"},
                        {"type": "array", "items": {"enum": list(k.choices)}, "uniqueItems": True}]}
+    elif k.kind == "either":
+        s = {"oneOf": [key_schema(a) for a in k.keys]}
     else:
         raise ValueError(f"{k.name}: no schema for kind {k.kind!r}")
     if k.choices is not None and k.kind not in ("selector", "selection"):

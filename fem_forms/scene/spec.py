@@ -280,6 +280,10 @@ LOAD_TYPES = {
     "pressure": (LOAD_WHERE, Key("value", "number", "follower pressure on the deformed surface", unit="Pa",
                                  required=True, attr="pressure")),
 }
+# one key every load type shares: the load's factor over time (dynamic analysis), piecewise linear
+LOAD_HISTORY = Key("history", "points", "[time, factor] pairs, piecewise linear in time, held after the last "
+                   "(dynamic analysis; default: constant 1)", length=2, min_items=1,
+                   note="must list [time, factor] pairs")
 LOAD_VARIANTS = Variants(Key("type", "string", "kind of load", required=True, choices=tuple(LOAD_TYPES)),
                          LOAD_TYPES)
 
@@ -291,6 +295,12 @@ class Load:
     where: Selector | None = None
     value: list | None = None      # traction vector
     pressure: float | None = None  # follower pressure
+    history: list | None = None    # [[t, factor], ...] piecewise linear; None: constant 1
+
+
+def _load_rules(ld: Load, t: Table) -> None:
+    if ld.history is not None and any(b[0] <= a[0] for a, b in zip(ld.history, ld.history[1:])):
+        raise InputError(f"{t.key('history')}: times must increase")
 
 
 # --- solver and output ----------------------------------------------------------------------
@@ -343,8 +353,8 @@ CORE_SECTIONS = (
     Section("discretization", "finite elements and quadrature", Discretization, keys=DISCRETIZATION_KEYS,
             rules=_discretization_rules),
     Section("fix", "a support: held displacement components on a boundary", Fix, keys=FIX_KEYS, array=True),
-    Section("load", "a load: gravity, dead traction or follower pressure", Load, variants=LOAD_VARIANTS,
-            array=True),
+    Section("load", "a load: gravity, dead traction or follower pressure", Load, keys=(LOAD_HISTORY,),
+            variants=LOAD_VARIANTS, rules=_load_rules, array=True),
     Section("solver", "Newton, load stepping and the linear solver", SolverSpec, keys=SOLVER_KEYS),
     Section("output", "what is written besides results.json", OutputSpec, keys=OUTPUT_KEYS),
 )

@@ -35,6 +35,8 @@ class NonlinearProblem:
     set_load: Callable[[float], None] | None = None     # continuation parameter setter
     inadmissible: Callable[[], str | None] | None = None  # why a state is unphysical, or None
     state: State | None = None         # fields and history committed/rolled back with the steps (default: u)
+    extra: object | None = None        # assembled-only additions (a lumped mass): residual(x, b), jacobian(A),
+                                       # energy(x) -> float, each at the solver's x (owned entries)
 
 
 @dataclass
@@ -150,6 +152,8 @@ class SNESDriver:
         fpetsc.assemble_vector(b, self.L)
         fpetsc.apply_lifting(b, [self.a], bcs=[self.p.bcs], x0=[x], scale=-1.0)
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        if self.p.extra is not None:
+            self.p.extra.residual(x, b)
         fpetsc.set_bc(b, self.p.bcs, x, -1.0)
         self.assembly_time += time.perf_counter() - t
 
@@ -158,6 +162,8 @@ class SNESDriver:
         A.zeroEntries()
         fpetsc.assemble_matrix(A, self.a, bcs=self.p.bcs)
         A.assemble()
+        if self.p.extra is not None:
+            self.p.extra.jacobian(A)
         if snes is not None and self.multigrid:
             if self.pc_reuse is None or self.pc_reuse.decide():
                 self._refresh_multigrid_matrix(snes, A)
@@ -180,6 +186,8 @@ class SNESDriver:
         t = time.perf_counter()
         self._set_state(x)
         value = self.comm.allreduce(fem.assemble_scalar(self.E), op=MPI.SUM)
+        if self.p.extra is not None:
+            value += self.p.extra.energy(x)
         self.assembly_time += time.perf_counter() - t
         return value if math.isfinite(value) else 1e300   # NaN (e.g. ln J, J<0): reject the step
 

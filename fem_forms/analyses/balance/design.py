@@ -6,7 +6,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 import math
 
-from mpi4py import MPI
 import numpy as np
 
 from fem_forms.analyses.balance import goals

@@ -1,0 +1,59 @@
+"""Transient dynamics: implicit Newmark / generalized-alpha and explicit central difference on the
+hyperelastic terms, with damping, time-dependent loads, energy accounting, checkpoints and restart.
+
+Modules: system (forms and state), implicit and explicit (the steps), energy (accounting), solve (the
+run), output (files), checkpoint (--restart)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from mpi4py import MPI
+
+from fem_forms.analyses.dynamic.output import MotionWriter, write_csvs, write_gif, write_history_png
+from fem_forms.analyses.dynamic.solve import DynamicResult, solve_dynamic
+from fem_forms.output import results
+from fem_forms.scene import Scene
+
+__all__ = ["DynamicResult", "run", "solve_dynamic"]
+
+
+def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> dict:
+    """CLI entry: march, write probes/energy CSVs, motion (XDMF, GIF), history PNG; results.json last."""
+    out = Path(out)
+    comm = MPI.COMM_WORLD
+    if comm.rank == 0:
+        out.mkdir(parents=True, exist_ok=True)
+    comm.barrier()
+    writer = None
+
+    def frame(system, t, step):
+        nonlocal writer
+        if writer is None:
+            writer = MotionWriter(out, system.model.mesh, restart is not None, scene.output.fields,
+                                  scene.output.picture)
+        writer(system, t, step)
+
+    try:
+        result = solve_dynamic(scene, out, Path(restart) if restart else None, on_frame=frame)
+    finally:
+        if writer is not None:
+            writer.close()
+    write_csvs(out, result, comm)
+    summary = result.summary()
+    files = {"probes": "probes.csv", "energy": "energy.csv"}
+    if scene.output.fields:
+        files["motion"] = "motion.xdmf"
+    if scene.output.picture and comm.rank == 0:
+        if writer is not None and len(writer.frames) > 1:
+            write_gif(out / "motion.gif", writer.frames, scene.title)
+            files["animation"] = "motion.gif"
+        write_history_png(out / "history.png", result)
+        files["picture"] = "history.png"
+    files = comm.bcast(files, root=0)
+    summary["files"] = files
+    results.write_json_atomic(out / "results.json", summary, comm)
+    if echo and comm.rank == 0:
+        print(f"{scene.title}: {summary['dofs']} dofs, {scene.dynamic.scheme}, {summary['steps']} steps to "
+              f"t = {summary['time_reached']:.6g} s, {summary['newton_iterations']} Newton iterations, "
+              f"energy balance error {summary['energy_balance_error']:.2e}, {summary['wall_time_s']:.2f} s -> {out}")
+    return summary

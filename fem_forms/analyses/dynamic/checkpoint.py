@@ -1,0 +1,66 @@
+"""Checkpoints of a dynamic run and --restart: each rank saves its local (u, v, a) arrays, and rank 0
+the time, step, dt, counters, energies and probe rows so far. A restart needs the same number of ranks
+(the same partitioning) and continues to the same answer as an uninterrupted run."""
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+
+from fem_forms.analyses.dynamic.energy import Energies
+from fem_forms.errors import InputError
+
+FIELDS = ("unknown", "velocity", "acceleration")
+
+
+def save(folder: Path, result, t: float, step: int, dt: float) -> None:
+    """Write the state after an accepted, committed step (each rank its own file, then rank 0 meta)."""
+    system = result.system
+    comm = system.model.mesh.comm
+    if comm.rank == 0:
+        folder.mkdir(parents=True, exist_ok=True)
+    comm.barrier()
+    arrays = {k: system.state.fields[k].x.array for k in FIELDS}
+    tmp = folder / f".rank{comm.rank}.npz"
+    np.savez(tmp, **arrays)
+    os.replace(tmp, folder / f"rank{comm.rank}.npz")
+    comm.barrier()
+    if comm.rank == 0:
+        r = result.report
+        meta = {"ranks": comm.size, "time": t, "step": step, "dt": dt,
+                "report": {"steps": r.steps, "time_reached": r.time_reached, "dt_min": r.dt_min,
+                           "dt_max": r.dt_max, "newton_iterations": r.newton_iterations, "rejected": r.rejected},
+                "energies": [[tt, e.row()] for tt, e in result.energy.history],
+                "probe_rows": result.probe_rows}
+        tmp = folder / ".meta.json"
+        tmp.write_text(json.dumps(meta))
+        os.replace(tmp, folder / "meta.json")
+    comm.barrier()
+
+
+def load(out: Path, result) -> tuple[float, int, float]:
+    """Restore the state saved under out/checkpoint; (time, step, dt) to continue from."""
+    system = result.system
+    comm = system.model.mesh.comm
+    folder = Path(out) / "checkpoint"
+    if not (folder / "meta.json").is_file():
+        raise InputError(f"--restart {out}: no checkpoint there (checkpoint/meta.json missing)")
+    meta = json.loads((folder / "meta.json").read_text())
+    if meta["ranks"] != comm.size:
+        raise InputError(f"--restart {out}: the checkpoint was written by {meta['ranks']} ranks; "
+                         f"run with the same number (this run has {comm.size})")
+    data = np.load(folder / f"rank{comm.rank}.npz")
+    for k in FIELDS:
+        f = system.state.fields[k]
+        if data[k].shape != f.x.array.shape:
+            raise InputError(f"--restart {out}: the checkpoint is of another mesh or discretization")
+        f.x.array[:] = data[k]
+    system.state.commit()
+    for name, value in meta["report"].items():
+        setattr(result.report, name, value)
+    result.energy.history = [(t, Energies(*row)) for t, row in meta["energies"]]
+    result.energy.now = result.energy.history[-1][1]
+    result.probe_rows = [list(r) for r in meta["probe_rows"]]
+    return meta["time"], meta["step"], meta["dt"]

@@ -1,0 +1,126 @@
+"""Energy accounting every step: kinetic 1/2 v.Mv (the scheme's own mass), stored elastic energy,
+work of the external loads and energy dissipated by damping, the last two integrated by the trapezoidal
+rule over each step (the rule Newmark average acceleration satisfies exactly for a linear problem:
+there E_kin + E_el - W_ext + D stays constant to solver tolerance)."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+from dolfinx import fem
+from dolfinx.fem import petsc as fpetsc
+from mpi4py import MPI
+import ufl
+
+from fem_forms.analyses.dynamic.system import DynamicSystem, damping_terms
+from fem_forms.physics.assemble import total_energy, virtual_work
+from fem_forms.physics.inertia import Inertia
+from fem_forms.solvers.time_stepping import piecewise_linear
+
+
+@dataclass
+class Energies:
+    kinetic: float = 0.0
+    elastic: float = 0.0
+    external_work: float = 0.0
+    dissipated: float = 0.0
+
+    def row(self) -> list:
+        return [self.kinetic, self.elastic, self.external_work, self.dissipated]
+
+
+@dataclass
+class EnergyAccount:
+    """Forms on their own Functions (state ue, velocity vm, increment w), so the step's forms and
+    Constants are untouched; `history` holds (t, Energies) for every step."""
+    system: DynamicSystem
+    released: set
+    history: list = field(default_factory=list)
+
+    def __post_init__(self):
+        s = self.system
+        m, V = s.model, s.model.V
+        self.comm = m.mesh.comm
+        self.ue, self.vm, self.w = (fem.Function(V) for _ in range(3))
+        ctx = replace(m.context, u=self.ue)
+        self.elastic = fem.form(m.terms[0].energy(ctx))
+        loads = total_energy(s.loads, ctx)
+        power = -ufl.derivative(loads, self.ue, self.w) if loads is not None else None
+        vw = virtual_work(s.loads, ctx, self.w)
+        if vw is not None:
+            power = -vw if power is None else power - vw
+        self.power = fem.form(power) if power is not None else None
+        dterms = damping_terms(s.scene, m, ctx, self.vm, True)
+        self.dissipation = fem.form(virtual_work(dterms, ctx, self.w)) if dterms else None
+        if s.lumped is None:
+            self.M = fpetsc.assemble_matrix(fem.form(Inertia().mass(m.context, ufl.TrialFunction(V),
+                                                                    ufl.TestFunction(V))))
+            self.M.assemble()
+        self.now = Energies()
+
+    def _scalar(self, form) -> float:
+        return self.comm.allreduce(fem.assemble_scalar(form), op=MPI.SUM)
+
+    def _set(self, f: fem.Function, values) -> None:
+        f.x.array[:] = values
+        f.x.scatter_forward()
+
+    def kinetic(self) -> float:
+        v = self.system.v.vector
+        if self.system.lumped is not None:
+            y = v.copy()
+            y.pointwiseMult(y, self.system.lumped)
+            e = 0.5 * y.dot(v)
+        else:
+            y = self.M.createVecLeft()
+            self.M.mult(v, y)
+            e = 0.5 * y.dot(v)
+        y.destroy()
+        return e
+
+    def _power(self, state, t: float) -> float:
+        """External power at `state` with the loads' factors at t, in the direction w."""
+        if self.power is None:
+            return 0.0
+        saved = [term.factor.value.copy() for term in self.system.loads]
+        for term in self.system.loads:
+            term.factor.value = 0.0 if term.index in self.released else \
+                piecewise_linear(self.system.scene.load[term.index].history, t)
+        self._set(self.ue, state)
+        p = self._scalar(self.power)
+        for term, f in zip(self.system.loads, saved):
+            term.factor.value = f
+        return p
+
+    def start(self, t: float) -> Energies:
+        self._set(self.ue, self.system.u.x.array)
+        self.now = Energies(self.kinetic(), self._scalar(self.elastic))
+        self.history.append((t, self.now))
+        return self.now
+
+    def advance(self, t_old: float, t_new: float) -> Energies:
+        """After a step (old values in the State's old, new in its fields, not yet committed)."""
+        s = self.system
+        u0, u1 = s.state.old["unknown"].x.array, s.u.x.array
+        self._set(self.w, u1 - u0)
+        work = 0.5 * (self._power(u0, t_old) + self._power(u1, t_new))
+        dis = 0.0
+        if self.dissipation is not None:
+            self._set(self.ue, 0.5 * (u0 + u1))
+            self._set(self.vm, 0.5 * (s.state.old["velocity"].x.array + s.v.x.array))
+            dis = self._scalar(self.dissipation)
+        self._set(self.ue, u1)
+        prev = self.now
+        self.now = Energies(self.kinetic(), self._scalar(self.elastic), prev.external_work + work,
+                            prev.dissipated + dis)
+        self.history.append((t_new, self.now))
+        return self.now
+
+    def balance_error(self) -> float:
+        """max over time of |E_kin + E_el - W_ext + D - (E_kin0 + E_el0)| over the largest of those."""
+        e0 = self.history[0][1]
+        start = e0.kinetic + e0.elastic
+        worst = scale = 0.0
+        for _, e in self.history:
+            worst = max(worst, abs(e.kinetic + e.elastic - e.external_work + e.dissipated - start))
+            scale = max(scale, abs(e.kinetic), abs(e.elastic), abs(e.external_work), abs(e.dissipated))
+        return worst / scale if scale > 0 else 0.0

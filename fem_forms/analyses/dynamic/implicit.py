@@ -1,0 +1,129 @@
+"""The implicit step (Newmark average acceleration or generalized-alpha): one SNES solve of the
+time-discrete balance through the one driver, accepted only after the driver's independent checks; a
+lumped mass enters the assembled system through the driver's `extra` hook (HRZ is not a UFL form)."""
+from __future__ import annotations
+
+from mpi4py import MPI
+import numpy as np
+from petsc4py import PETSc
+
+from fem_forms.analyses.dynamic.system import DynamicSystem
+from fem_forms.solvers import snes
+from fem_forms.solvers.time_stepping import StepOutcome
+
+
+class LumpedInertia:
+    """D ((1 - alpha_m) a(x) + alpha_m a_n + alpha v_f(x)) added to the residual, its derivative to the
+    tangent's diagonal, and the inertia's incremental potential to the energy (alpha = 0 only)."""
+
+    def __init__(self, system: DynamicSystem):
+        self.s = system
+        self.D = system.lumped
+        self.n = self.D.local_size
+        self.alpha = system.scene.damping.alpha
+
+    def _parts(self, x):
+        td, old, n = self.s.td, self.s.state.old, self.n
+        am, af, beta, gamma = td.params
+        dt = float(td.dt.value)
+        u0, v0, a0 = (old[k].x.array[:n] for k in ("unknown", "velocity", "acceleration"))
+        pred = u0 + dt * v0 + dt * dt * (0.5 - beta) * a0
+        acc = (x.array - pred) / (beta * dt * dt)
+        vel = v0 + dt * ((1 - gamma) * a0 + gamma * acc)
+        return am, af, beta, gamma, dt, pred, acc, vel, v0, a0
+
+    def residual(self, x, b) -> None:
+        am, af, beta, gamma, dt, pred, acc, vel, v0, a0 = self._parts(x)
+        force = (1 - am) * acc + am * a0 + self.alpha * ((1 - af) * vel + af * v0)
+        b.array[:] += self.D.array * force
+
+    def jacobian(self, A) -> None:
+        am, af, beta, gamma = self.s.td.params
+        dt = float(self.s.td.dt.value)
+        d = self.D.copy()
+        d.scale((1 - am) / (beta * dt * dt) + self.alpha * (1 - af) * gamma / (beta * dt))
+        d.array[self.s.constrained] = 0.0
+        A.setDiagonal(d, addv=PETSc.InsertMode.ADD_VALUES)
+        d.destroy()
+
+    def energy(self, x) -> float:
+        am, af, beta, gamma, dt, pred, acc, vel, v0, a0 = self._parts(x)
+        local = float(np.sum(self.D.array * ((1 - am) * 0.5 * (x.array - pred) ** 2 / (beta * dt * dt)
+                                             + am * a0 * x.array)))
+        return self.D.comm.tompi4py().allreduce(local)
+
+
+class ImplicitStepper:
+    """Advance (u, v, a) by one step; the State holds the new values uncommitted until the caller
+    commits them (or rolls back)."""
+
+    # rebuild the kept LU factor when the stale one needs more Krylov iterations per Newton step
+    KRYLOV_PER_NEWTON = 15
+
+    def __init__(self, system: DynamicSystem, released: set, options: dict | None = None):
+        self.s = system
+        self.released = released
+        m = system.model
+        extra = LumpedInertia(system) if system.lumped is not None else None
+        self.problem = snes.NonlinearProblem(m.u, system.residual, system.jacobian, m.bcs,
+                                             energy=system.energy, inadmissible=m.inadmissible,
+                                             state=system.state, extra=extra)
+        opts = {"snes_lag_preconditioner": 100, "snes_lag_preconditioner_persists": True}
+        opts.update(options or {})
+        self.driver = snes.SNESDriver(self.problem, opts, "direct", reuse_factor=True)
+        self.dt_factored = None
+        self.last_why = ""
+
+    def step(self, t: float, dt: float) -> StepOutcome:
+        s, drv = self.s, self.driver
+        if self.dt_factored is not None and dt != self.dt_factored:
+            drv._build_snes()                      # a new dt: the kept factor is stale
+        self.dt_factored = dt
+        s.td.dt.value = dt
+        s.td.time.value = t + dt
+        s.set_load_time(t + dt, t, self.released)
+        old = s.state.old
+        u = s.u
+        u.x.array[:] = old["unknown"].x.array + dt * old["velocity"].x.array + \
+            0.5 * dt * dt * old["acceleration"].x.array             # constant-acceleration predictor
+        u.x.scatter_forward()
+        r0 = drv.residual_norm()
+        rec = drv.solve_step()
+        why = None if rec.accepted else f"SNES {rec.reason}"
+        if why is None:
+            if not np.all(np.isfinite(u.x.array)):
+                why = "NaN or Inf in the solution"
+            elif (bad := self.problem.inadmissible()):
+                why = bad
+            else:
+                rn = drv.residual_norm()
+                if rn > 1e-6 * max(r0, rec.residuals[0] if rec.residuals else 0.0) and rn > drv.roundoff_floor():
+                    why = f"residual {rn:.3e} after SNES reported convergence"
+        if why is not None:
+            s.state.rollback()
+            drv._build_snes()
+            self.last_why = why
+            return StepOutcome(False, rec.iterations, why)
+        if rec.iterations and rec.krylov_iterations > self.KRYLOV_PER_NEWTON * rec.iterations:
+            drv._build_snes()                      # the factor no longer pays: refactor next step
+        v, a = s.td.update(u.x.array, old["unknown"].x.array, old["velocity"].x.array,
+                           old["acceleration"].x.array)
+        s.v.x.array[:] = v
+        s.a.x.array[:] = a
+        return StepOutcome(True, rec.iterations, error=self.error_estimate(dt))
+
+    def error_estimate(self, dt: float) -> float:
+        """Zienkiewicz-Xie local error dt^2 |beta - 1/6| |a_{n+1} - a_n|, relative to the largest
+        displacement so far (max norm over all ranks)."""
+        s = self.s
+        beta = s.td.params[2]
+        comm = s.model.mesh.comm
+        e = comm.allreduce(float(np.abs(s.a.x.array - s.state.old["acceleration"].x.array).max(initial=0)),
+                           op=MPI.MAX)
+        scale = comm.allreduce(float(np.abs(s.u.x.array).max(initial=0)), op=MPI.MAX)
+        self.u_scale = max(getattr(self, "u_scale", 0.0), scale)
+        return dt * dt * abs(beta - 1 / 6) * e / max(self.u_scale, 1e-300) if self.u_scale > 0 else 0.0
+
+    def undo(self) -> None:
+        self.s.state.rollback()
+

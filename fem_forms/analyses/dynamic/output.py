@@ -1,0 +1,115 @@
+"""What a dynamic run writes: probes.csv and energy.csv (every step), the motion as an XDMF time series
+(P1 displacement and velocity), an animated GIF of the boundary, and a PNG of probe histories and energies."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from dolfinx import io
+import numpy as np
+
+from fem_forms.output import fields
+
+COMPONENTS = ("ux", "uy", "uz", "vx", "vy", "vz")
+
+
+def write_csvs(out: Path, result, comm) -> None:
+    if comm.rank == 0:
+        names = list(result.system.scene.output.probes)
+        head = ["time"] + [f"{n}_{c}" for n in names for c in COMPONENTS]
+        lines = [",".join(head)] + [",".join(f"{x:.10g}" for x in row) for row in result.probe_rows]
+        (out / "probes.csv").write_text("\n".join(lines) + "\n")
+        lines = ["time,kinetic,elastic,external_work,dissipated"] + \
+            [",".join(f"{x:.10g}" for x in [t, *e.row()]) for t, e in result.energy.history]
+        (out / "energy.csv").write_text("\n".join(lines) + "\n")
+    comm.barrier()
+
+
+class MotionWriter:
+    """Frames every output_every steps: the XDMF time series and the GIF's boundary snapshots."""
+
+    def __init__(self, out: Path, mesh, append: bool, with_fields: bool, with_picture: bool):
+        self.mesh, self.frames = mesh, []
+        self.with_picture = with_picture
+        self.xdmf = None
+        if with_fields:
+            path = out / "motion.xdmf"
+            self.xdmf = io.XDMFFile(mesh.comm, str(path), "a" if append and path.exists() else "w")
+            if not (append and path.exists()):
+                self.xdmf.write_mesh(mesh)
+        self._p1 = None
+
+    def __call__(self, system, t: float, step: int) -> None:
+        if self.xdmf is not None:
+            if self._p1 is None:
+                self._p1 = (fields.p1_interpolant(system.u, "displacement"),
+                            fields.p1_interpolant(system.v, "velocity"))
+            for g, f in zip(self._p1, (system.u, system.v)):
+                g.interpolate(f)
+                self.xdmf.write_function(g, t)
+        if self.with_picture:
+            surf = fields.boundary_surface(system.u)
+            if surf is not None:
+                self.frames.append((t, surf))
+
+    def close(self) -> None:
+        if self.xdmf is not None:
+            self.xdmf.close()
+
+
+def write_gif(path: Path, frames: list, title: str, fps: int = 12) -> None:
+    """Animated GIF (matplotlib + pillow) of the deformed boundary, true scale."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.animation import FuncAnimation, PillowWriter
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    allx = np.vstack([X + d for _, (X, _, d) in frames])
+    lo, hi = allx.min(axis=0), allx.max(axis=0)
+    fig = plt.figure(figsize=(5, 4))
+    ax = fig.add_subplot(projection="3d")
+
+    def draw(k):
+        ax.clear()
+        t, (X, polys, d) = frames[k]
+        ax.add_collection3d(Poly3DCollection((X + d)[polys], facecolor=(0.35, 0.55, 0.8),
+                                             edgecolor=(0, 0, 0, 0.2), linewidths=0.2))
+        ax.set_xlim(lo[0], hi[0]), ax.set_ylim(lo[1], hi[1]), ax.set_zlim(lo[2], hi[2])
+        ax.set_box_aspect(np.maximum(hi - lo, 0.05 * (hi - lo).max()))
+        ax.set_axis_off()
+        ax.set_title(f"{title}: t = {t:.4g} s", fontsize=9)
+
+    anim = FuncAnimation(fig, draw, frames=len(frames))
+    anim.save(str(path), writer=PillowWriter(fps=fps))
+    plt.close(fig)
+
+
+def write_history_png(path: Path, result) -> None:
+    """Probe displacement histories (top) and the energies with their balance (bottom)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = np.array(result.probe_rows)
+    names = list(result.system.scene.output.probes)
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+    for i, n in enumerate(names):
+        for c in range(3):
+            col = rows[:, 1 + 6 * i + c]
+            if np.abs(col).max() > 0:
+                a1.plot(rows[:, 0], col, label=f"{n}_{COMPONENTS[c]}")
+    a1.set_ylabel("displacement [m]")
+    if names:
+        a1.legend(fontsize=8)
+    t = np.array([h[0] for h in result.energy.history])
+    e = np.array([h[1].row() for h in result.energy.history])
+    for k, label in enumerate(("kinetic", "elastic", "external work", "dissipated")):
+        a2.plot(t, e[:, k], label=label)
+    a2.plot(t, e[:, 0] + e[:, 1] - e[:, 2] + e[:, 3], "k--", label="kin + el - W + D")
+    a2.set_xlabel("time [s]")
+    a2.set_ylabel("energy [J]")
+    a2.legend(fontsize=8)
+    fig.suptitle(result.system.scene.title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)

@@ -1,0 +1,184 @@
+"""A dynamic run: the initial state (rest or static equilibrium, initial velocity, consistent initial
+acceleration), the march with the scene's scheme, per-step probes and energies, frames and checkpoints."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import time
+from pathlib import Path
+
+from dolfinx import fem
+from dolfinx.fem import petsc as fpetsc
+import numpy as np
+from petsc4py import PETSc
+import ufl
+
+from fem_forms.analyses.dynamic import checkpoint
+from fem_forms.analyses.dynamic.energy import EnergyAccount
+from fem_forms.analyses.dynamic.explicit import ExplicitStepper, check_stable
+from fem_forms.analyses.dynamic.implicit import ImplicitStepper
+from fem_forms.analyses.dynamic.system import DynamicSystem, build_system
+from fem_forms.errors import InputError, SolveError
+from fem_forms.output import probes
+from fem_forms.physics.inertia import Inertia
+from fem_forms.scene import Scene
+from fem_forms.solvers import continuation, snes
+from fem_forms.solvers.time_stepping import MarchReport, march
+
+
+@dataclass
+class DynamicResult:
+    system: DynamicSystem
+    report: MarchReport
+    energy: EnergyAccount
+    probe_rows: list = field(default_factory=list)     # [t, (ux, uy, uz, vx, vy, vz) per probe...]
+    dt_stable: float | None = None
+    wall_time_s: float = 0.0
+
+    def summary(self) -> dict:
+        s, r = self.system, self.report
+        names = list(s.scene.output.probes)
+        last = self.probe_rows[-1] if self.probe_rows else None
+        return {
+            "analysis": "dynamic", "title": s.scene.title, "dofs": s.model.dofs,
+            "scheme": s.scene.dynamic.scheme, "mass": s.scene.dynamic.mass,
+            "steps": r.steps, "time_reached": r.time_reached,
+            "dt_min": r.dt_min if r.steps else None, "dt_max": r.dt_max if r.steps else None,
+            "rejected_steps": r.rejected, "newton_iterations": r.newton_iterations,
+            "energy_balance_error": self.energy.balance_error(),
+            "energy_final": dict(zip(("kinetic", "elastic", "external_work", "dissipated"),
+                                     self.energy.now.row())),
+            "dt_stable": self.dt_stable,
+            "physics": s.model.physics + ["inertia"] + _damping_names(s.scene),
+            "mpi_ranks": s.model.mesh.comm.size, "wall_time_s": self.wall_time_s,
+            "probes": {n: {"point": s.scene.output.probes[n], "displacement": list(last[1 + 6 * i: 4 + 6 * i]),
+                           "velocity": list(last[4 + 6 * i: 7 + 6 * i])} for i, n in enumerate(names)}
+            if last else {},
+        }
+
+
+def _damping_names(scene: Scene) -> list:
+    d = scene.damping
+    return (["damping (Rayleigh)"] if d.alpha or d.beta else []) + (["damping (viscous)"] if d.shear or d.bulk else [])
+
+
+def initial_velocity(system: DynamicSystem) -> None:
+    spec = system.scene.dynamic.velocity
+    if isinstance(spec, dict):
+        w, x0 = np.array(spec["angular"]), np.array(spec["about"])
+        system.v.interpolate(lambda x: np.cross(w, (x - x0[:, None]).T).T)
+    else:
+        system.v.interpolate(lambda x: np.tile(np.array(spec)[:, None], (1, x.shape[1])))
+    system.v.x.array[system.constrained] = 0.0           # supports hold
+    system.v.x.scatter_forward()
+
+
+def initial_static(system: DynamicSystem) -> None:
+    """Equilibrium under the loads listed in [dynamic] initial_loads (the others off)."""
+    held = set(system.scene.dynamic.initial_loads)
+    for term in system.loads:
+        term.factor.value = 1.0 if term.index in held else 0.0
+    m = system.model
+    problem = snes.NonlinearProblem(m.u, m.residual, m.jacobian, m.bcs, energy=m.energy if m.conservative else None,
+                                    set_load=m.load.set, inadmissible=m.inadmissible,
+                                    state=system.state)
+    rep = continuation.solve(problem, system.scene.solver.petsc, steps=system.scene.solver.steps,
+                             max_cutbacks=system.scene.solver.max_cutbacks, linear_kind="direct")
+    if not rep.converged:
+        raise SolveError(f"initial static state: {rep.message}")
+    m.load.set(1.0)
+
+
+def initial_acceleration(system: DynamicSystem, released: set) -> None:
+    """M a0 = F(0) - f_int(u0) - C v0 (lumped: a division; consistent: CG on M)."""
+    system.set_load_time(0.0, 0.0, released)
+    system.v_h.x.array[:] = system.v.x.array
+    L = fem.form(system.explicit_residual)
+    b = fpetsc.assemble_vector(L)
+    b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    b.scale(-1.0)
+    fpetsc.set_bc(b, system.model.bcs, scale=0.0)
+    a = system.a
+    if system.lumped is not None:
+        inv = system.lumped.copy()
+        inv.reciprocal()
+        inv.array[system.constrained] = 0.0
+        a.vector.array[:] = b.array * inv.array
+        inv.destroy()
+    else:
+        V = system.model.V
+        M = fpetsc.assemble_matrix(fem.form(Inertia().mass(system.model.context, ufl.TrialFunction(V),
+                                                           ufl.TestFunction(V))), bcs=system.model.bcs)
+        M.assemble()
+        ksp = PETSc.KSP().create(system.model.mesh.comm)
+        ksp.setOperators(M)
+        ksp.setType("cg")
+        ksp.getPC().setType("jacobi")
+        ksp.setTolerances(rtol=1e-12, atol=1e-300, max_it=2000)
+        ksp.solve(b, a.vector)
+        ksp.destroy()
+        M.destroy()
+    a.x.scatter_forward()
+    b.destroy()
+
+
+def probe_row(system: DynamicSystem, t: float) -> list:
+    pts = system.scene.output.probes
+    if not pts:
+        return [t]
+    u, v = probes.evaluate(system.u, pts), probes.evaluate(system.v, pts)
+    row = [t]
+    for n in pts:
+        row += list(u[n]) + list(v[n])
+    return row
+
+
+def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = None,
+                  on_frame=None) -> DynamicResult:
+    """March the scene's [dynamic] span; `on_frame(system, t, step)` every output_every steps (and at
+    t = 0); checkpoints into out/checkpoint every checkpoint_every steps; `restart` continues from one."""
+    t0 = time.perf_counter()
+    dyn = scene.dynamic
+    if scene.material.rho <= 0:
+        raise InputError("material.rho: dynamic analysis needs a positive density")
+    system = build_system(scene)
+    released = set(dyn.initial_loads) if dyn.initial == "static" else set()
+    probes.evaluate(system.u, scene.output.probes)          # a probe outside the mesh is bad input
+    if dyn.initial == "static":
+        initial_static(system)
+    initial_velocity(system)
+    initial_acceleration(system, released)
+    system.state.commit()
+    dt_stable = None
+    if dyn.scheme == "central-difference":
+        dt_stable, _ = check_stable(system, dyn.dt)
+        stepper = ExplicitStepper(system, released)
+    else:
+        stepper = ImplicitStepper(system, released, scene.solver.petsc)
+    account = EnergyAccount(system, released)
+    result = DynamicResult(system, MarchReport(), account, dt_stable=dt_stable)
+    t_start, step0, dt = 0.0, 0, dyn.dt
+    if restart is not None:
+        t_start, step0, dt = checkpoint.load(restart, result)
+    else:
+        account.start(0.0)
+        result.probe_rows.append(probe_row(system, 0.0))
+        if on_frame:
+            on_frame(system, 0.0, 0)
+
+    state = {"t": t_start}
+
+    def on_accept(t: float, h: float, step: int) -> None:
+        account.advance(state["t"], t)
+        system.state.commit()
+        state["t"] = t
+        result.probe_rows.append(probe_row(system, t))
+        if on_frame and step % dyn.output_every == 0:
+            on_frame(system, t, step)
+        if out is not None and dyn.checkpoint_every and step % dyn.checkpoint_every == 0:
+            checkpoint.save(out / "checkpoint", result, t, step, h)
+
+    march(stepper, t_start, dyn.duration, dt, on_accept, adaptive=dyn.adaptive and dyn.scheme != "central-difference",
+          tolerance=dyn.tolerance, max_cutbacks=scene.solver.max_cutbacks, step0=step0, report=result.report,
+          dt_max=10 * dyn.dt if dyn.adaptive else dyn.dt)
+    result.wall_time_s = time.perf_counter() - t0
+    return result

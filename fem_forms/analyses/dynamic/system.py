@@ -1,0 +1,122 @@
+"""The discretised dynamic problem: the static model's terms evaluated at the scheme's generalized
+midpoint, the time-discrete inertia and the damping terms, the State (u, v, a with old values), the mass
+(consistent form or HRZ-lumped diagonal) and each load's history."""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+from dolfinx import fem
+from dolfinx.fem import petsc as fpetsc
+from mpi4py import MPI
+import numpy as np
+from petsc4py import PETSc
+import ufl
+
+from fem_forms.model import Model, build_model
+from fem_forms.physics.assemble import total_energy, virtual_work
+from fem_forms.physics.damping import RayleighDamping, ViscousDamping
+from fem_forms.physics.inertia import DiscreteInertia, Inertia
+from fem_forms.physics.terms import Context, Term
+from fem_forms.physics.time_discrete import NEWMARK_AVERAGE, TimeDiscrete, chung_hulbert
+from fem_forms.scene import Scene
+from fem_forms.solvers.time_stepping import piecewise_linear
+from fem_forms.state import State
+
+
+def scheme_params(scene: Scene) -> tuple:
+    """(alpha_m, alpha_f, beta, gamma) of the scene's implicit scheme."""
+    if scene.dynamic.scheme == "generalized-alpha":
+        return chung_hulbert(scene.dynamic.rho_inf)
+    return NEWMARK_AVERAGE
+
+
+def damping_terms(scene: Scene, model: Model, ctx: Context, velocity, with_mass: bool) -> list[Term]:
+    """The scene's damping terms acting on `velocity` (UFL) in the state of `ctx`."""
+    d, mesh, terms = scene.damping, model.mesh, []
+    if d.alpha or d.beta:
+        terms.append(RayleighDamping(mesh, d.alpha, d.beta, model.terms[0], model.V, velocity, with_mass))
+    if d.shear or d.bulk:
+        terms.append(ViscousDamping(mesh, d.shear, d.bulk, velocity, scene.material.model == "linear"))
+    return terms
+
+
+def hrz_lumped_mass(model: Model) -> PETSc.Vec:
+    """HRZ lumping: the consistent mass's diagonal scaled to keep the total mass (row sums for P1,
+    positive for P2, where row sums are not)."""
+    V = model.V
+    m = fem.form(Inertia().mass(model.context, ufl.TrialFunction(V), ufl.TestFunction(V)))
+    M = fpetsc.assemble_matrix(m)
+    M.assemble()
+    diag = M.getDiagonal()
+    one = fem.form(model.parameters.density * model.dx)
+    total = model.mesh.comm.allreduce(fem.assemble_scalar(one), op=MPI.SUM)
+    diag.scale(3.0 * total / diag.sum())
+    M.destroy()
+    return diag
+
+
+@dataclass
+class DynamicSystem:
+    scene: Scene
+    model: Model
+    state: State
+    td: TimeDiscrete
+    v: fem.Function
+    a: fem.Function
+    residual: ufl.Form            # implicit step: inertia + f_int - f_ext (+ damping) at the midpoints
+    jacobian: ufl.Form
+    energy: ufl.Form | None       # effective energy (None when damping or follower loads remove it)
+    explicit_residual: ufl.Form   # f_int(u) - f_ext(t) + C v_h (the explicit step's one assembly)
+    v_h: fem.Function             # the velocity the explicit step's damping sees
+    lumped: PETSc.Vec | None      # HRZ diagonal (lumped mass), zero nowhere
+    constrained: np.ndarray       # owned local indices of supported dofs
+    loads: list                   # the load terms (each with its factor Constant)
+
+    @property
+    def u(self) -> fem.Function:
+        return self.model.u
+
+    def set_load_time(self, t_new: float, t_old: float, released: set) -> None:
+        """Each load's factor at the force midpoint: (1 - alpha_f) h(t_new) + alpha_f h(t_old);
+        loads held only for the initial state are released (0)."""
+        af = float(self.td.alpha_f.value)
+        for term in self.loads:
+            hist = self.scene.load[term.index].history
+            f = 0.0 if term.index in released else \
+                (1 - af) * piecewise_linear(hist, t_new) + af * piecewise_linear(hist, t_old)
+            term.factor.value = f
+
+
+def build_system(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> DynamicSystem:
+    model = build_model(scene, comm=comm)
+    V, u = model.V, model.u
+    v, a = fem.Function(V, name="velocity"), fem.Function(V, name="acceleration")
+    state = State({"unknown": u, "velocity": v, "acceleration": a})
+    model.state = state
+    old = state.old
+    td = TimeDiscrete(model.mesh, old["unknown"], old["velocity"], old["acceleration"],
+                      scheme_params(scene), scene.dynamic.dt)
+    lumped = scene.dynamic.mass == "lumped"
+    ctx_f = replace(model.context, u=td.mid_f(u, old["unknown"]))
+    velocity_f = td.mid_f(td.velocity(u), old["velocity"])
+    damping = damping_terms(scene, model, ctx_f, velocity_f, with_mass=not lumped)
+    test, trial = ufl.TestFunction(V), ufl.TrialFunction(V)
+    energy = (1 / (1 - td.alpha_f)) * total_energy(model.terms, ctx_f)
+    if not lumped:
+        energy = energy + DiscreteInertia(td, u).energy(model.context)
+    residual = ufl.derivative(energy, u, test)
+    extra = virtual_work(model.terms + damping, ctx_f, test)
+    if extra is not None:
+        residual = residual + extra
+    v_h = fem.Function(V, name="velocity_h")
+    explicit = model.residual
+    wd = virtual_work(damping_terms(scene, model, model.context, v_h, True), model.context, test)
+    if wd is not None:
+        explicit = explicit + wd
+    nown = V.dofmap.index_map.size_local * V.dofmap.index_map_bs
+    constrained = np.unique(np.concatenate([bc.dof_indices()[0][: bc.dof_indices()[1]] for bc in model.bcs])) \
+        if model.bcs else np.empty(0, dtype=np.int32)
+    constrained = constrained[constrained < nown]
+    return DynamicSystem(scene, model, state, td, v, a, residual, ufl.derivative(residual, u, trial),
+                         energy if extra is None else None, explicit, v_h,
+                         hrz_lumped_mass(model) if lumped else None, constrained, model.terms[1:])

@@ -1,0 +1,112 @@
+"""Transient dynamics: its [dynamic] (time, scheme, mass, start) and [damping] sections."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from fem_forms.errors import InputError
+from fem_forms.scene.analyses import Analysis
+from fem_forms.scene.reader import Key, Section, Table
+
+SCHEMES = ("newmark", "generalized-alpha", "central-difference")
+DYNAMIC_KEYS = (
+    Key("duration", "number", "simulated time", default=1.0, unit="s", exclusive_minimum=0),
+    Key("dt", "number", "time step (implicit schemes may cut or adapt it)", default=1e-3, unit="s",
+        exclusive_minimum=0),
+    Key("scheme", "string", "newmark (average acceleration), generalized-alpha (Chung-Hulbert) or "
+        "central-difference (explicit, lumped mass)", default="newmark", choices=SCHEMES),
+    Key("rho_inf", "number", "generalized-alpha spectral radius at infinite frequency", default=0.8,
+        minimum=0, maximum=1),
+    Key("mass", "string", "mass matrix: consistent, or lumped (HRZ; required for central-difference)",
+        default="consistent", choices=("consistent", "lumped")),
+    Key("adaptive", "boolean", "error-controlled step size (implicit schemes)", default=False),
+    Key("tolerance", "number", "adaptive: local error per step relative to the largest displacement",
+        default=1e-3, exclusive_minimum=0),
+    Key("output_every", "integer", "fields and animation frames every N steps (probes, energies every step)",
+        default=10, exclusive_minimum=0),
+    Key("checkpoint_every", "integer", "checkpoint every N steps for --restart (0: never)", default=100,
+        minimum=0),
+    Key("initial", "string", "rest, or static: start from the equilibrium under initial_loads, then "
+        "release them", default="rest", choices=("rest", "static")),
+    Key("initial_loads", "vector", "indices into [[load]] of the loads held for initial = static "
+        "(released at t = 0)", default=[], integer=True, minimum=0),
+    Key("initial_velocity", "either", "initial velocity field", default=[0.0, 0.0, 0.0], attr="velocity",
+        keys=(Key("velocity", "vector", "a uniform velocity [vx, vy, vz]", unit="m/s", length=3),
+              Key("rotation", "table", "a rigid rotation { angular = [wx, wy, wz], about = [x, y, z] }",
+                  keys=(Key("angular", "vector", "angular velocity", unit="rad/s", required=True, length=3),
+                        Key("about", "vector", "a point on the axis", unit="m", default=[0.0, 0.0, 0.0],
+                            length=3))))),
+)
+_D = {k.name: k for k in DYNAMIC_KEYS}
+
+
+@dataclass
+class DynamicSpec:
+    """[dynamic]: how long, with which step and scheme, from which initial state."""
+    duration: float = _D["duration"].field()
+    dt: float = _D["dt"].field()
+    scheme: str = _D["scheme"].field()
+    rho_inf: float = _D["rho_inf"].field()
+    mass: str = _D["mass"].field()
+    adaptive: bool = _D["adaptive"].field()
+    tolerance: float = _D["tolerance"].field()
+    output_every: int = _D["output_every"].field()
+    checkpoint_every: int = _D["checkpoint_every"].field()
+    initial: str = _D["initial"].field()
+    initial_loads: list = _D["initial_loads"].field()
+    velocity: object = _D["initial_velocity"].field()   # [vx, vy, vz] or {"angular": w, "about": x0}
+
+
+def _dynamic_rules(s: DynamicSpec, t: Table) -> None:
+    if s.scheme == "central-difference" and s.mass != "lumped":
+        raise InputError(f"{t.key('mass')} = {s.mass!r}: central-difference needs mass = \"lumped\"")
+    if s.dt > s.duration:
+        raise InputError(f"{t.key('dt')} = {s.dt}: longer than duration = {s.duration}")
+    if s.initial_loads and s.initial != "static":
+        raise InputError(f"{t.key('initial_loads')}: only with initial = \"static\"")
+
+
+RAYLEIGH = Key("rayleigh", "table", "Rayleigh damping C = alpha M + beta K (K: the tangent at rest)", keys=(
+    Key("alpha", "number", "mass-proportional coefficient", default=0.0, unit="1/s", minimum=0),
+    Key("beta", "number", "stiffness-proportional coefficient", default=0.0, unit="s", minimum=0)))
+VISCOUS = Key("viscous", "table", "Kelvin-Voigt viscous stress from the rate of Green strain", keys=(
+    Key("shear", "number", "shear viscosity (deviatoric strain rate)", default=0.0, unit="Pa s", minimum=0),
+    Key("bulk", "number", "bulk viscosity (volumetric strain rate)", default=0.0, unit="Pa s", minimum=0)))
+DAMPING_KEYS = (RAYLEIGH, VISCOUS)
+
+
+@dataclass
+class DampingSpec:
+    """[damping]: Rayleigh coefficients and Kelvin-Voigt viscosities (all zero: undamped)."""
+    alpha: float = 0.0
+    beta: float = 0.0
+    shear: float = 0.0
+    bulk: float = 0.0
+
+    @property
+    def active(self) -> bool:
+        return any((self.alpha, self.beta, self.shear, self.bulk))
+
+
+def _check(scene) -> None:
+    n = len(scene.load)
+    for i in scene.dynamic.initial_loads:
+        if i >= n:
+            raise InputError(f"dynamic.initial_loads: {i} is not a [[load]] index (the scene has {n} loads)")
+    for i, fix in enumerate(scene.fix):
+        if any(v != 0.0 for v in fix.value):
+            raise InputError(f"fix[{i}].value: dynamic analysis holds supports fixed (value must be zero)")
+
+
+ANALYSIS = Analysis(
+    name="dynamic",
+    doc="transient motion (Newmark, generalized-alpha or central difference) with damping and energy balance",
+    runner="fem_forms.analyses.dynamic:run",
+    sections=(
+        Section("dynamic", "time span, step, scheme, mass matrix and initial state", DynamicSpec,
+                keys=DYNAMIC_KEYS, rules=_dynamic_rules),
+        Section("damping", "Rayleigh and viscous (Kelvin-Voigt) damping", DampingSpec, keys=DAMPING_KEYS),
+    ),
+    outputs=("results.json", "probes.csv", "energy.csv", "motion.xdmf", "motion.gif", "history.png",
+             "checkpoint/"),
+    check=_check,
+)

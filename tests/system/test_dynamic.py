@@ -1,0 +1,210 @@
+"""Transient dynamics against independent references: the modal frequency and the static deflection of
+the same beam (suddenly applied load: peak twice the static deflection, half period 1/(2 f1)), the
+closed-form decay per cycle of a Rayleigh-damped mode, the identity viscous (shear = beta mu,
+bulk = beta kappa) = stiffness-proportional Rayleigh for the linear material, exact energy balance of
+Newmark average acceleration, second order of generalized-alpha by step halving, explicit vs implicit,
+the stable-step refusal, restart, and 1 vs 2 MPI ranks. Small P1 meshes keep it fast."""
+import json
+import math
+import shutil
+
+import numpy as np
+import pytest
+
+from helpers import MPIRUN, ROOT, mpirun, run_scene, to_toml
+import fem_forms as ff
+from fem_forms.analyses.dynamic import solve_dynamic
+from fem_forms.analyses.modal import solve_modal
+from fem_forms.equilibrium import solve_static
+from fem_forms.errors import InputError
+
+L, H, E, NU, RHO, P = 1.0, 0.1, 1.0e6, 0.3, 1000.0, -100.0
+
+
+def beam(dynamic=None, model="linear", cells=(8, 2, 2), damping=None, **over) -> dict:
+    d = {"title": "dynamic beam", "analysis": "dynamic",
+         "mesh": {"size": [L, H, H], "cells": list(cells), "cell": "hexahedron"},   # symmetric: z bending alone
+         "material": {"model": model, "E": E, "nu": NU, "rho": RHO},
+         "discretization": {"degree": 1},
+         "fix": [{"where": {"axis": "x", "at": 0.0}}],
+         "load": [{"type": "traction", "where": {"axis": "x", "at": L}, "value": [0.0, 0.0, P]}],
+         "output": {"probes": {"tip": [L, H / 2, H / 2]}, "picture": False, "fields": False},
+         "dynamic": {"duration": 0.1, "dt": 1e-3, **(dynamic or {})}}
+    if damping:
+        d["damping"] = damping
+    d.update(over)
+    return d
+
+
+def as_static(d):
+    d = {k: v for k, v in d.items() if k not in ("dynamic", "damping")}
+    return ff.Scene.from_dict({**d, "analysis": "static"})
+
+
+def first_frequency(d) -> float:
+    s = {k: v for k, v in d.items() if k not in ("dynamic", "damping", "load")}
+    return float(solve_modal(ff.Scene.from_dict({**s, "analysis": "modal", "modal": {"count": 1}}))
+                 .frequencies_hz[0])
+
+
+def tip_z(result) -> tuple[np.ndarray, np.ndarray]:
+    rows = np.array(result.probe_rows)
+    return rows[:, 0], rows[:, 3]
+
+
+@pytest.fixture(scope="module")
+def frequency():
+    return first_frequency(beam())
+
+
+def test_sudden_load_peaks_at_twice_static_at_half_period(frequency):
+    period = 1.0 / frequency
+    d = beam({"duration": 0.75 * period, "dt": period / 80})
+    static = solve_static(as_static(d)).probes["tip"][2]
+    r = solve_dynamic(ff.Scene.from_dict(d))
+    t, uz = tip_z(r)
+    k = int(np.argmin(uz))
+    assert uz[k] / static == pytest.approx(2.0, rel=0.03)
+    assert t[k] == pytest.approx(0.5 * period, rel=0.03)
+    # Newmark average acceleration on a linear problem: the energy balance holds to solver tolerance
+    assert r.energy.balance_error() < 1e-8
+
+
+def peaks(t, x):
+    i = [k for k in range(1, len(x) - 1) if x[k] > x[k - 1] and x[k] >= x[k + 1] and x[k] > 0]
+    return t[i], x[i]
+
+
+def test_rayleigh_decay_per_cycle(frequency):
+    """Free vibration from the static state under the tip load (released at t = 0), mass-proportional
+    damping: successive peaks fall by exp(-2 pi zeta / sqrt(1 - zeta^2)), zeta = alpha / (2 omega)."""
+    period, omega = 1.0 / frequency, 2 * math.pi * frequency
+    zeta = 0.05
+    alpha = 2 * zeta * omega
+    d = beam({"duration": 3.2 * period, "dt": period / 60, "initial": "static", "initial_loads": [0]},
+             damping={"rayleigh": {"alpha": alpha}})
+    r = solve_dynamic(ff.Scene.from_dict(d))
+    t, uz = tip_z(r)
+    _, p = peaks(t, -uz)
+    ratios = p[1:] / p[:-1]
+    expected = math.exp(-2 * math.pi * zeta / math.sqrt(1 - zeta * zeta))
+    assert len(ratios) >= 2
+    assert np.mean(ratios) == pytest.approx(expected, rel=0.02)
+    # dissipated energy accounted: the balance closes (the initial elastic energy goes somewhere)
+    assert r.energy.balance_error() < 1e-6
+    assert r.energy.now.dissipated > 0.5 * r.energy.history[0][1].elastic
+
+
+def test_viscous_equals_stiffness_proportional_rayleigh():
+    beta = 2e-3
+    mu = E / (2 * (1 + NU))
+    kappa = E / (3 * (1 - 2 * NU))
+    dyn = {"duration": 0.04, "dt": 2e-3}
+    a = solve_dynamic(ff.Scene.from_dict(beam(dyn, damping={"rayleigh": {"beta": beta}})))
+    b = solve_dynamic(ff.Scene.from_dict(beam(dyn, damping={"viscous": {"shear": beta * mu,
+                                                                           "bulk": beta * kappa}})))
+    ra, rb = np.array(a.probe_rows), np.array(b.probe_rows)
+    assert np.abs(ra - rb).max() <= 1e-8 * np.abs(ra).max()
+    assert a.energy.now.dissipated == pytest.approx(b.energy.now.dissipated, rel=1e-8)
+
+
+def test_hyperelastic_newmark_stays_bounded():
+    """A soft neo-Hookean beam under a large sudden load: no energy is created (bounded balance error)."""
+    d = beam({"duration": 0.3, "dt": 5e-3}, model="neo-hookean", cells=(6, 1, 1))
+    d["load"][0]["value"] = [0.0, 0.0, -2000.0]
+    r = solve_dynamic(ff.Scene.from_dict(d))
+    assert r.report.time_reached == pytest.approx(0.3)
+    assert r.energy.balance_error() < 0.05
+    assert abs(tip_z(r)[1]).max() > 0.1                 # large motion indeed
+
+
+def test_generalized_alpha_second_order():
+    """Step halving: the tip history (at the coarsest step's times) changes by 4x less per halving."""
+    d = beam({"scheme": "generalized-alpha", "rho_inf": 0.5}, cells=(4, 1, 1))
+    d["load"][0]["history"] = [[0.0, 0.0], [0.2, 1.0]]
+    d["solver"] = {"petsc": {"snes_rtol": 1e-13, "ksp_rtol": 1e-14, "snes_atol": 1e-16}}
+    histories = []
+    for k, n in enumerate((40, 80, 160, 320, 640)):
+        d["dynamic"].update(duration=0.6, dt=0.6 / n)
+        t, uz = tip_z(solve_dynamic(ff.Scene.from_dict(d)))
+        histories.append(np.interp(np.linspace(0.0, 0.6, 41), t, uz))
+    diffs = np.array([np.abs(a - b).max() for a, b in zip(histories, histories[1:])])
+    rates = np.log2(diffs[:-1] / diffs[1:])
+    assert rates[-1] == pytest.approx(2.0, abs=0.2), rates
+
+
+def test_explicit_agrees_with_implicit_and_refuses_large_steps():
+    imp = solve_dynamic(ff.Scene.from_dict(beam({"duration": 0.1, "dt": 5e-4})))
+    exp = solve_dynamic(ff.Scene.from_dict(beam({"duration": 0.1, "dt": 2e-4, "scheme": "central-difference",
+                                                 "mass": "lumped"})))
+    ti, ui = tip_z(imp)
+    te, ue = tip_z(exp)
+    assert np.interp(ti, te, ue) == pytest.approx(ui, abs=0.05 * abs(ui).max())
+    assert exp.dt_stable > 2e-4
+    with pytest.raises(InputError, match="stable step estimate"):
+        solve_dynamic(ff.Scene.from_dict(beam({"dt": 5e-3, "scheme": "central-difference", "mass": "lumped"})))
+
+
+def test_lumped_implicit_close_to_consistent():
+    c = solve_dynamic(ff.Scene.from_dict(beam({"duration": 0.05, "dt": 1e-3})))
+    m = solve_dynamic(ff.Scene.from_dict(beam({"duration": 0.05, "dt": 1e-3, "mass": "lumped"})))
+    assert tip_z(m)[1][-1] == pytest.approx(tip_z(c)[1][-1], rel=0.1)
+    assert m.energy.balance_error() < 1e-8
+
+
+def test_cli_outputs_and_restart(tmp_path, capsys):
+    d = beam({"duration": 0.02, "dt": 1e-3, "checkpoint_every": 5, "output_every": 5},
+             output={"probes": {"tip": [L, H / 2, H / 2]}, "picture": True, "fields": True})
+    for sub in ("full", "half"):
+        (tmp_path / sub).mkdir()
+    code, full, _, out = run_scene(tmp_path / "full", d, capsys)
+    assert code == 0
+    for key in ("analysis", "steps", "time_reached", "dt_min", "dt_max", "newton_iterations",
+                "energy_balance_error", "probes"):
+        assert key in full
+    assert full["steps"] == 20 and full["time_reached"] == pytest.approx(0.02)
+    head = (out / "probes.csv").read_text().splitlines()
+    assert head[0] == "time,tip_ux,tip_uy,tip_uz,tip_vx,tip_vy,tip_vz" and len(head) == 22
+    assert (out / "energy.csv").read_text().startswith("time,kinetic,elastic,external_work,dissipated")
+    for f in ("motion.xdmf", "motion.gif", "history.png"):
+        assert (out / f).exists()
+    # a run stopped at t = 0.01 (its last checkpoint), then continued with --restart
+    half = dict(d, dynamic={**d["dynamic"], "duration": 0.01})
+    code, _, _, out2 = run_scene(tmp_path / "half", half, capsys)
+    scene = tmp_path / "full" / "scene.toml"
+    code = ff.cli.main(["run", str(scene), "--out", str(out2), "--restart", str(out2), "-q"])
+    assert code == 0
+    cont = json.loads((out2 / "results.json").read_text())
+    assert cont["steps"] == 20
+    assert np.allclose(cont["probes"]["tip"]["displacement"], full["probes"]["tip"]["displacement"],
+                       rtol=1e-7, atol=1e-12)
+
+
+def test_history_and_keys():
+    d = beam()
+    d["load"][0]["history"] = [[0.0, 0.0], [0.0, 1.0]]
+    with pytest.raises(InputError, match="history: times must increase"):
+        ff.Scene.from_dict(d)
+    with pytest.raises(InputError, match="central-difference needs mass"):
+        ff.Scene.from_dict(beam({"scheme": "central-difference"}))
+    s = ff.Scene.from_dict(beam({"initial_velocity": {"angular": [0.0, 1.0, 0.0]}}))
+    assert s.dynamic.velocity == {"angular": [0.0, 1.0, 0.0], "about": [0.0, 0.0, 0.0]}
+    with pytest.raises(InputError, match="dynamic: only for analysis"):
+        ff.Scene.from_dict(dict(beam(), analysis="static"))
+
+
+@pytest.mark.mpi
+@pytest.mark.skipif(MPIRUN is None, reason="mpirun not available")
+def test_two_ranks_agree(tmp_path):
+    d = beam({"duration": 0.01, "dt": 1e-3})
+    path = tmp_path / "scene.toml"
+    path.write_text(to_toml(d))
+    outs = []
+    for n in (1, 2):
+        out = tmp_path / f"r{n}"
+        p = mpirun(["-m", "fem_forms", "run", str(path), "--out", str(out), "-q"], n=n)
+        assert p.returncode == 0, p.stderr
+        outs.append(json.loads((out / "results.json").read_text()))
+    a, b = (o["probes"]["tip"]["displacement"] for o in outs)
+    assert np.allclose(a, b, rtol=1e-8, atol=1e-12)
+    assert outs[1]["energy_balance_error"] < 1e-8
