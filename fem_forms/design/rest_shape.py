@@ -36,7 +36,7 @@ def triangles(faces: np.ndarray) -> np.ndarray:
 
 def write_volume_mesh(path: Path, points: np.ndarray, cells: np.ndarray, cell_type: str,
                       facet_groups: dict | None = None) -> None:
-    """A gmsh .msh (format 2.2) with named boundary groups, that `generator = "file"` reads back."""
+    """A gmsh .msh (format 2.2, binary) with named boundary groups, that `generator = "file"` reads back."""
     import meshio
     kind = {"tetrahedron": "tetra", "hexahedron": "hexahedron"}[cell_type]
     face = {"tetrahedron": "triangle", "hexahedron": "quad"}[cell_type]
@@ -49,7 +49,8 @@ def write_volume_mesh(path: Path, points: np.ndarray, cells: np.ndarray, cell_ty
         field_data[name] = np.array([10 + k, 2])
     m = meshio.Mesh(points, blocks, cell_data={"gmsh:physical": physical, "gmsh:geometrical": physical},
                     field_data=field_data)
-    meshio.write(str(path), m, file_format="gmsh22", binary=False)
+    # binary: 0.2 s -> 0.002 s for the Chen-size arm (9,225 points), the same numbers bit for bit
+    meshio.write(str(path), m, file_format="gmsh22", binary=True)
 
 
 def write_stl(path: Path, points: np.ndarray, tris: np.ndarray, name: str = "rest_shape") -> None:
