@@ -207,7 +207,7 @@ def main() -> None:
         cmds = commands(tmp, args.only)
         times = {k: [] for k in cmds}
         cpu = {k: [] for k in cmds}
-        extra = {"design": [], "inverse_in_process": [], "mismatch": []}
+        extra = {"design": [], "inverse_in_process": [], "mismatch": [], "check": []}
         for name, cmd in cmds.items():             # warm the JIT cache; check every command works
             p = subprocess.run(cmd, env=env, capture_output=True, text=True)
             if p.returncode:
@@ -228,6 +228,7 @@ def main() -> None:
                     extra["design"].append(s["design_time_s"])
                     extra["inverse_in_process"].append(s["wall_time_s"])
                     extra["mismatch"].append(s["target_mismatch_max"])
+                    extra["check"].append(s.get("forward_check"))
         load1 = os.getloadavg()[0]
     med = {k: statistics.median(v) for k, v in times.items()}
     mcpu = {k: statistics.median(v) for k, v in cpu.items()}
@@ -257,7 +258,7 @@ def main() -> None:
                  f"{' '.join(f'{t:.2f}' for t in cpu['inverse'])} |", "",
                  f"- design target 1.5 s: {'met' if d <= 1.5 else 'not met'} ({d:.2f} s)",
                  f"- whole process / design = **{med['inverse'] / d:.2f}x** (target 2x); forward-check "
-                 f"mismatch {max(extra['mismatch']):.2g} m", ""]
+                 f"mismatch {max(extra['mismatch']):.2g} m; forward check: {extra['check'][-1]}", ""]
     text = "\n".join(rows)
     print(text)
     if not args.no_write:

@@ -95,7 +95,7 @@ def picture(path: Path, u: fem.Function, title: str, scale: float = 1.0) -> None
     if surf is None:
         u.function_space.mesh.comm.barrier()
         return
-    from matplotlib import cm, colors
+    from matplotlib import cm, colormaps, colors
 
     X, polys, d = surf
     x = X + scale * d
@@ -105,7 +105,7 @@ def picture(path: Path, u: fem.Function, title: str, scale: float = 1.0) -> None
     ax = fig.add_axes([0.02, 0.02, 0.8, 0.86])
     view = view_axes()
     xy0 = draw_surface(ax, X, polys, (0.6, 0.6, 0.6, 0.08), (0.4, 0.4, 0.4, 0.15), view=view)
-    cmap = cm.get_cmap("viridis")
+    cmap = colormaps["viridis"]
     rgba = shade(x, polys, cmap(mag[polys].mean(axis=1) / vmax), view[1])
     xy = draw_surface(ax, x, polys, rgba, (0, 0, 0, 0.15), view=view)
     frame(ax, np.vstack([xy0, xy]), view)
