@@ -150,14 +150,14 @@ def picture(path: Path, res: InverseResult, check: ForwardCheck, title: str) -> 
                        rest_shape.boundary_faces(fwd[1], fwd[2]), (0.17, 0.63, 0.17, 0.75)))
     view = pictures.view_axes()
     everything = np.vstack([pts for _, pts, _, _ in panels]) @ view[0].T
-    fig = pictures.figure(5 * len(panels), 3.2)
+    canvas = pictures.Canvas(500 * len(panels), 320)
     for k, (name, pts, faces, colour) in enumerate(panels):
-        ax = fig.add_subplot(1, len(panels), k + 1)
+        box = (500 * k + 10, 50, 500 * k + 490, 310)
+        to_px = canvas.fit(box, everything)
         if k > 0:                                    # the target as a faint ghost behind the other panels
-            pictures.draw_surface(ax, target[0], target_faces, (0.5, 0.5, 0.5, 0.08), "none", view=view)
-        pictures.draw_surface(ax, pts, faces, pictures.shade(pts, faces, colour, view[1]), (0, 0, 0, 0.2),
-                              view=view)
-        pictures.frame(ax, everything, view)
-        ax.set_title(name)
-    fig.suptitle(title)
-    fig.savefig(path, dpi=100)
+            canvas.surface(to_px, target[0], target_faces, (0.5, 0.5, 0.5, 0.08), view=view)
+        canvas.surface(to_px, pts, faces, pictures.shade(pts, faces, colour, view[1]), (0, 0, 0, 0.2), view=view)
+        canvas.text((500 * k + 250, 45), name, 13)
+        canvas.triad((500 * k + 40, 290), view)
+    canvas.text((250 * len(panels), 15), title, 14)
+    canvas.save(path)
