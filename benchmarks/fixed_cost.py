@@ -199,9 +199,10 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--only", choices=("static", "inverse"))
     ap.add_argument("--no-write", action="store_true")
+    ap.add_argument("--root", default=str(ROOT), help="the fem_forms checkout to measure (default: this one)")
     args = ap.parse_args()
     env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1",
-               PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+               PYTHONPATH=args.root + os.pathsep + os.environ.get("PYTHONPATH", ""))
     with tempfile.TemporaryDirectory() as td:
         tmp = Path(td)
         cmds = commands(tmp, args.only)
@@ -232,7 +233,8 @@ def main() -> None:
         load1 = os.getloadavg()[0]
     med = {k: statistics.median(v) for k, v in times.items()}
     mcpu = {k: statistics.median(v) for k, v in cpu.items()}
-    rows = [f"Medians of {args.repeat} interleaved runs; 1-minute load average {load0:.1f} before, "
+    rows = [f"fem_forms from {args.root}. "
+            f"Medians of {args.repeat} interleaved runs; 1-minute load average {load0:.1f} before, "
             f"{load1:.1f} after (2-core machine, OPENBLAS_NUM_THREADS=1, warm FFCx cache).", ""]
     if "ours" in med:
         rows += ["| static P2 beam, 19,683 dofs, direct | process wall [s] | runs [s] | process CPU [s] |",
@@ -261,9 +263,12 @@ def main() -> None:
                  f"mismatch {max(extra['mismatch']):.2g} m; forward check: {extra['check'][-1]}", ""]
     text = "\n".join(rows)
     print(text)
-    if not args.no_write:
-        (HERE / "fixed_cost.md").write_text("# Fixed cost of `fem-forms run` (benchmarks/fixed_cost.py)\n\n"
-                                            + text)
+    if not args.no_write:                        # replace the generated part, keep the notes around it
+        md = HERE / "fixed_cost.md"
+        begin, end = "<!-- fixed_cost.py: begin -->", "<!-- fixed_cost.py: end -->"
+        old = md.read_text() if md.exists() else f"# Fixed cost of `fem-forms run`\n\n{begin}\n{end}\n"
+        head, rest = old.split(begin, 1)
+        md.write_text(head + begin + "\n" + text + "\n" + end + rest.split(end, 1)[1])
 
 
 if __name__ == "__main__":
