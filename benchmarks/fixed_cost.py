@@ -205,12 +205,12 @@ def main() -> None:
                PYTHONPATH=args.root + os.pathsep + os.environ.get("PYTHONPATH", ""))
     with tempfile.TemporaryDirectory() as td:
         tmp = Path(td)
-        cmds = commands(tmp, args.only)
+        cmds = commands(tmp, args.only)         # run from tmp: `python -m` puts the cwd first on sys.path
         times = {k: [] for k in cmds}
         cpu = {k: [] for k in cmds}
         extra = {"design": [], "inverse_in_process": [], "mismatch": [], "check": []}
         for name, cmd in cmds.items():             # warm the JIT cache; check every command works
-            p = subprocess.run(cmd, env=env, capture_output=True, text=True)
+            p = subprocess.run(cmd, env=env, capture_output=True, text=True, cwd=tmp)
             if p.returncode:
                 sys.exit(f"{name} failed:\n{p.stderr[-3000:]}")
         load0 = os.getloadavg()[0]
@@ -218,7 +218,7 @@ def main() -> None:
         for r in range(args.repeat):
             for name in (names if r % 2 == 0 else names[::-1]):
                 t, c = time.perf_counter(), resource.getrusage(resource.RUSAGE_CHILDREN)
-                p = subprocess.run(cmds[name], env=env, capture_output=True, text=True)
+                p = subprocess.run(cmds[name], env=env, capture_output=True, text=True, cwd=tmp)
                 times[name].append(time.perf_counter() - t)
                 c1 = resource.getrusage(resource.RUSAGE_CHILDREN)
                 cpu[name].append(c1.ru_utime + c1.ru_stime - c.ru_utime - c.ru_stime)
