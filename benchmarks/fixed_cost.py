@@ -21,7 +21,9 @@ medians and the 1-minute load average before the first and after the last run (t
 shared: 15-35 % noise). FFCx's cache must be warm: one untimed run of each command comes first.
 
 Run: `.venv/bin/python benchmarks/fixed_cost.py [--repeat 3] [--only static|inverse]`
-(about 2 minutes); writes benchmarks/fixed_cost.md unless --no-write.
+(about 2 minutes); writes its section of benchmarks/fixed_cost.md unless --no-write. To compare with
+an older commit under the same load: `git archive OLD fem_forms | tar -x -C /tmp/old` and add
+`--before /tmp/old` (its runs are interleaved with these and reported as '@before').
 """
 from __future__ import annotations
 
@@ -177,21 +179,57 @@ steps = 1
 """
 
 
-def commands(tmp: Path, only: str | None) -> dict:
+def commands(tmp: Path, only: str | None, env: dict, before_env: dict | None) -> dict:
+    """name -> (command, environment, results folder of an inverse run or None)."""
     (tmp / "beam.toml").write_text(BEAM)
     (tmp / "chen.toml").write_text(CHEN)
+    (tmp / "bare").mkdir(exist_ok=True)
     ff = [PY, "-m", "fem_forms", "run"]
     cmds = {}
-    if only in (None, "static"):
-        cmds["bare"] = [PY, __file__, "--bare-worker"]
-        cmds["bare+fields"] = [PY, __file__, "--bare-worker", "--fields", str(tmp / "bare")]
-        cmds["ours-no-picture"] = ff + [str(tmp / "beam.toml"), "--out", str(tmp / "beam_np"),
-                                        "--set", "output.picture=false"]
-        cmds["ours"] = ff + [str(tmp / "beam.toml"), "--out", str(tmp / "beam")]
-    if only in (None, "inverse"):
-        cmds["inverse"] = ff + [str(tmp / "chen.toml"), "--out", str(tmp / "chen")]
-    (tmp / "bare").mkdir(exist_ok=True)
+    for tag, e in (("", env), ("@before", before_env)):
+        if e is None:
+            continue
+        if only in (None, "static"):
+            if not tag:
+                cmds["bare"] = ([PY, __file__, "--bare-worker"], e, None)
+                cmds["bare+fields"] = ([PY, __file__, "--bare-worker", "--fields", str(tmp / "bare")], e, None)
+            cmds["ours-no-picture" + tag] = (ff + [str(tmp / "beam.toml"), "--out", str(tmp / f"beam_np{tag}"),
+                                                   "--set", "output.picture=false"], e, None)
+            cmds["ours" + tag] = (ff + [str(tmp / "beam.toml"), "--out", str(tmp / f"beam{tag}")], e, None)
+        if only in (None, "inverse"):
+            cmds["inverse" + tag] = (ff + [str(tmp / "chen.toml"), "--out", str(tmp / f"chen{tag}")], e,
+                                     tmp / f"chen{tag}")
     return cmds
+
+
+def static_rows(med, mcpu, times, tag="") -> list:
+    rows = ["| static P2 beam, 19,683 dofs, direct | process wall [s] | runs [s] | process CPU [s] |",
+            "|---|---:|---|---:|"]
+    for k in ("bare", "bare+fields", "ours-no-picture" + tag, "ours" + tag):
+        rows.append(f"| {k} | {med[k]:.2f} | {' '.join(f'{t:.2f}' for t in times[k])} | {mcpu[k]:.2f} |")
+    o, onp = "ours" + tag, "ours-no-picture" + tag
+    return rows + ["", f"- same outputs (fields, no picture): {onp} / bare+fields = "
+                       f"**{med[onp] / med['bare+fields']:.2f}x** wall, {mcpu[onp] / mcpu['bare+fields']:.2f}x CPU "
+                       f"(target 1.1x)",
+                   f"- default CLI (fields and PNG) against bare solve only: {o} / bare = "
+                   f"**{med[o] / med['bare']:.2f}x** wall, {mcpu[o] / mcpu['bare']:.2f}x CPU; against bare+fields "
+                   f"{med[o] / med['bare+fields']:.2f}x wall; the picture costs about {med[o] - med[onp]:.2f} s", ""]
+
+
+def inverse_rows(med, mcpu, times, cpu, extra, tag="") -> list:
+    k = "inverse" + tag
+    e = extra[k]
+    d = statistics.median(e["design"])
+    return ["| Chen-size arm, 47,040 tets, direct method" + (" (before)" if tag else "") +
+            " | median [s] | runs [s] |", "|---|---:|---|",
+            f"| design (design_time_s) | {d:.2f} | {' '.join(f'{t:.2f}' for t in e['design'])} |",
+            f"| whole run, in process (wall_time_s) | {statistics.median(e['in_process']):.2f} | "
+            f"{' '.join(f'{t:.2f}' for t in e['in_process'])} |",
+            f"| whole `fem-forms run` process | {med[k]:.2f} | {' '.join(f'{t:.2f}' for t in times[k])} |",
+            f"| whole `fem-forms run` process, CPU | {mcpu[k]:.2f} | {' '.join(f'{t:.2f}' for t in cpu[k])} |", "",
+            f"- design target 1.5 s: {'met' if d <= 1.5 else 'not met'} ({d:.2f} s)",
+            f"- whole process / design = **{med[k] / d:.2f}x** (target 2x); forward-check mismatch "
+            f"{max(e['mismatch']):.2g} m; forward check: {e['check'][-1]}", ""]
 
 
 def main() -> None:
@@ -200,16 +238,21 @@ def main() -> None:
     ap.add_argument("--only", choices=("static", "inverse"))
     ap.add_argument("--no-write", action="store_true")
     ap.add_argument("--root", default=str(ROOT), help="the fem_forms checkout to measure (default: this one)")
+    ap.add_argument("--before", help="another checkout (e.g. `git archive` of an older commit) run interleaved "
+                                     "with --root, reported as '@before'")
     args = ap.parse_args()
-    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1",
-               PYTHONPATH=args.root + os.pathsep + os.environ.get("PYTHONPATH", ""))
+
+    def environment(root):
+        return dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1",
+                    PYTHONPATH=root + os.pathsep + os.environ.get("PYTHONPATH", ""))
     with tempfile.TemporaryDirectory() as td:
         tmp = Path(td)
-        cmds = commands(tmp, args.only)         # run from tmp: `python -m` puts the cwd first on sys.path
+        # run from tmp: `python -m` puts the cwd first on sys.path, PYTHONPATH then decides
+        cmds = commands(tmp, args.only, environment(args.root), args.before and environment(args.before))
         times = {k: [] for k in cmds}
         cpu = {k: [] for k in cmds}
-        extra = {"design": [], "inverse_in_process": [], "mismatch": [], "check": []}
-        for name, cmd in cmds.items():             # warm the JIT cache; check every command works
+        extra = {k: {"design": [], "in_process": [], "mismatch": [], "check": []} for k, c in cmds.items() if c[2]}
+        for name, (cmd, env, _) in cmds.items():     # warm the JIT cache; check every command works
             p = subprocess.run(cmd, env=env, capture_output=True, text=True, cwd=tmp)
             if p.returncode:
                 sys.exit(f"{name} failed:\n{p.stderr[-3000:]}")
@@ -217,50 +260,31 @@ def main() -> None:
         names = list(cmds)
         for r in range(args.repeat):
             for name in (names if r % 2 == 0 else names[::-1]):
+                cmd, env, results = cmds[name]
                 t, c = time.perf_counter(), resource.getrusage(resource.RUSAGE_CHILDREN)
-                p = subprocess.run(cmds[name], env=env, capture_output=True, text=True, cwd=tmp)
+                p = subprocess.run(cmd, env=env, capture_output=True, text=True, cwd=tmp)
                 times[name].append(time.perf_counter() - t)
                 c1 = resource.getrusage(resource.RUSAGE_CHILDREN)
                 cpu[name].append(c1.ru_utime + c1.ru_stime - c.ru_utime - c.ru_stime)
                 if p.returncode:
                     sys.exit(f"{name} failed:\n{p.stderr[-3000:]}")
-                if name == "inverse":
-                    s = json.loads((tmp / "chen" / "results.json").read_text())
-                    extra["design"].append(s["design_time_s"])
-                    extra["inverse_in_process"].append(s["wall_time_s"])
-                    extra["mismatch"].append(s["target_mismatch_max"])
-                    extra["check"].append(s.get("forward_check"))
+                if results is not None:
+                    s = json.loads((results / "results.json").read_text())
+                    extra[name]["design"].append(s["design_time_s"])
+                    extra[name]["in_process"].append(s["wall_time_s"])
+                    extra[name]["mismatch"].append(s["target_mismatch_max"])
+                    extra[name]["check"].append(s.get("forward_check"))
         load1 = os.getloadavg()[0]
     med = {k: statistics.median(v) for k, v in times.items()}
     mcpu = {k: statistics.median(v) for k, v in cpu.items()}
-    rows = [f"fem_forms from {args.root}. "
-            f"Medians of {args.repeat} interleaved runs; 1-minute load average {load0:.1f} before, "
+    rows = [f"fem_forms from {args.root}" + (f", '@before' from {args.before}" if args.before else "") +
+            f". Medians of {args.repeat} interleaved runs; 1-minute load average {load0:.1f} before, "
             f"{load1:.1f} after (2-core machine, OPENBLAS_NUM_THREADS=1, warm FFCx cache).", ""]
-    if "ours" in med:
-        rows += ["| static P2 beam, 19,683 dofs, direct | process wall [s] | runs [s] | process CPU [s] |",
-                 "|---|---:|---|---:|"]
-        for k in ("bare", "bare+fields", "ours-no-picture", "ours"):
-            rows.append(f"| {k} | {med[k]:.2f} | {' '.join(f'{t:.2f}' for t in times[k])} | {mcpu[k]:.2f} |")
-        rows += ["", f"- same outputs (fields, no picture): ours-no-picture / bare+fields = "
-                     f"**{med['ours-no-picture'] / med['bare+fields']:.2f}x** wall, "
-                     f"{mcpu['ours-no-picture'] / mcpu['bare+fields']:.2f}x CPU (target 1.1x)",
-                 f"- default CLI (with the PNG) against bare solve only: ours / bare = "
-                 f"**{med['ours'] / med['bare']:.2f}x** wall, {mcpu['ours'] / mcpu['bare']:.2f}x CPU; "
-                 f"against bare+fields {med['ours'] / med['bare+fields']:.2f}x wall; the picture costs about "
-                 f"{med['ours'] - med['ours-no-picture']:.2f} s", ""]
-    if "inverse" in med:
-        d = statistics.median(extra["design"])
-        rows += ["| Chen-size arm, 47,040 tets, direct method | median [s] | runs [s] |", "|---|---:|---|",
-                 f"| design (design_time_s) | {d:.2f} | {' '.join(f'{t:.2f}' for t in extra['design'])} |",
-                 f"| whole run, in process (wall_time_s) | {statistics.median(extra['inverse_in_process']):.2f} | "
-                 f"{' '.join(f'{t:.2f}' for t in extra['inverse_in_process'])} |",
-                 f"| whole `fem-forms run` process | {med['inverse']:.2f} | "
-                 f"{' '.join(f'{t:.2f}' for t in times['inverse'])} |",
-                 f"| whole `fem-forms run` process, CPU | {mcpu['inverse']:.2f} | "
-                 f"{' '.join(f'{t:.2f}' for t in cpu['inverse'])} |", "",
-                 f"- design target 1.5 s: {'met' if d <= 1.5 else 'not met'} ({d:.2f} s)",
-                 f"- whole process / design = **{med['inverse'] / d:.2f}x** (target 2x); forward-check "
-                 f"mismatch {max(extra['mismatch']):.2g} m; forward check: {extra['check'][-1]}", ""]
+    for tag in ("", "@before") if args.before else ("",):
+        if "ours" + tag in med:
+            rows += static_rows(med, mcpu, times, tag)
+        if "inverse" + tag in med:
+            rows += inverse_rows(med, mcpu, times, cpu, extra, tag)
     text = "\n".join(rows)
     print(text)
     if not args.no_write:                        # replace the generated part, keep the notes around it
