@@ -21,7 +21,8 @@ from fem_forms.scene import MeshSpec, Scene
 # The forward check's tangent is symmetric and (at the designed equilibrium) positive definite: with
 # the scene's linear = "auto" it runs CG + GAMG (rigid-body near-nullspace) from this size on, and
 # falls back to LU if a linear solve fails. Measured on the Chen-size arm (27,675 dofs, 7 Newton
-# steps): the check's solve 4.0 s with LU, 1.5 s with CG + GAMG (benchmarks/fixed_cost.md).
+# steps): the check's solve 4.5 s CPU with LU, 1.3 s with CG + GAMG; at 10,527 dofs 0.7-1.0 s with LU,
+# 0.5 s with CG + GAMG (benchmarks/fixed_cost.md).
 CHECK_ITERATIVE_ABOVE_DOFS = 10_000
 
 
@@ -95,8 +96,8 @@ def check_rest_shape(scene: Scene, res: InverseResult, out: Path) -> ForwardChec
     fscene.analysis = "static"
     fscene.mesh = MeshSpec(generator="file", file=out / "rest_shape.msh")
     fscene.output.probes = {}
-    if fscene.solver.linear == "auto" and res.v.function_space.dofmap.index_map.size_global * 3 \
-            >= CHECK_ITERATIVE_ABOVE_DOFS:
+    vmap = res.v.function_space.dofmap
+    if fscene.solver.linear == "auto" and vmap.index_map.size_global * vmap.index_map_bs >= CHECK_ITERATIVE_ABOVE_DOFS:
         fscene.solver.linear = "iterative-then-direct"
         # GAMG graph squared on the finest level only, threshold 0.01: on the Chen arm 265 CG iterations
         # instead of 462 (7 Newton steps instead of 8), the check's solve 2.0 -> 1.3 s CPU
