@@ -10,7 +10,6 @@ import math
 from pathlib import Path
 
 from dolfinx import cpp, mesh as dmesh
-from dolfinx.io import gmshio
 from mpi4py import MPI
 import numpy as np
 import ufl
@@ -286,7 +285,7 @@ def distribute(comm: MPI.Comm, arrays: MeshArrays | None) -> LoadedMesh:
     nv = 4 if cell_type == "tetrahedron" else 8
     domain = ufl.Mesh(ufl.VectorElement("Lagrange", ufl.Cell(cell_type), 1))
     dtype = dmesh.to_type(cell_type)
-    perm = gmshio.cell_perm_array(dtype, nv)
+    perm = cpp.io.perm_gmsh(dtype, nv)       # gmshio.cell_perm_array, without importing gmsh
     if comm.rank == 0:
         cells, x = arrays.cells[:, perm], arrays.points
     else:
@@ -300,7 +299,7 @@ def distribute(comm: MPI.Comm, arrays: MeshArrays | None) -> LoadedMesh:
         return LoadedMesh(mesh, None, {}, **extra)
     fdim = mesh.topology.dim - 1
     fnv = 3 if cell_type == "tetrahedron" else 4
-    fperm = gmshio.cell_perm_array(cpp.mesh.cell_entity_type(dtype, fdim, 0), fnv)
+    fperm = cpp.io.perm_gmsh(cpp.mesh.cell_entity_type(dtype, fdim, 0), fnv)
     if comm.rank == 0:
         facets = np.vstack([arrays.facet_groups[n] for n in names])[:, fperm]
         values = np.concatenate([np.full(len(arrays.facet_groups[n]), i + 1, dtype=np.int32)

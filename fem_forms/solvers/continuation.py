@@ -12,6 +12,7 @@ from petsc4py import PETSc
 
 from fem_forms import progress
 from fem_forms.errors import SolveError
+from fem_forms.solvers import linear
 from fem_forms.solvers.snes import NonlinearProblem, SNESDriver, SolveReport
 from fem_forms.state import State
 
@@ -62,7 +63,8 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
             why = f"SNES {rec.reason}"
             if rec.reason == "DIVERGED_LINEAR_SOLVE" and drv.stale_preconditioner_failed():
                 pass                                 # the retry (fresh SNES) rebuilds the preconditioner
-            elif rec.reason == "DIVERGED_LINEAR_SOLVE" and drv.linear_kind == "iterative" and linear_kind == "auto":
+            elif (rec.reason == "DIVERGED_LINEAR_SOLVE" and drv.linear_kind == "iterative"
+                  and linear_kind in linear.FALLBACK_TO_DIRECT):
                 drv.linear_kind = "direct"           # indefinite tangent: fall back to LU
                 report.linear_solver = "iterative->direct"
             elif rec.reason == "DIVERGED_LINEAR_SOLVE" and drv.reuse_factor:

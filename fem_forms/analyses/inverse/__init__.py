@@ -53,6 +53,10 @@ def run(scene: Scene, out: Path, echo: bool = False) -> dict:
         problems += check.problems
         summary["target_mismatch_max"] = check.mismatch_max
         summary["design_gap_max"] = check.design_gap_max
+        if check.static is not None:
+            r = check.static.report
+            summary["forward_check"] = {"newton_iterations": r.newton_iterations, "linear_solver": r.linear_solver,
+                                        "krylov_iterations": r.krylov_iterations, "load_steps": r.load_steps}
         if check.matched_mismatch_max is not None:
             summary["matched_mismatch_max"] = check.matched_mismatch_max
         summary["rest_mesh"] = str((out / "rest_shape.msh"))

@@ -18,6 +18,14 @@ from fem_forms.output import fields, pictures
 from fem_forms.scene import MeshSpec, Scene
 
 
+# The forward check's tangent is symmetric and (at the designed equilibrium) positive definite: with
+# the scene's linear = "auto" it runs CG + GAMG (rigid-body near-nullspace) from this size on, and
+# falls back to LU if a linear solve fails. Measured on the Chen-size arm (27,675 dofs, 7 Newton
+# steps): the check's solve 4.5 s CPU with LU, 1.3 s with CG + GAMG; at 10,527 dofs 0.7-1.0 s with LU,
+# 0.5 s with CG + GAMG (benchmarks/fixed_cost.md).
+CHECK_ITERATIVE_ABOVE_DOFS = 10_000
+
+
 @dataclass
 class ForwardCheck:
     mismatch_max: float             # largest distance of the forward-solved shape from the target
@@ -88,6 +96,13 @@ def check_rest_shape(scene: Scene, res: InverseResult, out: Path) -> ForwardChec
     fscene.analysis = "static"
     fscene.mesh = MeshSpec(generator="file", file=out / "rest_shape.msh")
     fscene.output.probes = {}
+    vmap = res.v.function_space.dofmap
+    if fscene.solver.linear == "auto" and vmap.index_map.size_global * vmap.index_map_bs >= CHECK_ITERATIVE_ABOVE_DOFS:
+        fscene.solver.linear = "iterative-then-direct"
+        # GAMG graph squared on the finest level only, threshold 0.01: on the Chen arm 265 CG iterations
+        # instead of 462 (7 Newton steps instead of 8), the check's solve 2.0 -> 1.3 s CPU
+        for k, v in {"pc_gamg_square_graph": 1, "pc_gamg_threshold": 0.01}.items():
+            fscene.solver.petsc.setdefault(k, v)
     try:
         static = solve_static(fscene)
     except InputError as e:
@@ -127,28 +142,23 @@ def picture(path: Path, res: InverseResult, check: ForwardCheck, title: str) -> 
         fwd = fields.gather_mesh(fm, fields.node_values(check.static.u))
     if mesh.comm.rank != 0:
         return
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
-    panels = [("target", target, "tab:blue"), ("rest shape to fabricate", rest, "tab:orange")]
+    # the rest shape has the target's cells: its boundary faces are the target's (computed once)
+    target_faces = rest_shape.boundary_faces(target[1], target[2])
+    panels = [("target", target[0], target_faces, (0.12, 0.47, 0.71, 0.75)),
+              ("rest shape to fabricate", rest[0], target_faces, (1.0, 0.5, 0.05, 0.75))]
     if fwd is not None:
-        panels.append((f"forward check (mismatch {check.mismatch_max:.2g} m)", fwd, "tab:green"))
-    allp = np.vstack([p[0] for _, p, _ in panels])
-    lo, hi = allp.min(axis=0), allp.max(axis=0)
-    fig = plt.figure(figsize=(5 * len(panels), 5))
-    for k, (name, (pts, cells, ctype), colour) in enumerate(panels):
-        ax = fig.add_subplot(1, len(panels), k + 1, projection="3d")
-        faces = rest_shape.boundary_faces(cells, ctype)
-        ax.add_collection3d(Poly3DCollection(target[0][rest_shape.boundary_faces(target[1], target[2])],
-                                             facecolor=(0.5, 0.5, 0.5, 0.06), edgecolor=(0.3, 0.3, 0.3, 0.08),
-                                             linewidths=0.2))
-        ax.add_collection3d(Poly3DCollection(pts[faces], facecolor=colour, alpha=0.75,
-                                             edgecolor=(0, 0, 0, 0.2), linewidths=0.2))
-        pictures.style_axes(ax, lo, hi)
-        ax.set_title(name)
-    fig.suptitle(title)
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
-
+        panels.append((f"forward check (mismatch {check.mismatch_max:.2g} m)", fwd[0],
+                       rest_shape.boundary_faces(fwd[1], fwd[2]), (0.17, 0.63, 0.17, 0.75)))
+    view = pictures.view_axes()
+    everything = np.vstack([pts for _, pts, _, _ in panels]) @ view[0].T
+    canvas = pictures.Canvas(500 * len(panels), 320)
+    for k, (name, pts, faces, colour) in enumerate(panels):
+        box = (500 * k + 10, 50, 500 * k + 490, 310)
+        to_px = canvas.fit(box, everything)
+        if k > 0:                                    # the target as a faint ghost behind the other panels
+            canvas.surface(to_px, target[0], target_faces, (0.5, 0.5, 0.5, 0.08), view=view)
+        canvas.surface(to_px, pts, faces, pictures.shade(pts, faces, colour, view[1]), (0, 0, 0, 0.2), view=view)
+        canvas.text((500 * k + 250, 45), name, 13)
+        canvas.triad((500 * k + 40, 290), view)
+    canvas.text((250 * len(panels), 15), title, 14)
+    canvas.save(path)
