@@ -1,6 +1,5 @@
 """gmsh solids for the balance tests (written as .msh files into a folder): shapes with closed-form mass
 properties and a leaning figure."""
-import math
 from pathlib import Path
 
 import gmsh

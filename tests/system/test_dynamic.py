@@ -6,7 +6,6 @@ Newmark average acceleration, second order of generalized-alpha by step halving,
 the stable-step refusal, restart, and 1 vs 2 MPI ranks. Small P1 meshes keep it fast."""
 import json
 import math
-import shutil
 
 import numpy as np
 import pytest

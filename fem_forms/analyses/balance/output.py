@@ -74,7 +74,6 @@ def picture(path: Path, mesh, carved: np.ndarray, before: dict, after: dict, tit
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from fem_forms.output.pictures import style_axes
 
     points, cells, _ = g
     outer = boundary_faces(cells)
@@ -105,7 +104,7 @@ def picture(path: Path, mesh, carved: np.ndarray, before: dict, after: dict, tit
             t = np.asarray(nums["tip"])
             L = np.ptp(points, axis=0).max()
             ax.plot(*np.stack([t, t + L * a]).T, color="tab:red", lw=1.5, label="spin axis")
-        style_axes(ax, points.min(axis=0), points.max(axis=0))
+        _style_axes(ax, points.min(axis=0), points.max(axis=0))
         ang = nums.get("toppling_angle_deg")
         ax.set_title(f"{label}: m = {nums['mass']:.4g} kg" + (f", topple {ang:.1f} deg" if ang is not None else ""))
         ax.legend(loc="upper left", fontsize=7)
@@ -114,3 +113,15 @@ def picture(path: Path, mesh, carved: np.ndarray, before: dict, after: dict, tit
     fig.savefig(path, dpi=100)
     plt.close(fig)
     mesh.comm.barrier()
+
+
+def _style_axes(ax, lo: np.ndarray, hi: np.ndarray) -> None:
+    """True-proportion 3D matplotlib axes spanning [lo, hi], few ticks on short axes, seen from the side."""
+    import matplotlib.ticker
+    ax.set_xlim(lo[0], hi[0]), ax.set_ylim(lo[1], hi[1]), ax.set_zlim(lo[2], hi[2])
+    span = np.maximum(hi - lo, 1e-3 * (hi - lo).max())
+    ax.set_box_aspect(span)
+    for axis, s in zip((ax.xaxis, ax.yaxis, ax.zaxis), span):
+        axis.set_major_locator(matplotlib.ticker.MaxNLocator(max(2, int(6 * s / span.max()))))
+    ax.set_xlabel("x [m]"), ax.set_ylabel("y [m]"), ax.set_zlabel("z [m]")
+    ax.view_init(elev=15, azim=-75)
