@@ -16,7 +16,7 @@ from fem_forms.meshes import LoadedMesh
 from fem_forms.physics.elastic import ElasticEnergy
 import fem_forms.physics.loads
 from fem_forms.physics.parameters import Parameters
-from fem_forms.physics.supports import LoadFactor, load_regions
+from fem_forms.physics.supports import LoadFactor, body_regions, load_regions
 from fem_forms.physics.terms import Context, LOAD_TERMS, Term
 from fem_forms.scene import Scene
 
@@ -55,7 +55,12 @@ def make_context(loaded: LoadedMesh, scene: Scene, u, dx: ufl.Measure, parameter
     """A Context on the loaded mesh with one tagged boundary measure for all of the scene's surface loads."""
     tags, regions = load_regions(loaded, scene.load)
     ds = ufl.Measure("ds", domain=loaded.mesh, subdomain_data=tags, metadata=dx.metadata())
-    return Context(loaded.mesh, u, dx, ds, regions, parameters, load, rest_map, pressure)
+    ctx = Context(loaded.mesh, u, dx, ds, regions, parameters, load, rest_map, pressure)
+    if any(spec.type == "gravity" and spec.where is not None for spec in scene.load):
+        cell_tags, ctx.body_regions = body_regions(loaded, scene.load)
+        ctx.dx_regions = ufl.Measure("dx", domain=loaded.mesh, subdomain_data=cell_tags,
+                                     metadata=dx.metadata())
+    return ctx
 
 
 def total_energy(terms: list[Term], ctx: Context) -> ufl.Form | None:

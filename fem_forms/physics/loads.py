@@ -18,7 +18,7 @@ from fem_forms.scene import Load
 
 @register_load("gravity")
 class Gravity(Term):
-    """Weight: -lambda int rho g . u dX (rho the density field)."""
+    """Weight: -lambda int rho g . u dX (rho the density field), over the body or a gmsh volume group."""
     name = "gravity"
 
     def __init__(self, spec: Load, index: int, mesh: dmesh.Mesh):
@@ -30,7 +30,12 @@ class Gravity(Term):
         self.g.value = spec.g
 
     def energy(self, ctx: Context) -> ufl.Form:
-        return -ctx.load.constant * self.factor * ctx.volume(ctx.parameters.density * ufl.dot(self.g, ctx.u))
+        weight = ctx.parameters.density * ufl.dot(self.g, ctx.u)
+        if self.index in ctx.body_regions:                 # restricted to a gmsh volume group
+            work = sum(ctx.volume(weight, k) for k in ctx.body_regions[self.index])
+        else:
+            work = ctx.volume(weight)
+        return -ctx.load.constant * self.factor * work
 
 
 @register_load("traction")

@@ -168,7 +168,7 @@ def load_regions(loaded: LoadedMesh, loads: list[Load]):
     fdim = mesh.topology.dim - 1
     owner: dict[int, frozenset] = {}
     for i, spec in enumerate(loads):
-        if spec.where is None:
+        if spec.where is None or spec.type == "gravity":       # body loads act on cells, not facets
             continue
         for f in locate_facets(loaded, spec.where):
             owner[int(f)] = owner.get(int(f), frozenset()) | {i}
@@ -181,3 +181,25 @@ def load_regions(loaded: LoadedMesh, loads: list[Load]):
     values = np.array([cid[owner[f]] for f in facets], dtype=np.int32)
     return dmesh.meshtags(mesh, fdim, facets, values), ids
 
+
+def body_regions(loaded: LoadedMesh, loads: list[Load]):
+    """One cell MeshTags for the body loads restricted to gmsh volume groups (`where = { group = ... }`):
+    each distinct set of loads sharing a cell gets an id (the same on every rank)."""
+    mesh = loaded.mesh
+    owner: dict[int, frozenset] = {}
+    for i, spec in enumerate(loads):
+        if spec.type != "gravity" or spec.where is None:
+            continue
+        name = spec.where.group
+        if name not in loaded.cells:
+            raise InputError(f"{spec.where.key}.group = {name!r}: no such volume group (the mesh has: "
+                             f"{loaded.group_names()})")
+        for c in loaded.cells[name]:
+            owner[int(c)] = owner.get(int(c), frozenset()) | {i}
+    combos = sorted({c for cs in mesh.comm.allgather(sorted(set(owner.values()), key=sorted)) for c in cs},
+                    key=sorted)
+    cid = {c: k + 1 for k, c in enumerate(combos)}
+    ids = {i: [cid[c] for c in combos if i in c] for i in range(len(loads))}
+    cells = np.array(sorted(owner), dtype=np.int32)
+    values = np.array([cid[owner[c]] for c in cells], dtype=np.int32)
+    return dmesh.meshtags(mesh, mesh.topology.dim, cells, values), ids

@@ -36,6 +36,8 @@ class Context:
     pressure: object = None                # the mixed formulation's pressure field, else None
     deformation: object = None             # F written directly (the inverse problem), else from u
     extra: dict = field(default_factory=dict)   # what later terms need (time, old values, history)
+    dx_regions: ufl.Measure | None = None  # dx tagged with the body loads' volume groups
+    body_regions: dict = field(default_factory=dict)   # load index -> the dx ids of its cells
 
     @property
     def F(self):
@@ -47,11 +49,12 @@ class Context:
             grad_u = grad_u * ufl.inv(self.rest_map)
         return ufl.Identity(len(self.u)) + grad_u
 
-    def volume(self, density) -> ufl.Form:
-        """int density dX over the rest shape."""
+    def volume(self, density, region: int | None = None) -> ufl.Form:
+        """int density dX over the rest shape (or over the cells of one body-load region)."""
+        dx = self.dx if region is None else self.dx_regions(region)
         if self.rest_map is None:
-            return density * self.dx
-        return density * ufl.det(self.rest_map) * self.dx
+            return density * dx
+        return density * ufl.det(self.rest_map) * dx
 
     def area(self, density, region: int) -> ufl.Form:
         """int density dA over the rest shape's facets of one ds region."""

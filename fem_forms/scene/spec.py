@@ -274,7 +274,9 @@ LOAD_WHERE = where("boundary facets loaded", kinds=AREA_SELECTORS)
 # Each load type and its keys: a new load type is one entry here (and its term in physics/).
 LOAD_TYPES = {
     "gravity": (Key("g", "vector", "gravitational acceleration", default=[0.0, 0.0, -9.81], unit="m/s^2",
-                    length=3),),
+                    length=3),
+                where("a gmsh volume group the weight acts on (default: the whole body)", required=False,
+                      kinds=("group",))),
     "traction": (LOAD_WHERE, Key("value", "vector", "dead traction per unit reference area", unit="Pa",
                                  required=True, length=3)),
     "pressure": (LOAD_WHERE, Key("value", "number", "follower pressure on the deformed surface", unit="Pa",
