@@ -17,6 +17,8 @@ from pathlib import Path
 
 import gmsh
 
+from groups import name_surfaces_and_write
+
 HALF_THICKNESS = 0.025
 
 
@@ -53,11 +55,7 @@ def build(out: Path, nx: int = 16, ny: int = 8, nz: int = 1) -> Path:
                 names[s] = "free_end"
             else:
                 names[s] = "sides"
-        for i, name in enumerate(sorted(set(names.values()))):
-            tag = gmsh.model.addPhysicalGroup(2, [s for s, n in names.items() if n == name], 10 + i)
-            gmsh.model.setPhysicalName(2, tag, name)
-        mesh.generate(3)
-        gmsh.write(str(out))
+        name_surfaces_and_write(names, out)
     finally:
         gmsh.finalize()
     return out

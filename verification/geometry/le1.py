@@ -17,6 +17,8 @@ from pathlib import Path
 
 import gmsh
 
+from groups import name_surfaces_and_write
+
 HALF_THICKNESS = 0.05
 
 
@@ -64,11 +66,7 @@ def build(out: Path, n_arc: int = 24, n_radial: int = 8, n_z: int = 1, grading: 
                 names[s] = "outer"
             else:
                 names[s] = "inner"
-        for i, name in enumerate(sorted(set(names.values()))):
-            tag = gmsh.model.addPhysicalGroup(2, [s for s, n in names.items() if n == name], 10 + i)
-            gmsh.model.setPhysicalName(2, tag, name)
-        mesh.generate(3)
-        gmsh.write(str(out))
+        name_surfaces_and_write(names, out)
     finally:
         gmsh.finalize()
     return out
