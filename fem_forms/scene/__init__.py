@@ -15,8 +15,8 @@ from fem_forms.scene.analyses.balance import BalanceSpec
 from fem_forms.scene.analyses.dynamic import DampingSpec, DynamicSpec
 from fem_forms.scene.analyses.inverse import InverseSpec
 from fem_forms.scene.analyses.modal import ModalSpec, SoundSpec
-from fem_forms.scene.reader import (AXES, Key, Section, Table, Variants, check_number, check_vector,
-                                    parse_assignment, read_toml, set_key)
+from fem_forms.scene.files import parse_assignment, read_toml, set_key
+from fem_forms.scene.reader import AXES, Key, Section, Table, Variants, check_number, check_vector
 from fem_forms.scene.registry import ANALYSIS_KEY
 from fem_forms.scene.spec import (CELL_TYPES, CORE_SECTIONS, GENERATORS, LOAD_TYPES, TITLE, Discretization,
                                   Fix, Load, MaterialSpec, MeshSpec, OutputSpec, Selector, SolverSpec, fix_names)
