@@ -8,7 +8,6 @@ on them fixes the dofs that lie on the curve's mesh edges or at the points, foun
 from __future__ import annotations
 
 from dolfinx import cpp, mesh as dmesh
-from dolfinx.io import gmshio
 import numpy as np
 
 # gmsh element types of lines (2- and 3-node) and points
@@ -70,7 +69,7 @@ def distribute_cell_groups(mesh: dmesh.Mesh, cells: np.ndarray | None, groups: d
     """Local cell indices of each volume group (rank 0 holds the cells and the groups' rows)."""
     tdim = mesh.topology.dim
     nv = cells.shape[1] if cells is not None else (4 if cell_type == "tetrahedron" else 8)
-    perm = gmshio.cell_perm_array(dmesh.to_type(cell_type), nv)
+    perm = cpp.io.perm_gmsh(dmesh.to_type(cell_type), nv)   # gmshio.cell_perm_array, without gmsh
     mesh.topology.create_connectivity(tdim, 0)
     out = {}
     for name in names:
