@@ -30,3 +30,58 @@ def invariants(F) -> tuple:
     I1 = ufl.tr(C)
     I2 = 0.5 * (I1**2 - ufl.tr(C * C))
     return I1, I2, ufl.det(F)
+
+
+
+
+def stretch_sum(F, fixed_point_steps: int = 2, newton_steps: int = 3) -> ufl.core.expr.Expr:
+    """i = tr U, the sum of the principal stretches (U of the polar decomposition F = R U, 3x3,
+    det F > 0), as a smooth UFL expression of the invariants of C: no eigenvalues, no division by their
+    differences, so it is differentiable at repeated stretches (F = I, uniaxial, isotropic states).
+
+    i is the one root i >= sqrt(I1) of q(i) = ((i^2 - I1)/2)^2 - 2 J i - I2 (from tr U^2 = I1,
+    ii_U = (i^2 - I1)/2 and ii_U^2 = I2 + 2 J i). Start at the upper bound sqrt(3 I1), take
+    `fixed_point_steps` of the monotone map i <- sqrt(I1 + 2 sqrt(I2 + 2 J i)) (each stays an upper
+    bound), then `newton_steps` Newton steps on q, which is convex and increasing there
+    (q'(i) = 2 (i ii - J) = 2 (l1+l2)(l2+l3)(l3+l1) > 0), so Newton decreases monotonically onto the
+    simple root, and i is a smooth function of C (implicit function theorem).
+
+    Accuracy (worst relative error of 200 random stretch/rotation pairs per range, default 2 + 3
+    steps): 1e-15 for principal log-strains |ln l| up to 2 (stretches 0.14 to 7.4); with 2 + 2 steps
+    2e-14 up to 0.2 and 3e-11 up to 2."""
+    if F.ufl_shape != (3, 3):
+        raise ValueError(f"stretch_sum: needs a 3x3 F (got {F.ufl_shape})")
+    C = right_cauchy_green(F)
+    I1 = ufl.tr(C)
+    I2 = 0.5 * (I1**2 - ufl.tr(C * C))
+    J = ufl.det(F)
+    i = ufl.sqrt(3 * I1)
+    for _ in range(fixed_point_steps):
+        i = ufl.sqrt(I1 + 2 * ufl.sqrt(I2 + 2 * J * i))
+    for _ in range(newton_steps):
+        ii = 0.5 * (i**2 - I1)
+        i = i - (ii**2 - 2 * J * i - I2) / (2 * (i * ii - J))
+    return i
+
+
+def polar_rotation(F) -> ufl.core.expr.Expr:
+    """The rotation R of the polar decomposition F = R U (3x3, det F > 0) as a UFL expression that
+    ufl.derivative goes through. With i = tr U from stretch_sum and ii = (i^2 - I1)/2, Cayley-Hamilton
+    for U gives (Hoger & Carlson 1984)
+        U = (-C^2 + (i^2 - ii) C + i J I) / (i ii - J),   U^-1 = (C - i U + ii I) / J,   R = F U^-1,
+    whose denominators (l1+l2)(l2+l3)(l3+l1) and l1 l2 l3 are positive for every det F > 0, repeated
+    stretches included. Accuracy against scipy.linalg.polar (worst of 200 random pairs): 5e-15 for
+    principal log-strains up to 0.5, 1e-14 up to 1, 1e-12 up to 2. Exactly rotation invariant:
+    everything but the leading F depends on C only, so R(Q F) = Q R(F).
+
+    Why not the matrix Newton iteration R <- (R + R^-T)/2 from F: it needs 6 steps for the same range,
+    and the tangent then nests the second derivatives of 6 matrix inverses; with 4 steps FFCx wrote
+    3.4 MB of C for the P1 tangent kernel, which gcc took about 17 minutes to compile here."""
+    C = right_cauchy_green(F)
+    I = ufl.Identity(3)
+    I1 = ufl.tr(C)
+    J = ufl.det(F)
+    i = stretch_sum(F)
+    ii = 0.5 * (i**2 - I1)
+    U = (-C * C + (i**2 - ii) * C + i * J * I) / (i * ii - J)
+    return F * (C - i * U + ii * I) / J
