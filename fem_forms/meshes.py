@@ -16,6 +16,7 @@ import numpy as np
 import ufl
 
 from fem_forms.errors import InputError
+from fem_forms.prisms import create_prism_box
 from fem_forms.scene import MeshSpec
 
 
@@ -284,6 +285,8 @@ def load_mesh(spec: MeshSpec, comm: MPI.Comm = MPI.COMM_WORLD) -> LoadedMesh:
     if spec.generator == "box":
         lo = np.array(spec.origin, dtype=float)
         hi = lo + np.array(spec.size, dtype=float)
+        if spec.cell == "prism":
+            return LoadedMesh(create_prism_box(comm, lo, hi, list(spec.cells)), None, {})
         ct = dmesh.CellType.tetrahedron if spec.cell == "tetrahedron" else dmesh.CellType.hexahedron
         return LoadedMesh(dmesh.create_box(comm, [lo, hi], list(spec.cells), cell_type=ct), None, {})
     key = "mesh.file" if spec.generator == "file" else f"mesh ({spec.generator})"
