@@ -72,7 +72,7 @@ def _parse_scene(data: dict, base_dir: Path, source: Path | None) -> Scene:
     if formulation not in analysis.formulations:
         able = " or ".join(repr(a.name) for a in registry.ANALYSES.values() if formulation in a.formulations)
         raise InputError(f"discretization.formulation = {formulation!r}: available for analysis = {able} only")
-    prism_rules(sc.mesh, sc.discretization, sc.load)
+    prism_rules(sc.mesh, sc.discretization, sc.load, sc.analysis)
     if any(ld.type == "gravity" for ld in sc.load) and sc.material.rho <= 0:
         raise InputError("material.rho: gravity needs a positive density")
 

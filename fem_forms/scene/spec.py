@@ -123,10 +123,13 @@ def _mesh_rules(m: MeshSpec, t: Table) -> None:
             m.h = (m.radius or 0.1) / 4
 
 
-def prism_rules(mesh: MeshSpec, disc: "Discretization", loads: list) -> None:
+def prism_rules(mesh: MeshSpec, disc: "Discretization", loads: list, analysis: str) -> None:
     """What dolfinx 0.5.2 cannot do on prisms, refused when the scene is read (see fem_forms/prisms.py)."""
     if mesh.cell != "prism":
         return
+    if analysis == "inverse":
+        raise InputError("analysis = 'inverse': not on prism meshes (its rest-shape mesh files hold "
+                         "tetrahedra or hexahedra)")
     if disc.degree != 1:
         raise InputError(f"discretization.degree = {disc.degree}: prisms take degree 1 only (FFCx 0.5.0: "
                          "\"Elements with different numbers of DOFs on subentities of the same dimension are "

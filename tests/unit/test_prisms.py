@@ -108,6 +108,7 @@ def _scene(**mesh_over):
      "cannot integrate over prism facets"),
     (lambda d: d.update(mesh={"generator": "sphere", "radius": 1.0, "cell": "prism"}),
      "only the box generator makes prisms"),
+    (lambda d: d.update(analysis="inverse"), "not on prism meshes"),
 ])
 def test_what_prisms_cannot_do_is_refused_in_one_line(change, fragment):
     d = _scene()
