@@ -15,14 +15,15 @@ from fem_forms.analyses.static import write_static_outputs
 from fem_forms.equilibrium import StaticResult, solve_static
 from fem_forms.errors import InputError, SolveError
 from fem_forms.logs import quiet_jit
-from fem_forms.materials import LinearElastic, MooneyRivlin, NeoHookean, StVenantKirchhoff, UserMaterial
+from fem_forms.materials import (Corotated, LinearElastic, MooneyRivlin, NeoHookean, StVenantKirchhoff,
+                                 UserMaterial)
 from fem_forms.materials.hyperelastic import make_material
 from fem_forms.materials.stresses import cauchy_stress, first_piola_kirchhoff, von_mises
 from fem_forms.output.progress_line import show_progress
 from fem_forms.scene import Scene
 
 __all__ = ["quiet_jit", "show_progress", "InputError", "SolveError", "Scene", "LinearElastic", "StVenantKirchhoff", "NeoHookean",
-           "MooneyRivlin", "UserMaterial", "make_material", "first_piola_kirchhoff", "cauchy_stress",
+           "MooneyRivlin", "Corotated", "UserMaterial", "make_material", "first_piola_kirchhoff", "cauchy_stress",
            "von_mises", "StaticResult", "solve_static", "write_static_outputs", "ModalResult",
            "solve_modal", "write_modal_outputs"]
 __version__ = "0.1.0"

@@ -16,6 +16,7 @@ import ufl
 
 from fem_forms import mesh_groups, resources, surface_meshes
 from fem_forms.errors import InputError
+from fem_forms.prisms import create_prism_box
 from fem_forms.scene import MeshSpec
 
 
@@ -322,6 +323,8 @@ def load_mesh(spec: MeshSpec, comm: MPI.Comm = MPI.COMM_WORLD, degree: int = 1) 
         resources.check_fits(*counts, spec.cell, degree, f"mesh.cells = {list(spec.cells)}", limit)
         lo = np.array(spec.origin, dtype=float)
         hi = lo + np.array(spec.size, dtype=float)
+        if spec.cell == "prism":
+            return LoadedMesh(create_prism_box(comm, lo, hi, list(spec.cells)), None, {})
         ct = dmesh.CellType.tetrahedron if spec.cell == "tetrahedron" else dmesh.CellType.hexahedron
         box = dmesh.create_box(comm, [lo, hi], list(spec.cells), cell_type=ct)
         loaded = LoadedMesh(box, None, {}, info={"source": "box", "cells": counts[0]})

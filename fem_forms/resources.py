@@ -19,8 +19,9 @@ BYTES_PER_CELL = 500
 BYTES_PER_ENTRY = 12            # a double and a column index
 MATRIX_COPIES = 3
 # coupled nodes per node (each with 3 components): the stencil of one row block
-STENCIL = {("tetrahedron", 1): 15, ("tetrahedron", 2): 30, ("hexahedron", 1): 27, ("hexahedron", 2): 80}
-CELLS_PER_CUBE = {"tetrahedron": 6, "hexahedron": 1}
+STENCIL = {("tetrahedron", 1): 15, ("tetrahedron", 2): 30, ("hexahedron", 1): 27, ("hexahedron", 2): 80,
+           ("prism", 1): 21, ("prism", 2): 50}
+CELLS_PER_CUBE = {"tetrahedron": 6, "hexahedron": 1, "prism": 2}
 
 
 def host_memory() -> int:

@@ -6,6 +6,8 @@ from pathlib import Path
 from dolfinx import cpp, fem, io, mesh as dmesh
 import numpy as np
 
+from fem_forms import prisms
+
 
 def p1_interpolant(f: fem.Function, name: str | None = None) -> fem.Function:
     """f on the mesh's P1 vector or scalar space (XDMF stores P1 only)."""
@@ -100,7 +102,10 @@ def boundary_surface(u: fem.Function):
     facets = dmesh.exterior_facet_indices(mesh.topology)
     nfo = mesh.topology.index_map(tdim - 1).size_local
     facets = facets[facets < nfo]
-    geom = cpp.mesh.entities_to_geometry(mesh._mesh, tdim - 1, facets, False)
+    if mesh.topology.cell_name() == "prism":
+        geom = prisms.boundary_triangles(mesh, facets)
+    else:
+        geom = cpp.mesh.entities_to_geometry(mesh._mesh, tdim - 1, facets, False)
     if mesh.topology.cell_name() == "hexahedron" and len(geom):
         geom = geom[:, [0, 1, 3, 2]]                 # tensor-product order -> polygon order
     values = node_values(u)

@@ -10,9 +10,7 @@ import numpy as np
 
 def quadrature_points(mesh: dmesh.Mesh, degree: int) -> tuple[np.ndarray, np.ndarray]:
     """basix's default quadrature rule (points, weights) of the given degree on the mesh's cell."""
-    cell = {"tetrahedron": basix.CellType.tetrahedron,
-            "hexahedron": basix.CellType.hexahedron}[mesh.topology.cell_name()]
-    return basix.make_quadrature(cell, max(degree, 1))
+    return basix.make_quadrature(getattr(basix.CellType, mesh.topology.cell_name()), max(degree, 1))
 
 
 class SmallestValue:

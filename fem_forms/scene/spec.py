@@ -91,8 +91,8 @@ def where(doc: str, required: bool = True, kinds: tuple | None = None) -> Key:
 # --- mesh -----------------------------------------------------------------------------------
 GENERATOR = Key("generator", "string", "how the mesh is made: a built-in shape or a mesh file",
                 default="box", choices=("box", "cylinder", "sphere", "revolve", "file"))
-CELL = Key("cell", "string", "cell type (cylinder, sphere and revolve make tetrahedra only)",
-           default="tetrahedron", choices=("tetrahedron", "hexahedron"))
+CELL = Key("cell", "string", "cell type (cylinder, sphere and revolve make tetrahedra only; prism: box only, "
+           "degree 1, no surface loads)", default="tetrahedron", choices=("tetrahedron", "hexahedron", "prism"))
 SIZE = Key("size", "vector", "box edge lengths [lx, ly, lz]", default=[1.0, 0.1, 0.1], unit="m",
            length=3, exclusive_minimum=0, maximum=1e6, note="must be positive and at most 1e6 m")
 ORIGIN = Key("origin", "vector", "lowest corner of the box, centre of a sphere, base of a cylinder",
@@ -150,6 +150,8 @@ def _mesh_rules(m: MeshSpec, t: Table) -> None:
                          f"{m.file.name!r} is meshed already")
     if m.generator == "file" and m.file.suffix.lower() in SURFACE_SUFFIXES and m.cell != "tetrahedron":
         raise InputError(f"{t.key('cell')} = {m.cell!r}: a surface file is filled with tetrahedra only")
+    if m.cell == "prism" and m.generator != "box":
+        raise InputError(f"{t.key('cell')} = 'prism': only the box generator makes prisms")
     if m.generator in ("cylinder", "sphere", "revolve"):
         if m.cell != "tetrahedron":
             raise InputError(f"{t.key('cell')} = {m.cell!r}: the {m.generator} generator makes tetrahedra only")
@@ -157,6 +159,23 @@ def _mesh_rules(m: MeshSpec, t: Table) -> None:
             raise InputError(f"{t.key('profile')}: radii r must not be negative")
         if m.h is None:
             m.h = (m.radius or 0.1) / 4
+
+
+def prism_rules(mesh: MeshSpec, disc: "Discretization", loads: list, analysis: str) -> None:
+    """What dolfinx 0.5.2 cannot do on prisms, refused when the scene is read (see fem_forms/prisms.py)."""
+    if mesh.cell != "prism":
+        return
+    if analysis == "inverse":
+        raise InputError("analysis = 'inverse': not on prism meshes (its rest-shape mesh files hold "
+                         "tetrahedra or hexahedra)")
+    if disc.degree != 1:
+        raise InputError(f"discretization.degree = {disc.degree}: prisms take degree 1 only (FFCx 0.5.0: "
+                         "\"Elements with different numbers of DOFs on subentities of the same dimension are "
+                         "not yet supported\"); set degree = 1")
+    surface = [f"load[{i}]" for i, ld in enumerate(loads) if ld.type in ("traction", "pressure")]
+    if surface:
+        raise InputError(f"{surface[0]}: surface loads cannot be applied on a prism mesh (FFCx 0.5.0 cannot "
+                         "integrate over prism facets); use tetrahedra or hexahedra")
 
 
 # --- material -------------------------------------------------------------------------------

@@ -39,7 +39,7 @@ CASES = [
     ("unknown group", with_(BASE, "fix.0.where", {"group": "base"}), "fix[0].where.group = 'base'"),
     ("unsupported element degree", with_(BASE, "discretization.degree", 4),
      "discretization.degree = 4: unsupported element"),
-    ("unsupported cell", with_(BASE, "mesh.cell", "prism"), "mesh.cell = 'prism'"),
+    ("unsupported cell", with_(BASE, "mesh.cell", "pyramid"), "mesh.cell = 'pyramid'"),
     ("bad component", with_(BASE, "fix.0.components", ["x", "w"]), "fix[0].components"),
     ("bad vector length", with_(BASE, "load.0.g", [0.0, -9.81]), "load[0].g"),
     ("gravity without density", with_(BASE, "material.rho", 0.0), "material.rho: gravity needs"),

@@ -17,7 +17,7 @@ def _vector(form):
     return b
 
 
-@pytest.mark.parametrize("model_name", ["neo-hookean", "mooney-rivlin", "stvk"])
+@pytest.mark.parametrize("model_name", ["neo-hookean", "mooney-rivlin", "stvk", "corotated"])
 def test_taylor_residual_is_gradient_of_energy_and_jacobian_its_derivative(model_name):
     """|Pi(u + h du) - Pi(u) - h R(u).du| = O(h^2) and |R(u + h du) - R(u) - h K(u) du| = O(h^2)."""
     scene = ff.Scene.from_dict(beam_scene(material={"model": model_name, "E": 1e6, "nu": 0.3, "rho": 1000}))
