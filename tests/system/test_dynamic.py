@@ -162,6 +162,12 @@ def test_cli_outputs_and_restart(tmp_path, capsys):
                 "energy_balance_error", "probes"):
         assert key in full
     assert full["steps"] == 20 and full["time_reached"] == pytest.approx(0.02)
+    tip = full["probes"]["tip"]                        # the final state's recovered stress and strain
+    sigma = np.array(tip["stress"])
+    assert sigma.shape == (3, 3) and np.allclose(sigma, sigma.T, atol=1e-9 * np.abs(sigma).max())
+    s_dev = sigma - np.trace(sigma) / 3 * np.eye(3)
+    assert tip["von_mises"] == pytest.approx(np.sqrt(1.5 * np.sum(s_dev * s_dev)), rel=1e-10)
+    assert np.array(tip["strain"]).shape == (3, 3)
     head = (out / "probes.csv").read_text().splitlines()
     assert head[0] == "time,tip_ux,tip_uy,tip_uz,tip_vx,tip_vy,tip_vz" and len(head) == 22
     assert (out / "energy.csv").read_text().startswith("time,kinetic,elastic,external_work,dissipated")

@@ -12,6 +12,7 @@ from mpi4py import MPI
 from fem_forms.analyses.dynamic.output import MotionWriter, write_csvs, write_gif, write_history_png
 from fem_forms.analyses.dynamic.solve import DynamicResult, solve_dynamic
 from fem_forms.output import results
+from fem_forms.output.quantities import Quantities
 from fem_forms.scene import Scene
 
 __all__ = ["DynamicResult", "run", "solve_dynamic"]
@@ -40,6 +41,9 @@ def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> d
             writer.close()
     write_csvs(out, result, comm)
     summary = result.summary()
+    # final probes: recovered stress and strain of the last state, as the static analysis reports them
+    for name, values in Quantities(result.system.model).at_probes(scene.output.probes).items():
+        summary["probes"].setdefault(name, {}).update(values)
     files = {"probes": "probes.csv", "energy": "energy.csv"}
     if scene.output.fields:
         files["motion"] = "motion.xdmf"
