@@ -190,7 +190,6 @@ def test_interrupted_write_leaves_old_results_and_no_temporary_file(tmp_path, mo
 
 
 @pytest.mark.mpi
-@pytest.mark.skipif(shutil.which("mpirun") is None, reason="needs mpirun")
 def test_two_ranks_show_progress_once_and_stop_on_interrupt(tmp_path):
     """Under mpirun, progress comes from rank 0 only; mpirun forwards the interrupt to every rank, each stops
     at its next Python bytecode, rank 0 prints the one line. Exit status is mpirun's own (1 here, not 130)."""

@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from helpers import MPIRUN, ROOT, mpirun, run_scene, to_toml
+from helpers import mpirun, run_scene, to_toml
 import fem_forms as ff
 from fem_forms.analyses.dynamic import solve_dynamic
 from fem_forms.analyses.modal import solve_modal
@@ -199,7 +199,6 @@ def test_history_and_keys():
 
 
 @pytest.mark.mpi
-@pytest.mark.skipif(MPIRUN is None, reason="mpirun not available")
 def test_two_ranks_agree(tmp_path):
     d = beam({"duration": 0.01, "dt": 1e-3})
     path = tmp_path / "scene.toml"
