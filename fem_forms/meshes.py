@@ -265,13 +265,16 @@ def read_mesh_file(path: Path) -> MeshArrays:
 
 # ----------------------------------------------------------------------------- distribution
 def _on_root(comm: MPI.Comm, build):
-    """Run build() on rank 0; an InputError there is raised on every rank."""
+    """Run build() on rank 0; an error there is raised on every rank as one InputError line (a reader's
+    or gmsh's own exception must not leave the other ranks waiting in the broadcast)."""
     result, error = None, None
     if comm.rank == 0:
         try:
             result = build()
         except InputError as e:
             error = str(e)
+        except Exception as e:                            # noqa: BLE001 (a file or gmsh failure)
+            error = f"mesh: cannot be built ({type(e).__name__}: {' '.join(str(e).split())[:200]})"
     error = comm.bcast(error, root=0)
     if error is not None:
         raise InputError(error)
@@ -324,7 +327,9 @@ def load_mesh(spec: MeshSpec, comm: MPI.Comm = MPI.COMM_WORLD, degree: int = 1) 
         lo = np.array(spec.origin, dtype=float)
         hi = lo + np.array(spec.size, dtype=float)
         if spec.cell == "prism":
-            return LoadedMesh(create_prism_box(comm, lo, hi, list(spec.cells)), None, {})
+            loaded = LoadedMesh(create_prism_box(comm, lo, hi, list(spec.cells)), None, {})
+            settle_coordinate_element(loaded.mesh)
+            return loaded
         ct = dmesh.CellType.tetrahedron if spec.cell == "tetrahedron" else dmesh.CellType.hexahedron
         box = dmesh.create_box(comm, [lo, hi], list(spec.cells), cell_type=ct)
         loaded = LoadedMesh(box, None, {}, info={"source": "box", "cells": counts[0]})

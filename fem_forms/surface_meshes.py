@@ -44,8 +44,10 @@ def read_meshio(path: Path):
     try:
         with quiet_meshio():
             return meshio.read(path)
-    except Exception as e:                                    # noqa: BLE001 - any reader failure is bad input
-        raise InputError(f"mesh.file = {str(path)!r}: cannot read it ({type(e).__name__}: {e})") from None
+    except (Exception, SystemExit) as e:    # noqa: BLE001 - any reader failure is bad input (meshio's VTU
+        # reader calls sys.exit(1) on malformed XML: that must not end one rank and hang the others)
+        why = " ".join(str(e).split())[:200] or "malformed file"
+        raise InputError(f"mesh.file = {str(path)!r}: cannot read it ({type(e).__name__}: {why})") from None
 
 
 def read_surface(path: Path) -> tuple[np.ndarray, np.ndarray]:

@@ -74,7 +74,8 @@ def _geometric_marker(loaded: LoadedMesh, sel: Selector):
             raise InputError(f"{sel.key}.point = {list(sel.point)}: lies outside the mesh (which spans "
                              f"{np.round(lo, 6).tolist()} to {np.round(hi, 6).tolist()}), selects no node")
         node = nearest_node(mesh, p)
-        return lambda x: np.linalg.norm(x.T - node, axis=1) <= 1e-9 * mesh_size(mesh)
+        close = 1e-9 * mesh_size(mesh)                  # collective: outside the marker
+        return lambda x: np.linalg.norm(x.T - node, axis=1) <= close
     if sel.kind == "line":
         seg = np.array([sel.line])
         return lambda x: mesh_groups.distance_to_segments(x.T, seg) <= tol

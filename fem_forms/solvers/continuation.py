@@ -7,6 +7,7 @@ import re
 import time
 from typing import Callable
 
+from mpi4py import MPI
 import numpy as np
 from petsc4py import PETSc
 
@@ -41,6 +42,7 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
 
     # reference scale: residual of the undeformed state under full load
     set_load(1.0)
+    drv._load_scale = None                           # a reused driver's loads or rest shape may have changed
     r_full = drv.load_scale()
 
     report = SolveReport(False, 0.0, 0, math.nan, linear_solver=drv.linear_kind)
@@ -71,7 +73,7 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
                 drv.reuse_factor = False             # stale LU too far off: factor every iteration
         else:
             arr = u.x.array
-            if not np.all(np.isfinite(arr)):
+            if not u.function_space.mesh.comm.allreduce(bool(np.all(np.isfinite(arr))), op=MPI.LAND):
                 why = "NaN or Inf in the solution"
             elif problem.inadmissible is not None and (bad := problem.inadmissible()):
                 why = bad

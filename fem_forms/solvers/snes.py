@@ -310,6 +310,8 @@ class SNESDriver:
         self._set_line_search("basic")
         self.snes.setTolerances(max_it=3)
         self._history = []
+        if self.pc_reuse is not None:
+            self.pc_reuse.start_solve()
         self.snes.solve(None, self.x)
         polished = self.snes.getConvergedReason()
         its, kits = self.snes.getIterationNumber(), self.snes.getLinearSolveIterations()
@@ -326,11 +328,16 @@ class SNESDriver:
         return reason, its, kits
 
     def _set_line_search(self, kind: str) -> None:
-        """petsc4py 3.18 has no SNESGetLineSearch: set the type through the options database."""
+        """petsc4py 3.18 has no SNESGetLineSearch: set the type through the options database, with every
+        other snes_linesearch_* option of this driver (a new type starts from PETSc's defaults)."""
         opts = PETSc.Options()
-        opts[self.prefix + "snes_linesearch_type"] = kind
+        settings = {k: v for k, v in self.options.items() if k.startswith("snes_linesearch_")}
+        settings["snes_linesearch_type"] = kind
+        for k, v in settings.items():
+            opts[self.prefix + k] = v
         self.snes.setFromOptions()
-        opts.delValue(self.prefix + "snes_linesearch_type")
+        for k in settings:
+            opts.delValue(self.prefix + k)
 
     def stale_preconditioner_failed(self) -> bool:
         """Whether the last linear solve ran with a kept preconditioner (its failure is no reason
