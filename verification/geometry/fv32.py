@@ -17,7 +17,7 @@ from pathlib import Path
 
 import gmsh
 
-from groups import name_surfaces_and_write
+from groups import extrude_slab, name_surfaces_and_write, slab_faces
 
 HALF_THICKNESS = 0.025
 
@@ -38,23 +38,9 @@ def build(out: Path, nx: int = 16, ny: int = 8, nz: int = 1) -> Path:
             mesh.setTransfiniteCurve(c, (nx if i % 2 == 0 else ny) + 1)
         mesh.setTransfiniteSurface(surf)
         mesh.setRecombine(2, surf)
-        ext = occ.extrude([(2, surf)], 0, 0, HALF_THICKNESS, numElements=[nz], recombine=True)
-        occ.synchronize()
-        vol = [t for d, t in ext if d == 3][0]
-        gmsh.model.addPhysicalGroup(3, [vol], 1)
-        names = {}
-        for _, s in gmsh.model.getBoundary([(3, vol)], oriented=False):
-            xmin, ymin, zmin, xmax, ymax, zmax = gmsh.model.getBoundingBox(2, s)
-            if zmax < 1e-6:
-                names[s] = "bottom"
-            elif zmin > HALF_THICKNESS - 1e-6:
-                names[s] = "top"
-            elif xmax < 1e-6:
-                names[s] = "clamped"
-            elif xmin > 10 - 1e-6:
-                names[s] = "free_end"
-            else:
-                names[s] = "sides"
+        vol = extrude_slab(surf, HALF_THICKNESS, nz)
+        names = slab_faces(vol, HALF_THICKNESS, lambda b: "clamped" if b[3] < 1e-6 else
+                           "free_end" if b[0] > 10 - 1e-6 else "sides")
         name_surfaces_and_write(names, out)
     finally:
         gmsh.finalize()

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import gmsh
 
-from groups import name_surfaces_and_write
+from groups import extrude_slab, name_surfaces_and_write, slab_faces
 
 HALF_THICKNESS = 0.05
 
@@ -47,25 +47,9 @@ def build(out: Path, n_arc: int = 24, n_radial: int = 8, n_z: int = 1, grading: 
             mesh.setTransfiniteCurve(c, n_radial + 1)
         mesh.setTransfiniteSurface(surf)
         mesh.setRecombine(2, surf)
-        ext = occ.extrude([(2, surf)], 0, 0, HALF_THICKNESS, numElements=[n_z], recombine=True)
-        occ.synchronize()
-        vol = [t for d, t in ext if d == 3][0]
-        gmsh.model.addPhysicalGroup(3, [vol], 1)
-        names = {}
-        for d, s in gmsh.model.getBoundary([(3, vol)], oriented=False):
-            xmin, ymin, zmin, xmax, ymax, zmax = gmsh.model.getBoundingBox(2, s)
-            if zmax < 1e-6:
-                names[s] = "bottom"
-            elif zmin > HALF_THICKNESS - 1e-6:
-                names[s] = "top"
-            elif xmax < 1e-6:
-                names[s] = "x0"
-            elif ymax < 1e-6:
-                names[s] = "y0"
-            elif xmax > 3.0:
-                names[s] = "outer"
-            else:
-                names[s] = "inner"
+        vol = extrude_slab(surf, HALF_THICKNESS, n_z)
+        names = slab_faces(vol, HALF_THICKNESS, lambda b: "x0" if b[3] < 1e-6 else "y0" if b[4] < 1e-6 else
+                           "outer" if b[3] > 3.0 else "inner")
         name_surfaces_and_write(names, out)
     finally:
         gmsh.finalize()
