@@ -328,11 +328,10 @@ def load_mesh(spec: MeshSpec, comm: MPI.Comm = MPI.COMM_WORLD, degree: int = 1) 
         hi = lo + np.array(spec.size, dtype=float)
         if spec.cell == "prism":
             loaded = LoadedMesh(create_prism_box(comm, lo, hi, list(spec.cells)), None, {})
-            settle_coordinate_element(loaded.mesh)
-            return loaded
-        ct = dmesh.CellType.tetrahedron if spec.cell == "tetrahedron" else dmesh.CellType.hexahedron
-        box = dmesh.create_box(comm, [lo, hi], list(spec.cells), cell_type=ct)
-        loaded = LoadedMesh(box, None, {}, info={"source": "box", "cells": counts[0]})
+        else:
+            ct = dmesh.CellType.tetrahedron if spec.cell == "tetrahedron" else dmesh.CellType.hexahedron
+            box = dmesh.create_box(comm, [lo, hi], list(spec.cells), cell_type=ct)
+            loaded = LoadedMesh(box, None, {}, info={"source": "box", "cells": counts[0]})
         settle_coordinate_element(loaded.mesh)
         return loaded
     key = "mesh.file" if spec.generator == "file" else f"mesh ({spec.generator})"
