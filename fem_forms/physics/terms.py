@@ -38,6 +38,7 @@ class Context:
     extra: dict = field(default_factory=dict)   # what later terms need (time, old values, history)
     dx_regions: ufl.Measure | None = None  # dx tagged with the body loads' volume groups
     body_regions: dict = field(default_factory=dict)   # load index -> the dx ids of its cells
+    thermal_strain: object = None          # alpha (T - T_ref), a UFL scalar, when temperature is coupled in
 
     @property
     def F(self):
