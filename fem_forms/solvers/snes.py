@@ -3,6 +3,7 @@ nonlinear problem, with the energy as line-search objective where one exists."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+import itertools
 import math
 import time
 from typing import Callable
@@ -76,6 +77,9 @@ class SolveReport:
         return sum(s.preconditioner_builds for s in self.steps)
 
 
+_DRIVER_IDS = itertools.count()
+
+
 class SNESDriver:
     """Compiled forms, PETSc objects and callbacks for one problem, reused across load steps."""
 
@@ -92,7 +96,7 @@ class SNESDriver:
         self.dofs = V.dofmap.index_map.size_global * V.dofmap.index_map_bs
         self.linear_kind = linear.choose(linear_kind, self.dofs)
         self.user_options = dict(options or {})
-        self.prefix = prefix
+        self.prefix = f"{prefix}{next(_DRIVER_IDS)}_"   # one per driver: options of two drivers never mix
         self.near_nullspace = near_nullspace
         self.L = fem.form(problem.residual)
         self.a = fem.form(problem.jacobian)
@@ -119,6 +123,7 @@ class SNESDriver:
             self.P.destroy()
         self.P = None
         self.A = fpetsc.create_matrix(self.a, "baij" if mumps or self.multigrid else "aij")
+        self._clear_options()
         opts = PETSc.Options()
         for k, v in merged.items():
             opts[self.prefix + k] = v
@@ -130,8 +135,8 @@ class SNESDriver:
             snes.setObjective(self._objective)
         snes.setMonitor(self._monitor)
         snes.setFromOptions()
-        for k in merged:
-            opts.delValue(self.prefix + k)
+        # kept in the database (under this driver's own prefix) until the driver is gone: the factor's
+        # and the multigrid levels' options (mat_mumps_icntl_*, mg_levels_*) are read at the first solve
         self.options = merged
         # multigrid set-up costs ~30 CG iterations: keep it across Newton steps while that is cheaper
         self.pc_reuse = (PreconditionerReuse(snes, self.comm)
@@ -139,6 +144,18 @@ class SNESDriver:
         if getattr(self, "snes", None) is not None:
             self.snes.destroy()
         self.snes = snes
+
+    def _clear_options(self) -> None:
+        """Remove this driver's options from PETSc's database."""
+        opts = PETSc.Options()
+        for k in getattr(self, "options", {}):
+            opts.delValue(self.prefix + k)
+
+    def __del__(self):
+        try:
+            self._clear_options()
+        except Exception:                 # PETSc already finalised at interpreter exit
+            pass
 
     def _set_state(self, x: PETSc.Vec) -> None:
         x.copy(self.p.u.vector)
@@ -336,8 +353,11 @@ class SNESDriver:
         for k, v in settings.items():
             opts[self.prefix + k] = v
         self.snes.setFromOptions()
-        for k in settings:
-            opts.delValue(self.prefix + k)
+        for k in settings:                       # back to the driver's own settings
+            if k in self.options:
+                opts[self.prefix + k] = self.options[k]
+            else:
+                opts.delValue(self.prefix + k)
 
     def stale_preconditioner_failed(self) -> bool:
         """Whether the last linear solve ran with a kept preconditioner (its failure is no reason
