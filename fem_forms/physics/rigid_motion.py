@@ -72,8 +72,8 @@ def _rigid_modes(model) -> list[PETSc.Vec]:
     return modes
 
 
-def free_modes_pushed(model, r0: PETSc.Vec) -> list[str]:
-    """Names of the rigid motions the supports leave free and the loads do work on."""
+def free_modes(model, r0: PETSc.Vec) -> tuple[list[str], list[str]]:
+    """Names of the rigid motions the supports leave free, and of those among them the loads do work on."""
     modes = _rigid_modes(model)
     lam = model.load.value
     model.load.set(0.0)                     # prescribed values 0: set_bc below copies the mode's values
@@ -89,25 +89,32 @@ def free_modes_pushed(model, r0: PETSc.Vec) -> list[str]:
     gram = np.array([[a.dot(b) for b in held] for a in held])
     values, vectors = np.linalg.eigh(gram)
     rnorm = r0.norm()
-    pushed = []
+    free, pushed = [], []
     for val, q in zip(values, vectors.T):
-        if val > FREE or rnorm == 0.0:
+        if val > FREE:
             continue
+        name = MODE_NAMES[int(np.argmax(np.abs(q)))]
+        free.append(name)
         f = modes[0].duplicate()
         f.set(0.0)
         for c, m in zip(q, modes):
             f.axpy(float(c), m)
-        if abs(r0.dot(f)) > WORK * rnorm * f.norm():
-            pushed.append(MODE_NAMES[int(np.argmax(np.abs(q)))])
+        if rnorm > 0.0 and abs(r0.dot(f)) > WORK * rnorm * f.norm():
+            pushed.append(name)
         f.destroy()
     for v in modes + held:
         v.destroy()
-    return sorted(set(pushed), key=MODE_NAMES.index)
+    return sorted(set(free), key=MODE_NAMES.index), sorted(set(pushed), key=MODE_NAMES.index)
 
 
 def check_supports_hold_loads(model, r0: PETSc.Vec) -> None:
-    """One-line InputError when the loads push a rigid motion the supports leave free."""
-    pushed = free_modes_pushed(model, r0)
+    """One-line InputError when the supports leave a rigid motion free: with the loads pushing it no
+    equilibrium exists; without, the answer would be defined only up to that motion (a singular tangent)."""
+    free, pushed = free_modes(model, r0)
+    if free and not pushed:
+        raise InputError(f"fix: the supports leave the body free ({', '.join(free)}); the loads do not push it "
+                         "that way, but a static answer would then be defined only up to that motion; hold it "
+                         "(another [[fix]] component, e.g. where = { point = [x, y, z] })")
     if pushed:
         other = ("[modal] prestress = false" if model.scene.analysis == "modal"
                  else "use analysis = \"modal\"")

@@ -26,6 +26,8 @@ REFUSED = [
      "fix: the supports leave the body free (translation z) and the loads push it that way"),
     ("roller leaves z free", with_(BASE, "fix", [{"where": {"axis": "x", "at": 0.0}, "components": ["x", "y"]}]),
      "no static equilibrium exists"),
+    ("free but not pushed", with_(BASE, "fix", [{"where": {"axis": "x", "at": 0.0}, "components": ["x", "z"]}]),
+     "fix: the supports leave the body free (translation y); the loads do not push it that way"),
     ("box larger than the machine", with_(BASE, "mesh.cells", [4000, 4000, 4000]),
      "mesh.cells = [4000, 4000, 4000]: 3.84e+11 cells"),
     ("non-numeric snes_rtol", with_(BASE, "solver", {"petsc": {"snes_rtol": "abc"}}),
