@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from dolfinx import fem
+from mpi4py import MPI
 import numpy as np
 
 from fem_forms.output.fields import gather_mesh, write_fields
@@ -48,9 +49,11 @@ def density_function(mesh, density: np.ndarray) -> fem.Function:
 
 
 def write_outputs(out: Path, mesh, density: np.ndarray, carved: np.ndarray, shift=None) -> dict:
-    """void.stl, outer.stl (rank 0, from the gathered mesh), density.xdmf; their names."""
+    """void.stl, outer.stl (rank 0, from the gathered mesh), density.xdmf, and when cells were carved
+    solid.vtu (the cells left solid: the part as built, a mesh any analysis can load); their names."""
     write_fields(out / "density.xdmf", mesh, [density_function(mesh, density)])
     flags = mesh.comm.gather(carved, root=0)
+    any_carved = mesh.comm.allreduce(bool(carved.any()), op=MPI.LOR)
     g = gather_mesh(mesh)
     if mesh.comm.rank == 0:
         points, cells, _ = g
@@ -59,8 +62,13 @@ def write_outputs(out: Path, mesh, density: np.ndarray, carved: np.ndarray, shif
         void = boundary_faces(cells[carved_all]) if carved_all.any() else np.empty((0, 3), dtype=np.int64)
         # the void's faces, turned to point into the void (outward normals of the solid that remains)
         write_stl(out / "void.stl", points, void[:, ::-1], "carved void")
+        if any_carved:
+            import meshio
+            kind = "tetra" if cells.shape[1] == 4 else "hexahedron"
+            meshio.write(out / "solid.vtu", meshio.Mesh(points, [(kind, cells[~carved_all])]))
     mesh.comm.barrier()
-    return {"density": "density.xdmf", "outer_surface": "outer.stl", "void_surface": "void.stl"}
+    files = {"density": "density.xdmf", "outer_surface": "outer.stl", "void_surface": "void.stl"}
+    return files | ({"solid_mesh": "solid.vtu"} if any_carved else {})
 
 
 def picture(path: Path, mesh, carved: np.ndarray, before: dict, after: dict, title: str,
