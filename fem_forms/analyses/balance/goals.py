@@ -183,7 +183,7 @@ def swing(P: Problem, frame: tuple, center: np.ndarray, depth: float) -> np.ndar
     up, e1, e2 = frame
     Wc, bc = _band(np.array([rows.first(e1, center), rows.first(e2, center)]), CENTER_TOLERANCE * P.size)
     Wh = rows.first(up, center - depth * up)
-    p = _program(P, rows.first(up), np.vstack([Wc, Wh]), np.concatenate([bc, [0.0]]))
+    p = _program(P, rows.first(up, center), np.vstack([Wc, Wh]), np.concatenate([bc, [0.0]]))
     return _finish(P, p, lp.solve(p, P.timing),
                    "balance: no carving brings the CoM below the rocking surface's centre with the margin: "
                    "lower margin_angle or shell")
