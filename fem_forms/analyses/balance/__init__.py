@@ -21,6 +21,7 @@ from fem_forms.analyses.balance.output import picture, write_outputs
 from fem_forms.errors import SolveError
 from fem_forms.meshes import load_mesh, mesh_size
 from fem_forms.output import results
+from fem_forms.output.fields import node_values
 from fem_forms.scene import Scene
 
 def _gravity(scene: Scene) -> np.ndarray:
@@ -72,7 +73,8 @@ def run(scene: Scene, out, echo: bool = False) -> dict:
     carved = np.zeros(len(body.ids), dtype=bool)
     carved[body.carvable] = r["solid"] < 0.5
     files = write_outputs(out, mesh, body.density(r["solid"], st.rho, b.fill_density), carved)
-    picture(out / "balance.png", mesh, carved, r["before"], after, scene.title, f" ({b.goal})")
+    picture(out / "balance.png", mesh, carved, r["before"], after, scene.title, f" ({b.goal})",
+            sag=node_values(r["u"]) if b.elastic else None)
     files["picture"] = "balance.png"
     summary = {"analysis": "balance", "title": scene.title, "goal": b.goal, "elastic": b.elastic,
                **after, "before": r["before"], "cells": comm.allreduce(len(body.ids)),
