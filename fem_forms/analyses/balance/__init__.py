@@ -73,9 +73,10 @@ def run(scene: Scene, out, echo: bool = False) -> dict:
     carved = np.zeros(len(body.ids), dtype=bool)
     carved[body.carvable] = r["solid"] < 0.5
     files = write_outputs(out, mesh, body.density(r["solid"], st.rho, b.fill_density), carved)
-    picture(out / "balance.png", mesh, carved, r["before"], after, scene.title, f" ({b.goal})",
-            sag=node_values(r["u"]) if b.elastic else None)
-    files["picture"] = "balance.png"
+    if scene.output.picture:
+        picture(out / "balance.png", mesh, carved, r["before"], after, scene.title, f" ({b.goal})",
+                sag=node_values(r["u"]) if b.elastic else None)
+        files["picture"] = "balance.png"
     summary = {"analysis": "balance", "title": scene.title, "goal": b.goal, "elastic": b.elastic,
                **after, "before": r["before"], "cells": comm.allreduce(len(body.ids)),
                "carvable_cells": comm.allreduce(int(body.carvable.sum())), "mpi_ranks": comm.size,
