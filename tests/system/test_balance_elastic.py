@@ -105,4 +105,4 @@ def test_soft_figure_stands_rigid_topples_sagged_stands_designed(tmp_path, figur
     assert code == 0
     assert again["mass"] == pytest.approx(d["mass"], rel=1e-9)
     assert again["deformed"]["stands"] and again["deformed"]["toppling_angle_deg"] >= MARGIN
-    assert again["deformed"]["toppling_angle_deg"] == pytest.approx(dd["toppling_angle_deg"], abs=0.05)
+    assert again["deformed"]["toppling_angle_deg"] == pytest.approx(dd["toppling_angle_deg"], abs=1e-3)   # measured 8e-7

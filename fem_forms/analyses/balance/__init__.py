@@ -24,6 +24,7 @@ from fem_forms.output import results
 from fem_forms.output.fields import node_values
 from fem_forms.scene import Scene
 
+
 def _gravity(scene: Scene) -> np.ndarray:
     """[balance] gravity, else the scene's gravity load, else -z."""
     g = scene.balance.gravity or next((ld.g for ld in scene.load if ld.type == "gravity"), [0.0, 0.0, -9.81])
