@@ -1,7 +1,8 @@
 """Balance on the shape sagging under gravity (`elastic = true`): a cantilever's deformed centre of mass
 against Euler-Bernoulli-Timoshenko (mass kept as it deforms), and a soft leaning figure that stands rigid,
 topples after sagging, and stands once designed on its sagged shape within 4 static solves; the carved
-part as built (solid.vtu, carved cells removed instead of made soft) checked again by an independent run."""
+part as built (solid.vtu, carved cells removed instead of made soft) checked again by an independent run;
+one too soft for any carving exits 3; 1 and 2 MPI ranks give the same elastic design."""
 import math
 
 import numpy as np
@@ -106,3 +107,33 @@ def test_soft_figure_stands_rigid_topples_sagged_stands_designed(tmp_path, figur
     assert again["mass"] == pytest.approx(d["mass"], rel=1e-9)
     assert again["deformed"]["stands"] and again["deformed"]["toppling_angle_deg"] >= MARGIN
     assert again["deformed"]["toppling_angle_deg"] == pytest.approx(dd["toppling_angle_deg"], abs=1e-3)   # measured 8e-7
+
+
+def test_too_soft_to_stand_exits_3(tmp_path, figure):
+    """E 0.05 MPa (P1): sagged 11 cm, no carving brings the CoM back over the sole; the loop stops at its
+    fixed point and the run exits 3 without a results file."""
+    d = soft(figure, goal="stand")
+    d["material"]["E"], d["discretization"]["degree"] = 5e4, 1
+    code, res, _, _ = run_scene(tmp_path, d)
+    assert code == 3 and res is None
+
+
+@pytest.mark.mpi
+def test_soft_figure_two_ranks_same_design(tmp_path, figure):
+    """The elastic stand design (P1, E 0.1 MPa: the rigid design misses the margin once sagged, the
+    redesign meets it) on 1 and 2 ranks: the same carving and sagged numbers."""
+    import json
+    from helpers import mpirun, toml_dumps
+    d = soft(figure, goal="stand")
+    d["material"]["E"], d["discretization"]["degree"] = 1e5, 1
+    (tmp_path / "s.toml").write_text(toml_dumps(d))
+    got = []
+    for n in (1, 2):
+        p = mpirun(["-m", "fem_forms", "run", str(tmp_path / "s.toml"), "--out", str(tmp_path / f"o{n}")], n=n)
+        assert p.returncode == 0, p.stderr
+        got.append(json.loads((tmp_path / f"o{n}" / "results.json").read_text()))
+    one, two = got
+    assert two["mpi_ranks"] == 2 and one["static_solves"] == two["static_solves"]
+    assert one["elastic_iterations"][0]["toppling_angle_deg"] < MARGIN <= one["deformed"]["toppling_angle_deg"]
+    assert one["carved_fraction"] == pytest.approx(two["carved_fraction"], rel=1e-12)
+    assert np.allclose(one["deformed"]["center_of_mass"], two["deformed"]["center_of_mass"], rtol=1e-9)

@@ -66,7 +66,9 @@ def run(scene: Scene, out, echo: bool = False) -> dict:
     if b.goal != "check":
         why = unmet(after.get("deformed", after), st)
         if why:
-            raise SolveError(f"balance: the binary design misses its goal: {why}")
+            shape = (f" on the shape sagged under gravity (after {len(r['history'])} static solves)"
+                     if b.elastic else "")
+            raise SolveError(f"balance: the binary design misses its goal{shape}: {why}")
     comm = mesh.comm
     if comm.rank == 0:
         out.mkdir(parents=True, exist_ok=True)

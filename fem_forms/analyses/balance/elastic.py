@@ -138,8 +138,8 @@ def sag_design(scene: Scene, gravity: np.ndarray, setting: Callable[[object], Se
             raise
         changed = comm.allreduce(int(np.sum(new != solid)), op=MPI.SUM)
         entry["cells_changed_by_redesign"] = changed
-        if changed <= FIXED_POINT_CELLS * n_carvable and meets:
-            break
+        if changed == 0 or (changed <= FIXED_POINT_CELLS * n_carvable and meets):
+            break                                          # a fixed point: another solve would repeat this one
         solid = new
     if met is not None and not history[-1].get("meets_goal", True):
         solid, numbers, u = met                            # the last solved design that met the goal
