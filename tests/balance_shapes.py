@@ -63,3 +63,16 @@ def lopsided_top(path, h=0.005):
         out, _ = occ.fuse([(3, cone)], [(3, disc), (3, lump)])
         return [t for d, t in out if d == 3]
     return _mesh(path, build, h)
+
+
+def roly_poly(path, R=0.05, H=0.0, r=None, h=0.006):
+    """A hemisphere of radius R resting on its dome (centre at the origin, dome below z = 0) under a
+    cylinder of radius r (default R) and height H on its flat face (H = 0: the hemisphere alone)."""
+    def build(occ):
+        s = occ.addSphere(0, 0, 0, R)
+        box = occ.addBox(-2 * R, -2 * R, 0, 4 * R, 4 * R, 2 * R)
+        out, _ = occ.cut([(3, s)], [(3, box)])
+        if H > 0:
+            out, _ = occ.fuse(out, [(3, occ.addCylinder(0, 0, 0, 0, 0, H, r or R))])
+        return [t for d, t in out if d == 3]
+    return _mesh(path, build, h)

@@ -141,6 +141,14 @@ BONET_WOOD = ("closed form; energy of Bonet & Wood, Nonlinear Continuum Mechanic
 TUTORIAL = ("J. S. Dokken, The FEniCSx tutorial, ch. 2 Hyperelasticity, "
             "https://jsdokken.com/dolfinx-tutorial/chapter2/hyperelasticity.html (v0.5.0)")
 
+HEMI_R = 0.05
+HEMI_MASS = 1000.0 * 2 / 3 * math.pi * HEMI_R**3
+BOX_L, BOX_B, BOX_H, BOX_T = 0.4, 0.2, 0.1, 0.037
+HEMISPHERE = ("closed form: mass properties of homogeneous solids (J. L. Meriam, L. G. Kraige, Engineering "
+              "Mechanics: Dynamics, Wiley, appendix D, table D/4)")
+FLOTATION = ("closed form: Archimedes and the metacentre, BM = I_waterplane / V (K. J. Rawson, E. C. Tupper, "
+             "Basic Ship Theory, 5th ed., Butterworth-Heinemann, 2001, vol. 1)")
+
 CASES = [
     Case("uniaxial_tension", "Uniaxial tension, neo-Hookean (stretch 1.54)", BONET_WOOD,
          "uniaxial_tension.toml",
@@ -220,6 +228,32 @@ CASES = [
                "displacement is then the target for fem_forms (same discrete problem: agreement to the "
                "solvers' tolerances). fem_forms takes its own path (energy line search, growing load "
                "steps, secant predictor), so its Newton count is reported, not compared."),
+    Case("balance_hemisphere", "Solid hemisphere: mass, CoM 3R/8, inertia 2/5 and 83/320 m R^2",
+         HEMISPHERE, "balance_hemisphere.toml",
+         [Row("mass", lambda r: HEMI_MASS, lambda r, ref: float(r["mass"]), 0.015, "kg"),
+          Row("CoM height above the flat face", 3 * HEMI_R / 8,
+              lambda r, ref: float(r["center_of_mass"][2]), 0.015, "m"),
+          Row("inertia about the axis", 2 / 5 * HEMI_MASS * HEMI_R**2,
+              lambda r, ref: float(r["inertia"][2][2]), 0.015, "kg m^2"),
+          Row("transverse inertia about the CoM", 83 / 320 * HEMI_MASS * HEMI_R**2,
+              lambda r, ref: float(r["inertia"][0][0]), 0.015, "kg m^2")],
+         mesh=("hemisphere", {"radius": HEMI_R, "h": HEMI_R / 10}),
+         notes="goal = \"check\" (mass properties only). gmsh tetrahedra of size R/10: the mesh is a polyhedron "
+               "inscribed in the dome (its nodes on the sphere), so volume and moments come out slightly small; "
+               "the integrals themselves are exact for straight-sided cells (boxes: 1e-12 in tests/unit). "
+               "Tolerance 1.5 %."),
+    Case("balance_floating_box", "Floating box: metacentric height GM = KB + BM - KG", FLOTATION,
+         "balance_floating_box.toml",
+         [Row("displaced volume L B T", BOX_L * BOX_B * BOX_T,
+              lambda r, ref: float(r["displaced_volume"]), 1e-9, "m^3"),
+          Row("KB (centre of buoyancy height)", BOX_T / 2,
+              lambda r, ref: float(r["center_of_buoyancy"][2]), 1e-9, "m"),
+          Row("mass = displaced water (it floats at T)", 1000.0 * BOX_L * BOX_B * BOX_T,
+              lambda r, ref: float(r["mass"]), 1e-9, "kg"),
+          Row("GM", BOX_T / 2 + BOX_B**2 / (12 * BOX_T) - BOX_H / 2,
+              lambda r, ref: float(r["metacentric_height"]), 1e-9, "m")],
+         notes="goal = \"check\" with a waterline: the cells are clipped at the water plane (exact for flat "
+               "faces), BM = I / V with I the waterplane's smaller principal second moment, L B^3 / 12."),
 ]
 
 

@@ -2,7 +2,9 @@
 
 Mass, first and second moments are linear in the cellwise density rho_e: with the per-cell integrals
 D_e = [V, int x, int y, int z, int xx, int yy, int zz, int xy, int xz, int yz] (over the cell, on the rest
-shape or on the deformed shape x = X + u), the body's moments are M = sum_e rho_e D_e. The per-cell
+shape or on the deformed shape x = X + u), the body's moments are M = sum_e rho_e D_e. On the deformed
+shape the integrals run over the rest cell (rho dv = rho_0 dV: a part keeps its mass as it deforms), so
+D_e[0] stays the rest volume and rho_e the rest density. The per-cell
 integrals come from one vector DG0 form (compiled once per cell type and displacement space), with a
 quadrature degree that makes them exact for straight-sided tetrahedra, trilinear hexahedra and P1
 displacements (and exact up to the P2 map's own degree for P2 displacements). Sums are over owned cells
@@ -35,15 +37,14 @@ def _form(mesh, u: fem.Function | None):
         v = ufl.TestFunction(Q)
         X = ufl.SpatialCoordinate(mesh)
         if u is None:
-            x, J, p = X, 1.0, 1
+            x, p = X, 1
         else:
-            x = X + u
-            J = ufl.det(ufl.Identity(3) + ufl.grad(u))
+            x = X + u                              # mass conserved: no det F (rho dv = rho_0 dV)
             p = u.function_space.ufl_element().degree()
         q = _degree(mesh.topology.cell_name(), p)
         vals = ufl.as_vector([1.0, x[0], x[1], x[2], x[0] * x[0], x[1] * x[1], x[2] * x[2],
                               x[0] * x[1], x[0] * x[2], x[1] * x[2]])
-        form = fem.form(ufl.inner(J * vals, v) * ufl.dx(metadata={"quadrature_degree": q}))
+        form = fem.form(ufl.inner(vals, v) * ufl.dx(metadata={"quadrature_degree": q}))
         _FORMS[key] = (form, Q, mesh, u)          # holding mesh and u keeps their ids unique
     return _FORMS[key][:2]
 

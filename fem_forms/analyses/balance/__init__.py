@@ -11,20 +11,18 @@ from pathlib import Path
 import sys
 import time
 
-from mpi4py import MPI
 import numpy as np
 
 from fem_forms.analyses.balance.body import Body
 from fem_forms.analyses.balance.design import Setting, design
-from fem_forms.analyses.balance.elastic import SagModel
+from fem_forms.analyses.balance.elastic import sag_design
 from fem_forms.analyses.balance.evaluate import evaluate, unmet
 from fem_forms.analyses.balance.output import picture, write_outputs
 from fem_forms.errors import SolveError
 from fem_forms.meshes import load_mesh, mesh_size
 from fem_forms.output import results
+from fem_forms.output.fields import node_values
 from fem_forms.scene import Scene
-
-MAX_STATIC_SOLVES = 4
 
 
 def _gravity(scene: Scene) -> np.ndarray:
@@ -50,43 +48,6 @@ def _rigid(scene: Scene, st: Setting, body: Body) -> dict:
             "design_time_s": time.perf_counter() - t0}
 
 
-def _elastic(scene: Scene) -> dict:
-    """Design on the sagging shape: solve, redesign on X + u, repeat to a fixed point (<= 4 solves)."""
-    sag = SagModel(scene, _gravity(scene))
-    st = setting(scene, sag.mesh)
-    rest = Body.rest(sag.mesh, st.spec.shell)
-    solid = np.ones(int(rest.carvable.sum()))
-    history = []
-    rigid_before = evaluate(rest, st, solid)
-    if st.spec.goal != "check":
-        solid, _ = design(rest, st)                        # start from the rigid design
-    deformed_before = None
-    for k in range(MAX_STATIC_SOLVES):
-        stiff = np.where(rest.carvable, 1.0, 1.0)
-        stiff[rest.carvable] = np.where(solid > 0.5, 1.0, st.spec.fill_stiffness)
-        result = sag.solve(rest.density(solid, st.rho, st.spec.fill_density), stiff)
-        bent = rest.deformed(sag.model.u)
-        numbers = evaluate(bent, st, solid, rest)
-        history.append({"static_solve": k + 1, "max_displacement": result.max_displacement,
-                        "carved_fraction": numbers["carved_fraction"],
-                        "stability_margin": numbers["stability_margin"]})
-        if k == 0 and st.spec.goal == "check":
-            deformed_before = numbers
-        if st.spec.goal == "check" or k == MAX_STATIC_SOLVES - 1:
-            break
-        new, _ = design(bent, st, rest)
-        changed = bent.mesh.comm.allreduce(int(np.sum(new != solid)), op=MPI.SUM)
-        history[-1]["cells_changed_by_redesign"] = changed
-        if changed == 0:
-            break
-        solid = new
-    after = evaluate(rest, st, solid)
-    after["deformed"] = numbers
-    after["deformed"]["max_displacement"] = result.max_displacement
-    return {"solid": solid, "before": rigid_before, "after": after, "mesh": sag.mesh, "rest": rest, "setting": st,
-            "history": history, "u": sag.model.u, "deformed_before": deformed_before}
-
-
 def run(scene: Scene, out, echo: bool = False) -> dict:
     """Mass properties and the goal's design; results.json last. SolveError (exit 3) when no design
     exists or the binary design misses a requirement."""
@@ -94,7 +55,7 @@ def run(scene: Scene, out, echo: bool = False) -> dict:
     out = Path(out)
     b = scene.balance
     if b.elastic:
-        r = _elastic(scene)
+        r = sag_design(scene, _gravity(scene), lambda mesh: setting(scene, mesh))
         mesh, body, st = r["mesh"], r["rest"], r["setting"]
     else:
         mesh = load_mesh(scene.mesh).mesh
@@ -105,7 +66,9 @@ def run(scene: Scene, out, echo: bool = False) -> dict:
     if b.goal != "check":
         why = unmet(after.get("deformed", after), st)
         if why:
-            raise SolveError(f"balance: the binary design misses its goal: {why}")
+            shape = (f" on the shape sagged under gravity (after {len(r['history'])} static solves)"
+                     if b.elastic else "")
+            raise SolveError(f"balance: the binary design misses its goal{shape}: {why}")
     comm = mesh.comm
     if comm.rank == 0:
         out.mkdir(parents=True, exist_ok=True)
@@ -113,8 +76,10 @@ def run(scene: Scene, out, echo: bool = False) -> dict:
     carved = np.zeros(len(body.ids), dtype=bool)
     carved[body.carvable] = r["solid"] < 0.5
     files = write_outputs(out, mesh, body.density(r["solid"], st.rho, b.fill_density), carved)
-    picture(out / "balance.png", mesh, carved, r["before"], after, scene.title, f" ({b.goal})")
-    files["picture"] = "balance.png"
+    if scene.output.picture:
+        picture(out / "balance.png", mesh, carved, r["before"], after, scene.title, f" ({b.goal})",
+                sag=node_values(r["u"]) if b.elastic else None)
+        files["picture"] = "balance.png"
     summary = {"analysis": "balance", "title": scene.title, "goal": b.goal, "elastic": b.elastic,
                **after, "before": r["before"], "cells": comm.allreduce(len(body.ids)),
                "carvable_cells": comm.allreduce(int(body.carvable.sum())), "mpi_ranks": comm.size,
@@ -127,8 +92,7 @@ def run(scene: Scene, out, echo: bool = False) -> dict:
         summary["design_time_s"] = r["design_time_s"]
     if b.elastic:
         summary["elastic_iterations"] = r["history"]
-        if r["deformed_before"] is not None:
-            summary["deformed"] = r["deformed_before"]
+        summary["static_solves"] = len(r["history"])
     results.write_json_atomic(out / "results.json", summary, comm)
     if echo and comm.rank == 0:
         _echo(summary, out)

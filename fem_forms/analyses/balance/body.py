@@ -36,6 +36,16 @@ def surface_points(mesh) -> np.ndarray:
     return np.vstack(mesh.comm.allgather(local))
 
 
+def _boundary_nodes(mesh) -> np.ndarray:
+    """Owned geometry nodes on the boundary: only they can touch the ground (an interior node near the
+    bottom would bend a rocking surface's sphere fit inwards)."""
+    tdim = mesh.topology.dim
+    mesh.topology.create_connectivity(tdim - 1, tdim)
+    facets = dmesh.exterior_facet_indices(mesh.topology)
+    idx = np.unique(cpp.mesh.entities_to_geometry(mesh._mesh, tdim - 1, facets, False).ravel())
+    return idx[idx < mesh.geometry.index_map().size_local]
+
+
 @dataclass
 class Body:
     """One rank's share of the part on one shape (rest, or deformed by u)."""
@@ -44,7 +54,8 @@ class Body:
     carvable: np.ndarray         # owned cells that may be carved
     moments: np.ndarray          # (owned cells, 10) on this shape
     corners: np.ndarray          # (owned cells, 4 or 8, 3) on this shape
-    nodes: np.ndarray            # owned geometry nodes on this shape
+    nodes: np.ndarray            # owned boundary geometry nodes on this shape
+    node_index: np.ndarray       # their local geometry indices
 
     @classmethod
     def rest(cls, mesh, shell: float) -> "Body":
@@ -55,16 +66,15 @@ class Body:
         dist, _ = tree.query(corners.reshape(-1, 3))
         carvable = dist.reshape(len(cn), -1).min(axis=1) > shell if len(cn) else np.zeros(0, bool)
         ids = np.asarray(mesh.topology.original_cell_index[:n], dtype=np.int64)
-        nown = mesh.geometry.index_map().size_local
-        return cls(mesh, ids, carvable, cell_moments(mesh), corners, mesh.geometry.x[:nown].copy())
+        surface = _boundary_nodes(mesh)
+        return cls(mesh, ids, carvable, cell_moments(mesh), corners, mesh.geometry.x[surface].copy(), surface)
 
     def deformed(self, u: fem.Function) -> "Body":
         """The same cells on the shape X + u."""
         d = node_values(u)
         x = self.mesh.geometry.x + d
-        nown = self.mesh.geometry.index_map().size_local
         return Body(self.mesh, self.ids, self.carvable, cell_moments(self.mesh, u), x[_cell_nodes(self.mesh)],
-                    x[:nown].copy())
+                    x[self.node_index], self.node_index)
 
     def centroids(self) -> np.ndarray:
         return self.corners.mean(axis=1)

@@ -81,9 +81,11 @@ def full_moments(body: Body, st: Setting) -> np.ndarray:
     return total_moments(np.full(len(body.ids), st.rho), body.moments, body.mesh.comm)
 
 
-def design(body: Body, st: Setting, rest: Body | None = None) -> tuple[np.ndarray, goals.Problem | None]:
+def design(body: Body, st: Setting, rest: Body | None = None,
+           best_effort: bool = False) -> tuple[np.ndarray, goals.Problem | None]:
     """The goal's binary carving of this rank's carvable cells (solid fraction 0 or 1) on body's shape.
-    `rest` (the undeformed body) fixes what a floating or spinning design refers to."""
+    `rest` (the undeformed body) fixes what a floating or spinning design refers to; `best_effort`
+    (stand): the largest margin when the requested one is out of reach on this shape."""
     b = st.spec
     rest = rest or body
     up, e1, e2 = st.frame
@@ -94,7 +96,7 @@ def design(body: Body, st: Setting, rest: Body | None = None) -> tuple[np.ndarra
             raise SolveError("balance: the support is a point or a line (no area to stand on): no design "
                              "can stand; raise contact_tolerance or give the part a foot")
         args = (poly.normals, poly.offsets, (up, e1, e2), poly.ground, math.tan(math.radians(b.margin_angle)))
-        run = lambda P: goals.stand(P, *args)
+        run = lambda P: goals.stand(P, *args, best_effort=best_effort)
     elif b.goal == "spin":
         axis = np.asarray(b.axis)
         if b.kind == "top":

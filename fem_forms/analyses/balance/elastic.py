@@ -5,19 +5,32 @@ default 1e-6): the material is wrapped so that its psi(F) is multiplied by a DG0
 factor and the density are fem.Functions, so a new carving compiles nothing; no physics module changes,
 and other analyses' forms stay as they are. (Removing carved cells from the mesh instead would build a
 new mesh, spaces and solver per design and lose the cell correspondence the moments need.)
+
+`sag_design` is the loop of `elastic = true`: solve the sag with the current carving, take the moments on
+X + u (linear in the densities for that u), redesign, repeat until the redesign keeps the design (a fixed
+point within FIXED_POINT_CELLS of the carvable cells) or MAX_STATIC_SOLVES solves. The reported design
+is always one whose sag was solved: its deformed numbers are measured, never predicted by the LP.
 """
 from __future__ import annotations
 
 import dataclasses
+from typing import Callable
 
 from dolfinx import fem
+from mpi4py import MPI
 import numpy as np
 from ufl.algorithms import extract_coefficients
 
+from fem_forms.analyses.balance.body import Body
+from fem_forms.analyses.balance.design import Setting, design
+from fem_forms.analyses.balance.evaluate import evaluate, unmet
 from fem_forms.equilibrium import StaticResult, solve_static
 from fem_forms.errors import SolveError
 from fem_forms.model import Model, build_model
 from fem_forms.scene import Load, Scene
+
+MAX_STATIC_SOLVES = 4
+FIXED_POINT_CELLS = 0.02        # a redesign changing at most this share of the carvable cells keeps the design
 
 
 class CellwiseStiffness:
@@ -46,13 +59,16 @@ class SagModel:
         return self.model.mesh
 
     def solve(self, density: np.ndarray, stiffness: np.ndarray) -> StaticResult:
-        """Static sag with these cellwise densities and stiffness factors (owned cells)."""
+        """Static sag with these cellwise densities and stiffness factors (owned cells), started from the
+        last sag (a redesign changes it little: fewer Newton steps)."""
         self.model.parameters.set_density(density)
         n = len(stiffness)
         self.factor.x.array[self.factor.function_space.dofmap.list.array[:n]] = stiffness
         self.factor.x.scatter_forward()
-        self.model.u.x.array[:] = 0.0
         result = solve_static(self.scene, model=self.model)
+        if not result.report.converged:                  # retry from the rest shape before giving up
+            self.model.u.x.array[:] = 0.0
+            result = solve_static(self.scene, model=self.model)
         if not result.report.converged:
             raise SolveError(f"balance: the sag under gravity did not converge: {result.report.message}")
         return result
@@ -73,3 +89,62 @@ class _Deferred:
             factor.x.array[:] = 1.0
             self.holder["factor"] = factor
         return CellwiseStiffness(self.scene.material.material, self.holder["factor"], self.name).psi(F)
+
+
+def stiffness_factors(body: Body, solid: np.ndarray, fill_stiffness: float) -> np.ndarray:
+    """Per owned cell: 1 for solid cells, `fill_stiffness` for carved ones."""
+    f = np.ones(len(body.ids))
+    f[body.carvable] = np.where(solid > 0.5, 1.0, fill_stiffness)
+    return f
+
+
+def sag_design(scene: Scene, gravity: np.ndarray, setting: Callable[[object], Setting]) -> dict:
+    """The elastic loop: the rigid numbers of the solid part, the design (or, for check, the solid part)
+    and its numbers on the rest and on the sagged shape, and one history entry per static solve."""
+    sag = SagModel(scene, gravity)
+    st = setting(sag.mesh)
+    b = st.spec
+    rest = Body.rest(sag.mesh, b.shell)
+    comm = sag.mesh.comm
+    n_carvable = comm.allreduce(int(rest.carvable.sum()), op=MPI.SUM)
+    solid = np.ones(int(rest.carvable.sum()))
+    rigid_before = evaluate(rest, st, solid)
+    if b.goal != "check":
+        solid, _ = design(rest, st)                        # start from the rigid design
+    history, met = [], None
+    for k in range(MAX_STATIC_SOLVES):
+        result = sag.solve(rest.density(solid, st.rho, b.fill_density), stiffness_factors(rest, solid, b.fill_stiffness))
+        bent = rest.deformed(sag.model.u)
+        numbers = evaluate(bent, st, solid, rest)
+        numbers["max_displacement"] = result.max_displacement
+        entry = {"static_solve": k + 1, "max_displacement": result.max_displacement,
+                 "newton_iterations": result.report.newton_iterations,
+                 "carved_fraction": numbers["carved_fraction"], "stability_margin": numbers["stability_margin"],
+                 "toppling_angle_deg": numbers["toppling_angle_deg"]}
+        history.append(entry)
+        if b.goal == "check":
+            break
+        meets = unmet(numbers, st) is None
+        entry["meets_goal"] = meets
+        if meets:
+            met = (solid, numbers, sag.model.u.x.array.copy())
+        if k == MAX_STATIC_SOLVES - 1:
+            break
+        try:
+            new, _ = design(bent, st, rest, best_effort=True)
+        except SolveError:
+            if meets:                                      # no redesign on this shape, but this design holds
+                break
+            raise
+        changed = comm.allreduce(int(np.sum(new != solid)), op=MPI.SUM)
+        entry["cells_changed_by_redesign"] = changed
+        if changed == 0 or (changed <= FIXED_POINT_CELLS * n_carvable and meets):
+            break                                          # a fixed point: another solve would repeat this one
+        solid = new
+    if met is not None and not history[-1].get("meets_goal", True):
+        solid, numbers, u = met                            # the last solved design that met the goal
+        sag.model.u.x.array[:] = u
+    after = evaluate(rest, st, solid)
+    after["deformed"] = numbers
+    return {"solid": solid, "before": rigid_before, "after": after, "mesh": sag.mesh, "rest": rest, "setting": st,
+            "history": history, "u": sag.model.u}

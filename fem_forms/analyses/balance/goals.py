@@ -81,8 +81,10 @@ def _finish(P: Problem, p: lp.Program, v: np.ndarray | None, why: str) -> np.nda
 
 # ----------------------------------------------------------------------------- stand
 def stand(P: Problem, normals: np.ndarray, offsets: np.ndarray, frame: tuple, ground: float,
-          tan_margin: float) -> np.ndarray:
-    """Largest margin, then least carved mass (binary s)."""
+          tan_margin: float, best_effort: bool = False) -> np.ndarray:
+    """Largest margin, then least carved mass (binary s). With `best_effort`, a margin out of reach
+    returns the largest-margin carving instead of failing (a step of the elastic loop: carving lightens
+    the part, so it sags less than the shape this program was posed on)."""
     up, e1, e2 = frame
     W = np.array([rows.first(-(n[0] * e1 + n[1] * e2) - tan_margin * up) for n in normals])
     W[:, 0] = -offsets + tan_margin * ground
@@ -93,6 +95,8 @@ def stand(P: Problem, normals: np.ndarray, offsets: np.ndarray, frame: tuple, gr
     p1 = lp.Program(c, A, b, P.n, ((None, None),))
     P.timing.setup_s += time.perf_counter() - t0
     v = lp.solve(p1, P.timing)
+    if best_effort and v is not None and v[-1] < 0:
+        return _finish(P, p1, v, "balance: the largest-margin design failed")
     if v is None or v[-1] < 0:
         best = "none" if v is None else f"{v[-1]:.3g} kg m"
         raise SolveError("balance: no carving makes the part stand with the requested margin (best "
@@ -179,7 +183,7 @@ def swing(P: Problem, frame: tuple, center: np.ndarray, depth: float) -> np.ndar
     up, e1, e2 = frame
     Wc, bc = _band(np.array([rows.first(e1, center), rows.first(e2, center)]), CENTER_TOLERANCE * P.size)
     Wh = rows.first(up, center - depth * up)
-    p = _program(P, rows.first(up), np.vstack([Wc, Wh]), np.concatenate([bc, [0.0]]))
+    p = _program(P, rows.first(up, center), np.vstack([Wc, Wh]), np.concatenate([bc, [0.0]]))
     return _finish(P, p, lp.solve(p, P.timing),
                    "balance: no carving brings the CoM below the rocking surface's centre with the margin: "
                    "lower margin_angle or shell")

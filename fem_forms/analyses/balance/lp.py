@@ -40,10 +40,21 @@ class Timing:
     fractional: int = 0
 
 
+def scaled(c: np.ndarray, A: np.ndarray, b: np.ndarray) -> tuple:
+    """c, and each row of A v <= b, divided by its largest |coefficient|: HiGHS's feasibility and
+    optimality tolerances are absolute (about 1e-7), and rows of moments in kg m^2 are smaller than that
+    (a spin design's product-of-inertia rows were ignored: 14x over their bound)."""
+    r = np.abs(A).max(axis=1) if A.size else np.ones(len(b))
+    r[r == 0] = 1.0
+    cmax = np.abs(c).max() if c.size else 1.0
+    return c / (cmax if cmax > 0 else 1.0), A / r[:, None], b / r
+
+
 def solve(p: Program, timing: Timing | None = None) -> np.ndarray | None:
     """The LP's optimal v, or None when infeasible."""
     t0 = time.perf_counter()
-    r = linprog(p.c, A_ub=p.A_ub, b_ub=p.b_ub, bounds=p.bounds(), method="highs")
+    c, A, b = scaled(p.c, p.A_ub, p.b_ub)
+    r = linprog(c, A_ub=A, b_ub=b, bounds=p.bounds(), method="highs")
     if timing is not None:
         timing.solve_s += time.perf_counter() - t0
         timing.lps += 1
@@ -96,6 +107,7 @@ def _milp_on(p: Program, fixed: np.ndarray, free: np.ndarray) -> np.ndarray | No
     lo = np.concatenate([np.zeros(len(free)), [(-np.inf if b_[0] is None else b_[0]) for b_ in p.extra_bounds]])
     hi = np.concatenate([np.ones(len(free)), [(np.inf if b_[1] is None else b_[1]) for b_ in p.extra_bounds]])
     integrality = np.concatenate([np.ones(len(free)), np.zeros(ne)])
+    c, A, b = scaled(c, A, b)
     r = milp(c, constraints=LinearConstraint(A, -np.inf, b), integrality=integrality, bounds=Bounds(lo, hi),
              options={"time_limit": 30.0})
     if r.x is None or r.status not in (0, 1):

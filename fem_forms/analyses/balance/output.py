@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from dolfinx import fem
+from mpi4py import MPI
 import numpy as np
 
 from fem_forms.output.fields import gather_mesh, write_fields
@@ -48,9 +49,11 @@ def density_function(mesh, density: np.ndarray) -> fem.Function:
 
 
 def write_outputs(out: Path, mesh, density: np.ndarray, carved: np.ndarray, shift=None) -> dict:
-    """void.stl, outer.stl (rank 0, from the gathered mesh), density.xdmf; their names."""
+    """void.stl, outer.stl (rank 0, from the gathered mesh), density.xdmf, and when cells were carved
+    solid.vtu (the cells left solid: the part as built, a mesh any analysis can load); their names."""
     write_fields(out / "density.xdmf", mesh, [density_function(mesh, density)])
     flags = mesh.comm.gather(carved, root=0)
+    any_carved = mesh.comm.allreduce(bool(carved.any()), op=MPI.LOR)
     g = gather_mesh(mesh)
     if mesh.comm.rank == 0:
         points, cells, _ = g
@@ -59,15 +62,22 @@ def write_outputs(out: Path, mesh, density: np.ndarray, carved: np.ndarray, shif
         void = boundary_faces(cells[carved_all]) if carved_all.any() else np.empty((0, 3), dtype=np.int64)
         # the void's faces, turned to point into the void (outward normals of the solid that remains)
         write_stl(out / "void.stl", points, void[:, ::-1], "carved void")
+        if any_carved:
+            import meshio
+            kind = "tetra" if cells.shape[1] == 4 else "hexahedron"
+            meshio.write(out / "solid.vtu", meshio.Mesh(points, [(kind, cells[~carved_all])]))
     mesh.comm.barrier()
-    return {"density": "density.xdmf", "outer_surface": "outer.stl", "void_surface": "void.stl"}
+    files = {"density": "density.xdmf", "outer_surface": "outer.stl", "void_surface": "void.stl"}
+    return files | ({"solid_mesh": "solid.vtu"} if any_carved else {})
 
 
 def picture(path: Path, mesh, carved: np.ndarray, before: dict, after: dict, title: str,
-            extra: str = "") -> None:
-    """Two panels: the part solid and carved, each with its CoM, support polygon and axis/waterline."""
+            extra: str = "", sag: np.ndarray | None = None) -> None:
+    """Two panels, each with its CoM, support polygon and axis/waterline: the part solid and carved; or,
+    given the sag (displacement per local geometry node, elastic = true), the design rigid and sagged."""
     flags = mesh.comm.gather(carved, root=0)
     g = gather_mesh(mesh)
+    gs = gather_mesh(mesh, sag) if sag is not None else None
     if mesh.comm.rank != 0:
         mesh.comm.barrier()
         return
@@ -80,7 +90,12 @@ def picture(path: Path, mesh, carved: np.ndarray, before: dict, after: dict, tit
     carved_all = np.concatenate(flags)
     void = boundary_faces(cells[carved_all]) if carved_all.any() else None
     fig = plt.figure(figsize=(11, 5.5))
-    for k, (label, nums, show_void) in enumerate((("solid", before, False), ("carved", after, True))):
+    panels = [("solid", before, False, points), ("carved", after, True, points)]
+    if gs is not None:
+        panels = [("rigid", after, True, points), ("sagged", after["deformed"], True, gs[0])]
+    lo = np.min([p[3].min(axis=0) for p in panels], axis=0)
+    hi = np.max([p[3].max(axis=0) for p in panels], axis=0)
+    for k, (label, nums, show_void, points) in enumerate(panels):
         ax = fig.add_subplot(1, 2, k + 1, projection="3d")
         ax.plot_trisurf(points[:, 0], points[:, 1], points[:, 2], triangles=outer, color=(0.7, 0.7, 0.75, 0.15),
                         edgecolor=(0.3, 0.3, 0.3, 0.05), linewidth=0.1)
@@ -104,7 +119,7 @@ def picture(path: Path, mesh, carved: np.ndarray, before: dict, after: dict, tit
             t = np.asarray(nums["tip"])
             L = np.ptp(points, axis=0).max()
             ax.plot(*np.stack([t, t + L * a]).T, color="tab:red", lw=1.5, label="spin axis")
-        _style_axes(ax, points.min(axis=0), points.max(axis=0))
+        _style_axes(ax, lo, hi)
         ang = nums.get("toppling_angle_deg")
         ax.set_title(f"{label}: m = {nums['mass']:.4g} kg" + (f", topple {ang:.1f} deg" if ang is not None else ""))
         ax.legend(loc="upper left", fontsize=7)

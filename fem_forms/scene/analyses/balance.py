@@ -94,6 +94,6 @@ ANALYSIS = Analysis(
     runner="fem_forms.analyses.balance:run",
     sections=(Section("balance", "what must balance and how the interior may be carved", BalanceSpec,
                       keys=COMMON_KEYS, variants=VARIANTS, rules=_rules),),
-    outputs=("results.json", "void.stl", "outer.stl", "density.xdmf", "balance.png"),
+    outputs=("results.json", "void.stl", "outer.stl", "density.xdmf", "balance.png", "solid.vtu (when carved)"),
     check=_check,
 )

@@ -1,0 +1,57 @@
+"""A roly-poly toy carved inside so that it rocks back upright (Make it swing).
+
+    python demos/roly_poly.py OUT_DIR
+
+The toy (a hemisphere of radius 5 cm resting on its dome, under a cylinder 4 cm tall) is meshed with gmsh.
+Tilted, it rolls on its dome about the dome's centre: it comes back only if its centre of mass lies below
+that centre. Solid, the CoM is above it (the toy falls over); `goal = "swing"` fits a sphere to the
+contact region (the rocking surface), then carves the interior (a 3 mm wall kept) so that the CoM lies on
+the vertical through the sphere's centre and at least R sin(5 deg) below it, with the largest righting
+moment m g d sin(tilt). Prints the rocking centre and radius and the CoM's depth below the centre.
+"""
+from pathlib import Path
+import sys
+
+import gmsh
+
+import fem_forms as ff
+from fem_forms.analyses import run_analysis
+
+
+def toy(path: Path, R: float = 0.05, H: float = 0.04, h: float = 0.006) -> Path:
+    gmsh.initialize()
+    gmsh.option.setNumber("General.Terminal", 0)
+    occ = gmsh.model.occ
+    ball = occ.addSphere(0, 0, 0, R)
+    top = occ.addBox(-2 * R, -2 * R, 0, 4 * R, 4 * R, 2 * R)
+    dome, _ = occ.cut([(3, ball)], [(3, top)])
+    out, _ = occ.fuse(dome, [(3, occ.addCylinder(0, 0, 0, 0, 0, H, R))])
+    occ.synchronize()
+    gmsh.model.addPhysicalGroup(3, [t for d, t in out if d == 3], 1)
+    gmsh.option.setNumber("Mesh.CharacteristicLengthMax", h)
+    gmsh.option.setNumber("Mesh.CharacteristicLengthMin", h / 3)
+    gmsh.model.mesh.generate(3)
+    gmsh.write(str(path))
+    gmsh.finalize()
+    return path
+
+
+def main(out: Path) -> None:
+    out.mkdir(parents=True, exist_ok=True)
+    scene = {"title": "roly-poly toy", "analysis": "balance",
+             "mesh": {"generator": "file", "file": str(toy(out / "toy.msh"))},
+             "material": {"model": "neo-hookean", "E": 2e9, "nu": 0.35, "rho": 1200.0},
+             "balance": {"goal": "swing", "margin_angle": 5.0, "shell": 0.003, "contact_tolerance": 0.01}}
+    d = run_analysis(ff.Scene.from_dict(scene), out / "swing")
+    b = d["before"]
+    c = d["curvature_center"]
+    print(f"rocking surface: centre ({c[0]:.3e}, {c[1]:.3e}, {c[2]:.3e}) m, radius {d['curvature_radius']:.6f} m")
+    print(f"solid: CoM height above the centre {-b['com_depth_below_center']:.6f} m, mass {b['mass']:.6f} kg")
+    print(f"carved: CoM depth below the centre {d['com_depth_below_center']:.6f} m, off its vertical "
+          f"{d['com_offset_from_center_vertical']:.3e} m, mass {d['mass']:.6f} kg, carved fraction "
+          f"{d['carved_fraction']:.4f}")
+    print(f"picture: {out / 'swing' / 'balance.png'}")
+
+
+if __name__ == "__main__":
+    main(Path(sys.argv[1] if len(sys.argv) > 1 else "roly_poly_out"))

@@ -1,0 +1,38 @@
+"""Solid hemisphere of radius R (flat face on z = 0, centred at the origin, dome up): gmsh geometry and a
+tetrahedral mesh of size h, written as hemisphere.msh (straight-sided tetrahedra inscribed in the dome).
+
+    python verification/geometry/hemisphere.py [--radius 0.05] [--h 0.005] [--out hemisphere.msh]
+"""
+import argparse
+from pathlib import Path
+
+import gmsh
+
+
+def build(out: Path, radius: float = 0.05, h: float = 0.005) -> Path:
+    gmsh.initialize()
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add("hemisphere")
+        occ = gmsh.model.occ
+        ball = occ.addSphere(0, 0, 0, radius)
+        below = occ.addBox(-2 * radius, -2 * radius, -2 * radius, 4 * radius, 4 * radius, 2 * radius)
+        dome, _ = occ.cut([(3, ball)], [(3, below)])
+        occ.synchronize()
+        gmsh.model.addPhysicalGroup(3, [t for d, t in dome if d == 3], 1)
+        gmsh.option.setNumber("Mesh.CharacteristicLengthMax", h)
+        gmsh.option.setNumber("Mesh.CharacteristicLengthMin", h / 3)
+        gmsh.model.mesh.generate(3)
+        gmsh.write(str(out))
+    finally:
+        gmsh.finalize()
+    return Path(out)
+
+
+if __name__ == "__main__":
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--radius", type=float, default=0.05)
+    ap.add_argument("--h", type=float, default=0.005)
+    ap.add_argument("--out", type=Path, default=Path(__file__).with_name("hemisphere.msh"))
+    a = ap.parse_args()
+    print(build(a.out, a.radius, a.h))
