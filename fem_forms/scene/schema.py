@@ -59,6 +59,8 @@ def key_schema(k: Key) -> dict:
         s = {"type": "array", "items": {"enum": ["x", "y", "z"]}, "minItems": 1, "uniqueItems": True}
     elif k.kind == "table":
         s = _object(k.keys)
+    elif k.kind == "tables":
+        s = {"type": "array", "items": _object(k.keys)}
     elif k.kind == "map":
         s = {"type": "object", "additionalProperties": key_schema(k.item)}
     elif k.kind == "options":
@@ -137,9 +139,12 @@ def scene_schema() -> dict:
     rules = []
     for analysis in registry.ANALYSES.values():
         for s in analysis.sections:
+            if s.name in props:               # a section several analyses own: its first declaration
+                continue
             props[s.name] = section_schema(s)
-            props[s.name]["description"] = f"{s.doc} (analysis = {analysis.name!r} only)"
-        others = [name for name, (owner, _) in owned.items() if owner is not analysis]
+            names = " or ".join(repr(a.name) for a in owned[s.name][0])
+            props[s.name]["description"] = f"{s.doc} (analysis = {names} only)"
+        others = [name for name, (owners, _) in owned.items() if analysis not in owners]
         if others:
             cond = {"properties": {"analysis": {"const": analysis.name}}}
             if analysis.name != registry.ANALYSIS_KEY.default:

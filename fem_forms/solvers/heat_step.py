@@ -1,0 +1,72 @@
+"""One heat solve, steady or a backward-Euler step, through the one SNES driver: linear conduction and
+convection take one linear solve (`ksponly`, the factor kept while dt stays the same); radiation takes
+Newton. A step is accepted only if SNES converged and the temperature is finite; otherwise the State
+rolls back."""
+from __future__ import annotations
+
+import math
+
+from mpi4py import MPI
+import numpy as np
+
+from fem_forms.physics.heat import HeatForms
+from fem_forms.solvers import snes
+from fem_forms.solvers.time_stepping import StepOutcome
+from fem_forms.state import State
+
+# linear heat: one Krylov/LU solve per step, tangent and factor kept across steps of equal dt
+LINEAR = {"snes_type": "ksponly", "snes_lag_jacobian": -2, "snes_lag_jacobian_persists": True,
+          "snes_lag_preconditioner": -2, "snes_lag_preconditioner_persists": True}
+
+
+class HeatSolver:
+    """Solves HeatForms for its temperature; `state` holds the temperature and its last committed value."""
+
+    def __init__(self, forms: HeatForms, state: State, options: dict | None = None, linear_kind: str = "auto"):
+        self.forms, self.state = forms, state
+        opts = dict(LINEAR) if forms.linear else {}
+        opts.update(options or {})
+        problem = snes.NonlinearProblem(forms.T, forms.residual, forms.jacobian, forms.bcs, state=state)
+        self.driver = snes.SNESDriver(problem, opts, linear_kind=linear_kind, prefix="fem_forms_heat_")
+        self.iterations = 0
+        self._dt = None
+
+    def solve(self, t: float = 0.0, dt: float | None = None) -> StepOutcome:
+        """The temperature at time t (after a step dt from the committed one, or steady with dt None);
+        committed when accepted, rolled back otherwise."""
+        self.forms.set_time(t, dt)
+        if self.forms.linear and dt != self._dt and self._dt is not None:
+            self.driver._build_snes()            # a new dt changes the operator: assemble and factor anew
+        self._dt = dt
+        record = self.driver.solve_step()
+        self.iterations += max(record.iterations, 1)
+        T = self.forms.T
+        local_ok = bool(np.all(np.isfinite(T.x.array)))
+        finite = T.function_space.mesh.comm.allreduce(local_ok, op=MPI.LAND)
+        if record.accepted and finite:
+            self.state.commit()
+            return StepOutcome(True, record.iterations)
+        self.state.rollback()
+        self.driver._build_snes()
+        why = record.reason if finite else "temperature not finite"
+        return StepOutcome(False, record.iterations, why=why)
+
+    def step(self, t: float, dt: float) -> StepOutcome:
+        """The time-stepping protocol: advance the committed temperature from t to t + dt."""
+        return self.solve(t + dt, dt)
+
+    def undo(self) -> None:                       # heat steps are not adaptive: nothing to undo
+        pass
+
+
+def max_value(f) -> float:
+    """Largest owned nodal value of a scalar Function over all ranks."""
+    n = f.function_space.dofmap.index_map.size_local
+    local = float(f.x.array[:n].max()) if n else -math.inf
+    return f.function_space.mesh.comm.allreduce(local, op=MPI.MAX)
+
+
+def min_value(f) -> float:
+    n = f.function_space.dofmap.index_map.size_local
+    local = float(f.x.array[:n].min()) if n else math.inf
+    return f.function_space.mesh.comm.allreduce(local, op=MPI.MIN)
