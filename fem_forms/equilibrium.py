@@ -9,10 +9,11 @@ from dolfinx import fem
 from mpi4py import MPI
 import numpy as np
 
-from fem_forms.errors import SolveError
+from fem_forms.errors import InputError, SolveError
 from fem_forms.model import Model, build_model
 from fem_forms.physics.heat import HeatForms
-from fem_forms.solvers.heat_step import HeatSolver
+from fem_forms.physics.thermoelastic import young_modulus
+from fem_forms.solvers.heat_step import HeatSolver, max_value, min_value
 from fem_forms.state import State
 from fem_forms.output import probes
 from fem_forms.output.quantities import Quantities
@@ -98,7 +99,21 @@ def solve_temperature(model: Model) -> None:
     out = HeatSolver(forms, State({"temperature": T}), linear_kind=scene.solver.linear).solve()
     if not out.accepted:
         raise SolveError(f"{scene.title}: the steady heat problem did not converge ({out.why})")
+    check_modulus(model)
     model.state.commit()
+
+
+def check_modulus(model: Model) -> None:
+    """E(T) = E + dE/dT (T - T_ref) must stay positive over the temperatures reached (one-line InputError)."""
+    th = model.scene.thermal
+    if th.modulus_slope == 0.0:
+        return
+    E = young_modulus(model.material)
+    for T in (min_value(model.temperature), max_value(model.temperature)):
+        if E + th.modulus_slope * (T - th.reference_temperature) <= 0:
+            raise InputError(f"thermal.modulus_slope = {th.modulus_slope}: E(T) = "
+                             f"{E + th.modulus_slope * (T - th.reference_temperature):.4g} Pa at T = {T:.6g} "
+                             "is not positive")
 
 
 def solve_static(scene: Scene, material=None, model: Model | None = None) -> StaticResult:

@@ -138,18 +138,24 @@ def scene_schema() -> dict:
     props.update({s.name: section_schema(s) for s in CORE_SECTIONS})
     rules = []
     for analysis in registry.ANALYSES.values():
+        narrowed = {}
         for s in analysis.sections:
-            if s.name in props:               # a section several analyses own: its first declaration
+            if s is not owned[s.name][1]:     # this analysis reads a table another declares more widely
+                narrowed[s.name] = section_schema(s)
+                narrowed[s.name]["description"] = f"{s.doc} (analysis = {analysis.name!r})"
                 continue
             props[s.name] = section_schema(s)
             names = " or ".join(repr(a.name) for a in owned[s.name][0])
             props[s.name]["description"] = f"{s.doc} (analysis = {names} only)"
         others = [name for name, (owners, _) in owned.items() if analysis not in owners]
-        if others:
+        if others or narrowed:
             cond = {"properties": {"analysis": {"const": analysis.name}}}
             if analysis.name != registry.ANALYSIS_KEY.default:
                 cond["required"] = ["analysis"]
-            rules.append({"if": cond, "then": {"propertyNames": {"not": {"enum": others}}}})
+            then = {"propertyNames": {"not": {"enum": others}}} if others else {}
+            if narrowed:
+                then["properties"] = narrowed
+            rules.append({"if": cond, "then": then})
     analyses = "; ".join(f"{a.name} writes {', '.join(a.outputs)}" for a in registry.ANALYSES.values())
     return {
         "$schema": DRAFT,
