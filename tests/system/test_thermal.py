@@ -144,6 +144,17 @@ def test_transient_bar_against_the_fourier_series():
         assert row[2] == pytest.approx(series(1.0, row[0]), abs=2e-3)
 
 
+def test_a_transient_run_at_steady_state_steps_through():
+    """Initial temperature equal to the held one: every step's residual is round-off, none is rejected."""
+    d = {"analysis": "thermal", "mesh": {"size": [1.0, 0.1, 0.1], "cells": [20, 1, 1]},
+         "material": {"E": 1e9, "nu": 0.3, "rho": 1.0}, "dynamic": {"duration": 0.05, "dt": 0.01},
+         "thermal": {"conductivity": 1.3, "specific_heat": 1.0, "initial_temperature": 293.15, "boundary": [
+             {"where": {"axis": "x", "at": 0.0}, "temperature": 293.15},
+             {"where": {"axis": "x", "at": 1.0}, "convection": {"h": 7.0, "ambient": 293.15}}]}}
+    r = solve_thermal(ff.Scene.from_dict(d))
+    assert r.steps == 5 and r.summary()["max_temperature"] == pytest.approx(293.15, rel=1e-13)
+
+
 @pytest.mark.mpi
 def test_two_ranks_agree_on_a_transient_run(tmp_path):
     d = {"title": "t", "analysis": "thermal", "mesh": {"size": [1.0, 0.2, 0.1], "cells": [20, 4, 2]},
