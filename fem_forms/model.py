@@ -63,7 +63,7 @@ class Model:
         """Names of the terms assembled into this model's forms (results.json "physics")."""
         names = [t.name for t in self.terms]
         if self.temperature is not None:
-            names.append("thermal strain (steady heat first, staggered)")
+            names.append("thermal strain (heat solved first, staggered)")
         return names
 
     @property

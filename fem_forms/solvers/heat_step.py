@@ -29,8 +29,9 @@ LINEAR = {"snes_type": "ksponly", "snes_lag_jacobian": -2, "snes_lag_jacobian_pe
 class HeatSolver:
     """Solves HeatForms for its temperature; `state` holds the temperature and its last committed value."""
 
-    def __init__(self, forms: HeatForms, state: State, options: dict | None = None, linear_kind: str = "auto"):
-        self.forms, self.state = forms, state
+    def __init__(self, forms: HeatForms, state: State, options: dict | None = None, linear_kind: str = "auto",
+                 commit: bool = True):
+        self.forms, self.state, self.commit = forms, state, commit
         opts = dict(LINEAR) if forms.linear else {}
         opts.update(options or {})
         problem = snes.NonlinearProblem(forms.T, forms.residual, forms.jacobian, forms.bcs, state=state)
@@ -43,7 +44,7 @@ class HeatSolver:
 
     def solve(self, t: float = 0.0, dt: float | None = None) -> StepOutcome:
         """The temperature at time t (after a step dt from the committed one, or steady with dt None);
-        committed when accepted, rolled back otherwise."""
+        committed when accepted (unless the caller commits: a staggered step), rolled back otherwise."""
         self.forms.set_time(t, dt)
         if self.forms.linear and dt != self._dt and self._dt is not None:
             self.driver._build_snes()            # a new dt changes the operator: assemble and factor anew
@@ -57,7 +58,8 @@ class HeatSolver:
         if forms_linear_unsolved(self.forms.linear, res) and res[-1] > self.driver.roundoff_floor():
             record.accepted, record.reason = False, f"residual fell only to {res[-1]:.3g} from {res[0]:.3g}"
         if record.accepted and finite:
-            self.state.commit()
+            if self.commit:
+                self.state.commit()
             return StepOutcome(True, record.iterations)
         self.state.rollback()
         self.driver._build_snes()
