@@ -43,7 +43,8 @@ class StaticResult:
 
     def summary(self) -> dict:
         r = self.report
-        return {
+        heat = {} if self.model.temperature is None else {"max_temperature": max_value(self.model.temperature)}
+        return {**heat,
             "analysis": "static",
             "title": self.model.scene.title,
             "dofs": self.model.dofs,

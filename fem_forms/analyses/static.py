@@ -11,7 +11,6 @@ from fem_forms.errors import SolveError
 from fem_forms.output import fields, pictures, results
 from fem_forms.output.quantities import output_fields
 from fem_forms.scene import Scene
-from fem_forms.solvers.heat_step import max_value
 
 
 def write_static_outputs(result: StaticResult, out: "Path") -> dict:
@@ -27,8 +26,6 @@ def write_static_outputs(result: StaticResult, out: "Path") -> dict:
     if result.report.converged:
         scene = result.model.scene
         T = result.model.temperature
-        if T is not None:
-            summary["max_temperature"] = max_value(T)
         if scene.output.fields:
             written = output_fields(result.quantities, scene.output.fields)
             if T is not None:

@@ -175,3 +175,28 @@ def test_two_ranks_agree_on_a_transient_run(tmp_path):
     np.testing.assert_allclose(rows, np.array(serial.probe_rows), rtol=1e-9, atol=1e-12)
     assert (tmp_path / "out" / "probes.csv").read_text().splitlines()[0] == "time,a_T,b_T"
     assert par["max_temperature"] == pytest.approx(serial.summary()["max_temperature"], rel=1e-12)
+
+
+@pytest.mark.mpi
+def test_two_ranks_agree_on_a_coupled_static_run(tmp_path):
+    """Steady heat with convection, then the neo-Hookean bar's thermal bending, on 1 and 2 ranks."""
+    d = {"title": "t", "mesh": {"size": [1.0, 0.1, 0.05], "cells": [16, 2, 2]},
+         "material": {"model": "neo-hookean", "E": 1e6, "nu": 0.3}, "discretization": {"degree": 2},
+         "thermal": {"conductivity": 0.5, "expansion": 1e-3, "modulus_slope": -2e3, "boundary": [
+             {"where": {"axis": "z", "at": 0.0}, "temperature": 40.0},
+             {"where": {"axis": "z", "at": 0.05}, "convection": {"h": 20.0, "ambient": 0.0}}]},
+         "fix": [{"where": {"axis": "x", "at": 0.0}}],
+         "output": {"probes": {"tip": [1.0, 0.05, 0.025]}, "picture": False}}
+    path = tmp_path / "scene.toml"
+    path.write_text(toml_dumps(d))
+    serial = ff.solve_static(ff.Scene.from_file(path)).summary()
+    assert serial["converged"] and abs(serial["probes"]["tip"]["displacement"][2]) > 1e-3
+    assert serial["max_temperature"] == pytest.approx(40.0, rel=1e-12)
+    p = mpirun(["-m", "fem_forms", "run", str(path), "--out", str(tmp_path / "out")])
+    assert p.returncode == 0, p.stderr
+    par = json.loads((tmp_path / "out" / "results.json").read_text())
+    assert par["mpi_ranks"] == 2
+    np.testing.assert_allclose(par["probes"]["tip"]["displacement"], serial["probes"]["tip"]["displacement"],
+                               rtol=1e-8, atol=1e-12)
+    assert par["probes"]["tip"]["temperature"] == pytest.approx(serial["probes"]["tip"]["temperature"], rel=1e-10)
+    assert par["max_temperature"] == pytest.approx(40.0, rel=1e-12)
