@@ -9,7 +9,12 @@ from dolfinx import fem
 from mpi4py import MPI
 import numpy as np
 
+from fem_forms.errors import InputError, SolveError
 from fem_forms.model import Model, build_model
+from fem_forms.physics.heat import HeatForms
+from fem_forms.physics.thermoelastic import young_modulus
+from fem_forms.solvers.heat_step import HeatSolver, max_value, min_value
+from fem_forms.state import State
 from fem_forms.output import probes
 from fem_forms.output.quantities import Quantities
 from fem_forms.output.reactions import reaction_report
@@ -38,7 +43,8 @@ class StaticResult:
 
     def summary(self) -> dict:
         r = self.report
-        return {
+        heat = {} if self.model.temperature is None else {"max_temperature": max_value(self.model.temperature)}
+        return {**heat,
             "analysis": "static",
             "title": self.model.scene.title,
             "dofs": self.model.dofs,
@@ -84,12 +90,41 @@ def max_norm(f: fem.Function) -> float:
     return f.function_space.mesh.comm.allreduce(local, op=MPI.MAX)
 
 
+def solve_temperature(model: Model) -> None:
+    """The steady temperature of a coupled static scene (staggered: heat first, then the mechanics with
+    its thermal strain ramped by the load factor); SolveError if the heat solve fails."""
+    scene = model.scene
+    T = model.temperature
+    forms = HeatForms(scene.thermal, scene.material.rho, model.loaded, T, model.state.old["temperature"],
+                      False, scene.discretization.quadrature)
+    out = HeatSolver(forms, State({"temperature": T}), linear_kind=scene.solver.linear).solve()
+    if not out.accepted:
+        raise SolveError(f"{scene.title}: the steady heat problem did not converge ({out.why})")
+    check_modulus(model)
+    model.state.commit()
+
+
+def check_modulus(model: Model) -> None:
+    """E(T) = E + dE/dT (T - T_ref) must stay positive over the temperatures reached (one-line InputError)."""
+    th = model.scene.thermal
+    if th.modulus_slope == 0.0:
+        return
+    E = young_modulus(model.material)
+    for T in (min_value(model.temperature), max_value(model.temperature)):
+        if E + th.modulus_slope * (T - th.reference_temperature) <= 0:
+            raise InputError(f"thermal.modulus_slope = {th.modulus_slope}: E(T) = "
+                             f"{E + th.modulus_slope * (T - th.reference_temperature):.4g} Pa at T = {T:.6g} "
+                             "is not positive")
+
+
 def solve_static(scene: Scene, material=None, model: Model | None = None) -> StaticResult:
     """Solve the scene's equilibrium. `material` may be a Material or a user's psi(F) function.
     Raises InputError for bad input; a failed solve is returned with report.converged False."""
     t0 = time.perf_counter()
     model = model or build_model(scene, material)
     probes.evaluate(model.u, scene.output.probes)          # a probe outside the mesh is bad input
+    if model.temperature is not None:
+        solve_temperature(model)
     problem = snes.NonlinearProblem(
         model.unknown, model.residual, model.jacobian, model.bcs,
         energy=model.energy if model.conservative else None,
@@ -115,6 +150,9 @@ def solve_static(scene: Scene, material=None, model: Model | None = None) -> Sta
         result.quantities = Quantities(model)
         result.probe_stresses = result.quantities.at_probes(scene.output.probes)
         result.reactions = reaction_report(model)
+        if model.temperature is not None:
+            for name, value in probes.evaluate(model.temperature, scene.output.probes).items():
+                result.probe_stresses.setdefault(name, {})["temperature"] = value[0]
     result.wall_time_s = time.perf_counter() - t0
     return result
 

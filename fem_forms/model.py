@@ -16,6 +16,7 @@ from fem_forms.physics.assemble import build_material, equilibrium_forms, scene_
 from fem_forms.physics.parameters import Parameters
 from fem_forms.physics.supports import LoadFactor, supports
 from fem_forms.physics.terms import Context, Term
+from fem_forms.physics.thermoelastic import couple_temperature
 from fem_forms.scene import Scene
 from fem_forms.state import State
 
@@ -48,6 +49,7 @@ class Model:
     state: State
     warnings: list = field(default_factory=list)
     support_owners: list = field(default_factory=list)   # (fix index, component) of each of bcs
+    temperature: fem.Function | None = None               # the coupled temperature ([thermal]), else None
 
     def __post_init__(self):
         self._det_F: SmallestValue | None = None
@@ -59,7 +61,10 @@ class Model:
     @property
     def physics(self) -> list[str]:
         """Names of the terms assembled into this model's forms (results.json "physics")."""
-        return [t.name for t in self.terms]
+        names = [t.name for t in self.terms]
+        if self.temperature is not None:
+            names.append("thermal strain (heat solved first, staggered)")
+        return names
 
     @property
     def dofs(self) -> int:
@@ -131,10 +136,13 @@ def build_model(scene: Scene, material=None, comm: MPI.Comm = MPI.COMM_WORLD) ->
             warnings.append(f"material.nu = {nu}: nearly incompressible in the displacement formulation "
                             "locks (too stiff); set [discretization] formulation = \"mixed\"")
     context, terms = scene_physics(scene, loaded, u_form, material, pressure=pressure, load=load)
+    fields = {"unknown": unknown}
+    if getattr(scene, "thermal", None) is not None:
+        fields["temperature"] = couple_temperature(scene, context, terms[0].material, disc.degree)
     forms = equilibrium_forms(terms, context, unknown, v)
     # the mixed energy is a saddle in (u, p): no line-search objective there
     conservative = forms.conservative and disc.formulation != "mixed"
     mat = terms[0].material
     return Model(scene, loaded, V, u, mat, context.dx, load, bcs, forms.energy, forms.residual, forms.jacobian,
                  conservative, unknown, u_form, context, terms, context.parameters,
-                 State({"unknown": unknown}), warnings, owners)
+                 State(fields), warnings, owners, fields.get("temperature"))

@@ -78,6 +78,15 @@ def cantilever_frequency(mode: int, L=1.0, t=0.025, E=1e8, rho=1000.0) -> float:
     return bl**2 / (2 * math.pi * L**2) * math.sqrt(E * t**2 / 12 / rho)
 
 
+def bar_conduction(x: float, t: float, L: float = 1.0, kappa: float = 1.0, terms: int = 400) -> float:
+    """T / T1 in a bar 0 < x < L initially at 0, x = 0 held at T1 from t = 0, x = L insulated (Fourier series)."""
+    total = 0.0
+    for n in range(terms):
+        b = (2 * n + 1) * math.pi / (2 * L)
+        total += 4 / ((2 * n + 1) * math.pi) * math.sin(b * x) * math.exp(-b * b * kappa * t)
+    return 1.0 - total
+
+
 # --- cases ------------------------------------------------------------------------------------
 @dataclass
 class Row:
@@ -210,6 +219,13 @@ CASES = [
                "93.12 MPa at 12x4 / 24x8 / 48x16 / 96x32 cells (error +0.83 % at 48x16), converging to "
                "about 92.8 MPa; the chords of the straight-sided cells along the curved edges dominate "
                "the error."),
+    Case("transient_conduction", "Transient conduction in a bar suddenly heated at one end",
+         "Fourier series of the heat equation (Carslaw & Jaeger, Conduction of Heat in Solids, 2nd ed., "
+         "Oxford, 1959, sec. 3.3)", "transient_conduction.toml",
+         [Row("T at x = L/2, t = 0.2 s", lambda r: bar_conduction(0.5, 0.2), probe("mid", "temperature"), 0.005, "K"),
+          Row("T at x = L, t = 0.2 s", lambda r: bar_conduction(1.0, 0.2), probe("end", "temperature"), 0.005, "K")],
+         notes="P2 tetrahedra 40x1x1, backward Euler with dt = 1e-3 (200 steps); the first-order time error "
+               "dominates. Tolerance 0.5 %."),
     Case("tutorial_beam", "FEniCSx tutorial hyperelastic beam (Q2 hex 20x5x5, 9 load steps)", TUTORIAL,
          "tutorial_beam.toml",
          [Row("reference: Newton iterations per step (published 8,9,10,9,8,7,6,6,6)", 0.0,

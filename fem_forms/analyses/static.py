@@ -25,8 +25,11 @@ def write_static_outputs(result: StaticResult, out: "Path") -> dict:
     files = {}
     if result.report.converged:
         scene = result.model.scene
+        T = result.model.temperature
         if scene.output.fields:
             written = output_fields(result.quantities, scene.output.fields)
+            if T is not None:
+                written.append(fields.p1_interpolant(T, "temperature"))
             fields.write_fields(out / "fields.xdmf", result.model.mesh, written)
             files["fields"] = "fields.xdmf"
         if "von_mises" in scene.output.fields:

@@ -15,7 +15,7 @@ from dolfinx import fem
 import numpy as np
 import ufl
 
-from fem_forms.materials import LinearElastic, mixed_energy
+from fem_forms.materials import LinearElastic
 from fem_forms.output import measures, probes
 from fem_forms.output.fields import p1_interpolant
 from fem_forms.output.recovery import Recovery
@@ -30,7 +30,7 @@ def tensor_expressions(model) -> dict:
     """UFL expressions of the model's deformation gradient, strains and stresses, by name."""
     ctx = model.context
     F = ufl.variable(ctx.F)
-    psi = model.material.psi(F) if ctx.pressure is None else mixed_energy(model.material, F, ctx.pressure)
+    psi = model.terms[0].density_at(ctx, F)          # the elastic term: pressure and thermal strain included
     P = ufl.diff(psi, F)
     sigma = P if isinstance(model.material, LinearElastic) else P * F.T / ufl.det(F)
     I = ufl.Identity(3)

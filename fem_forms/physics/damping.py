@@ -61,8 +61,14 @@ class ViscousDamping(Term):
             return ufl.sym(ufl.grad(v))
         return ufl.sym(ctx.F.T * ufl.grad(v))
 
+    def _stress(self, rate):
+        return 2 * self.shear * ufl.dev(rate) + self.bulk * ufl.tr(rate) * ufl.Identity(len(self.velocity))
+
     def virtual_work(self, ctx: Context, w) -> ufl.Form:
         rate, virtual = self._rate(ctx, self.velocity), self._rate(ctx, w)
-        d = len(w)
-        stress = 2 * self.shear * ufl.dev(rate) + self.bulk * ufl.tr(rate) * ufl.Identity(d)
-        return ctx.volume(ufl.inner(stress, virtual))
+        return ctx.volume(ufl.inner(self._stress(rate), virtual))
+
+    def power_density(self, ctx: Context):
+        """Dissipated power per rest volume, S_v : E_dot >= 0 (the heat source of damping heat)."""
+        rate = self._rate(ctx, self.velocity)
+        return ufl.inner(self._stress(rate), rate)

@@ -3,8 +3,9 @@ from __future__ import annotations
 
 import ufl
 
-from fem_forms.materials import Material, mixed_energy
+from fem_forms.materials import LinearElastic, Material, mixed_energy
 from fem_forms.physics.terms import Context, Term
+from fem_forms.physics.thermoelastic import thermoelastic_density
 
 
 class ElasticEnergy(Term):
@@ -16,9 +17,17 @@ class ElasticEnergy(Term):
 
     def density(self, ctx: Context):
         """psi per rest volume at the context's F (mixed energy with the context's pressure)."""
+        return self.density_at(ctx, ctx.F)
+
+    def density_at(self, ctx: Context, F):
+        """psi per rest volume at F, with the context's pressure field and thermal strain where they exist
+        (stresses for output differentiate this with respect to F)."""
         if ctx.pressure is not None:
-            return mixed_energy(self.material, ctx.F, ctx.pressure)
-        return self.material.psi(ctx.F)
+            def psi(G):
+                return mixed_energy(self.material, G, ctx.pressure)
+        else:
+            psi = self.material.psi
+        return thermoelastic_density(psi, F, ctx, isinstance(self.material, LinearElastic))
 
     def energy(self, ctx: Context) -> ufl.Form:
         return ctx.volume(self.density(ctx))

@@ -45,7 +45,8 @@ def prescribes_motion(scene) -> bool:
 
 def nothing_to_solve(model, r0: PETSc.Vec) -> bool:
     """No loads (or loads that vanish) and no prescribed displacement: u = 0 is the answer."""
-    return not prescribes_motion(model.scene) and (not model.scene.load or r0.norm() == 0.0)
+    loaded = bool(model.scene.load) or model.context.thermal_strain is not None   # a temperature change loads
+    return not prescribes_motion(model.scene) and (not loaded or r0.norm() == 0.0)
 
 
 def _rigid_modes(model) -> list[PETSc.Vec]:

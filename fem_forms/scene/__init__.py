@@ -15,6 +15,7 @@ from fem_forms.scene.analyses.balance import BalanceSpec
 from fem_forms.scene.analyses.dynamic import DampingSpec, DynamicSpec
 from fem_forms.scene.analyses.inverse import InverseSpec
 from fem_forms.scene.analyses.modal import ModalSpec, SoundSpec
+from fem_forms.scene.analyses.heat import ThermalSpec
 from fem_forms.scene.files import parse_assignment, read_toml, set_key
 from fem_forms.scene.reader import AXES, Key, Section, Table, Variants, check_number, check_vector
 from fem_forms.scene.registry import ANALYSIS_KEY
@@ -46,6 +47,7 @@ class Scene:
     balance: BalanceSpec = field(default_factory=BalanceSpec)
     dynamic: DynamicSpec = field(default_factory=DynamicSpec)
     damping: DampingSpec = field(default_factory=DampingSpec)
+    thermal: ThermalSpec | None = None     # None: no temperature field
     source: Path | None = None
 
     @classmethod
@@ -82,11 +84,12 @@ def _parse_scene(data: dict, base_dir: Path, source: Path | None) -> Scene:
     if any(ld.type == "gravity" for ld in sc.load) and sc.material.rho <= 0:
         raise InputError("material.rho: gravity needs a positive density")
 
-    for name, (owner, section) in registry.owned_sections().items():
-        if t.has(name) and owner is not analysis:
-            raise InputError(f"{name}: only for analysis = {owner.name!r} "
+    for name, (owners, first) in registry.owned_sections().items():
+        mine = registry.section_of(analysis, name)
+        if t.has(name) and mine is None:
+            raise InputError(f"{name}: only for analysis = {' or '.join(repr(o.name) for o in owners)} "
                              f"(this scene's analysis is {sc.analysis!r})")
-        setattr(sc, name, _section(t, section, base_dir))
+        setattr(sc, name, _section(t, mine or first, base_dir))
     if analysis.check is not None:
         analysis.check(sc)
     t.done()

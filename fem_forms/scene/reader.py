@@ -29,7 +29,8 @@ class Key:
     (a list of vectors), axes (distinct names from x, y, z -> indices), file (a path that must
     exist), table (a sub-table of `keys`, read into the same spec), map (name -> `item`), options
     (PETSc option -> scalar), selector (a boundary selector read by `parse`; `choices` limits its kinds),
-    selection (distinct names from `choices`; true means the default list, false none),
+    selection (distinct names from `choices`; true means the default list, false none), tables (an array
+    of sub-tables of `keys`, each read into a dict),
     either (one of the alternatives in `keys`, told apart by shape: a list or a table).
     `note` replaces the generic range message; `attr` names the spec attribute when it differs.
     """
@@ -281,6 +282,15 @@ def read_value(k: Key, v: Any, key: str, base_dir: Path) -> Any:
         return check_options(v, key)
     if k.kind == "selector":
         return k.parse(v, key, k.choices)
+    if k.kind == "tables":
+        if not isinstance(v, list):
+            raise InputError(f"{key}: must be an array of tables [[{key}]]")
+        out = []
+        for i, d in enumerate(v):
+            t = Table(d, f"{key}[{i}]", base_dir)
+            out.append(t.read_keys(k.keys))
+            t.done()
+        return out
     if k.kind == "selection":
         return read_selection(k, v, key)
     if k.kind == "either":

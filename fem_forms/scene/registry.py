@@ -7,11 +7,12 @@ sections is read into scene.<section name> (declare a Scene field there for the 
 from __future__ import annotations
 
 from fem_forms.errors import InputError
-from fem_forms.scene.analyses import Analysis, balance, dynamic, inverse, modal, static
+from fem_forms.scene.analyses import Analysis, balance, dynamic, inverse, modal, static, thermal
 from fem_forms.scene.reader import Key, Section
 
 ANALYSES: dict[str, Analysis] = {a.name: a for a in (static.ANALYSIS, modal.ANALYSIS, inverse.ANALYSIS,
-                                                     balance.ANALYSIS, dynamic.ANALYSIS)}
+                                                     balance.ANALYSIS, dynamic.ANALYSIS,
+                                                     thermal.ANALYSIS)}
 
 ANALYSIS_KEY = Key("analysis", "string", "what to compute: " + "; ".join(
     f"{a.name}: {a.doc}" for a in ANALYSES.values()), default="static", choices=tuple(ANALYSES))
@@ -28,6 +29,17 @@ def names() -> tuple[str, ...]:
     return tuple(ANALYSES)
 
 
-def owned_sections() -> dict[str, tuple[Analysis, Section]]:
-    """Every analysis-owned section by table name, with its owner."""
-    return {s.name: (a, s) for a in ANALYSES.values() for s in a.sections}
+def owned_sections() -> dict[str, tuple[tuple[Analysis, ...], Section]]:
+    """Every analysis-owned section by table name, with its owners (a table several analyses read, such
+    as [thermal], has several) and its first declaration."""
+    out: dict = {}
+    for a in ANALYSES.values():
+        for s in a.sections:
+            owners, first = out.get(s.name, ((), s))
+            out[s.name] = (owners + (a,), first)
+    return out
+
+
+def section_of(analysis: Analysis, name: str) -> Section | None:
+    """The analysis's own declaration of table `name`, or None if it does not read that table."""
+    return next((s for s in analysis.sections if s.name == name), None)

@@ -59,6 +59,8 @@ def key_schema(k: Key) -> dict:
         s = {"type": "array", "items": {"enum": ["x", "y", "z"]}, "minItems": 1, "uniqueItems": True}
     elif k.kind == "table":
         s = _object(k.keys)
+    elif k.kind == "tables":
+        s = {"type": "array", "items": _object(k.keys)}
     elif k.kind == "map":
         s = {"type": "object", "additionalProperties": key_schema(k.item)}
     elif k.kind == "options":
@@ -136,15 +138,24 @@ def scene_schema() -> dict:
     props.update({s.name: section_schema(s) for s in CORE_SECTIONS})
     rules = []
     for analysis in registry.ANALYSES.values():
+        narrowed = {}
         for s in analysis.sections:
+            if s is not owned[s.name][1]:     # this analysis reads a table another declares more widely
+                narrowed[s.name] = section_schema(s)
+                narrowed[s.name]["description"] = f"{s.doc} (analysis = {analysis.name!r})"
+                continue
             props[s.name] = section_schema(s)
-            props[s.name]["description"] = f"{s.doc} (analysis = {analysis.name!r} only)"
-        others = [name for name, (owner, _) in owned.items() if owner is not analysis]
-        if others:
+            names = " or ".join(repr(a.name) for a in owned[s.name][0])
+            props[s.name]["description"] = f"{s.doc} (analysis = {names} only)"
+        others = [name for name, (owners, _) in owned.items() if analysis not in owners]
+        if others or narrowed:
             cond = {"properties": {"analysis": {"const": analysis.name}}}
             if analysis.name != registry.ANALYSIS_KEY.default:
                 cond["required"] = ["analysis"]
-            rules.append({"if": cond, "then": {"propertyNames": {"not": {"enum": others}}}})
+            then = {"propertyNames": {"not": {"enum": others}}} if others else {}
+            if narrowed:
+                then["properties"] = narrowed
+            rules.append({"if": cond, "then": then})
     analyses = "; ".join(f"{a.name} writes {', '.join(a.outputs)}" for a in registry.ANALYSES.values())
     return {
         "$schema": DRAFT,

@@ -8,6 +8,8 @@ come from the demo itself (never its own past output):
 - struck_bar: the first flexural frequencies of the free bar against Euler-Bernoulli theory.
 - loaded_vs_unloaded_modes: the unloaded modes against Timoshenko beam theory, Saint-Venant torsion and
   longitudinal bar theory; the loaded state against the same independent static solve.
+- heated_strip: the face temperatures against the steady heat balance (wall and film in series) and the
+  tip rise against the thermal-gradient beam (a circular arc of curvature alpha dT / (h s^2)).
 - inverse_design: the printed forward-check mismatch against the design tolerance, and the written rest
   shape solved forward here, through the public API, landing on the target.
 - spinning_top, floating_boat, roly_poly, soft_figure: closed forms of their shapes (centres of mass,
@@ -43,7 +45,8 @@ CHECKS = {"loaded_vs_unloaded_modes": "test_loaded_vs_unloaded_modes_demo",    #
           "soft_figure": "test_soft_figure_demo",
           "spinning_top": "test_spinning_top_demo",
           "floating_boat": "test_floating_boat_demo",
-          "roly_poly": "test_roly_poly_demo"}
+          "roly_poly": "test_roly_poly_demo",
+          "heated_strip": "test_heated_strip_demo"}
 NUMBER = r"[-+]?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?"
 
 
@@ -344,3 +347,27 @@ def test_soft_figure_demo(demo):
     solves, = grab(r"static solves (\d+)", text)
     assert 1 <= solves <= 4
     assert (out / "stand" / "balance.png").stat().st_size > 0
+
+
+# --- heat: the silicone strip heated from below --------------------------------------------------
+def test_heated_strip_demo(demo):
+    """Face temperatures from the series resistances h/k + 1/h_c (exact for the P2 linear profile), and the
+    tip rise of the gradient beam: fibres at z stretch by 1 + alpha (T(z) - T_ref), so the mid-line (stretch
+    s) turns through alpha dT L / (h s) over its length L s: rise = (1 - cos(angle)) L s / angle. Measured
+    within 0.01 %; linear beam theory (alpha dT L^2 / 2h) differs by 0.2 %, so 0.1 % tells them apart."""
+    text, out = demo("heated_strip")
+    d = scene_dict("heated_strip")
+    th, (L, _, h) = d["thermal"], d["mesh"]["size"]
+    hot, film = th["boundary"][0]["temperature"], th["boundary"][1]["convection"]
+    flux = (hot - film["ambient"]) / (h / th["conductivity"] + 1 / film["h"])
+    dT = flux * h / th["conductivity"]
+    s = 1 + th["expansion"] * (hot - dT / 2 - th["reference_temperature"])
+    angle = th["expansion"] * dT * L / (h * s)
+    rise = (1 - math.cos(angle)) * L * s / angle
+    T_hot, T_cool = grab(rf"faces at ({NUMBER}) C and ({NUMBER}) C", text)
+    assert T_hot == pytest.approx(hot, abs=1e-3) and T_cool == pytest.approx(hot - dT, abs=1e-3)
+    tip, = grab(rf"tip rise ({NUMBER}) mm", text)
+    assert tip / 1000 == pytest.approx(rise, rel=1e-3)
+    assert abs(tip / 1000 - th["expansion"] * dT * L * L / (2 * h)) > 1e-3 * rise
+    res = json.loads((out / "results.json").read_text())
+    assert res["max_temperature"] == pytest.approx(hot, rel=1e-9) and (out / "deformed.png").stat().st_size > 0

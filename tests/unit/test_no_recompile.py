@@ -143,3 +143,32 @@ def test_a_second_run_with_new_values_compiles_nothing(tmp_path):
 def _toml(d: dict) -> str:
     from helpers import toml_dumps
     return toml_dumps(d)
+
+
+def thermal_scenes(k=35.0, alpha=1.2e-5, slope=-2e6, T0=100.0, h=50.0, amb=20.0, rho=1000.0, dt=0.5):
+    """A coupled static scene and a transient heat scene carrying the same thermal values."""
+    thermal = {"conductivity": k, "specific_heat": 400.0, "expansion": alpha, "modulus_slope": slope,
+               "boundary": [{"where": {"axis": "x", "at": 0.0}, "temperature": T0},
+                            {"where": {"axis": "x", "at": 1.0}, "convection": {"h": h, "ambient": amb}}]}
+    base = {"mesh": {"size": [1.0, 0.1, 0.1], "cells": [6, 1, 1]}, "discretization": {"degree": 1},
+            "material": {"model": "linear", "E": 1e9, "nu": 0.3, "rho": rho}, "thermal": thermal,
+            "output": {"probes": {"tip": [1.0, 0.05, 0.05]}}}
+    static = dict(base, fix=[{"where": {"axis": "x", "at": 0.0}}])
+    heat = dict(base, analysis="thermal", dynamic={"duration": 2 * dt, "dt": dt})
+    return ff.Scene.from_dict(static), ff.Scene.from_dict(heat)
+
+
+def test_new_thermal_values_compile_nothing(compilations):
+    from fem_forms.analyses.thermal import solve_thermal
+    static, heat = thermal_scenes()
+    a = solve_static(static)
+    ha = solve_thermal(heat)
+    before = len(compilations)
+    assert before >= 4
+    static, heat = thermal_scenes(k=20.0, alpha=2e-5, slope=-1e6, T0=150.0, h=80.0, amb=0.0, rho=500.0, dt=0.25)
+    b = solve_static(static)
+    hb = solve_thermal(heat)
+    assert len(compilations) == before, f"new thermal values compiled {len(compilations) - before} forms"
+    assert a.report.converged and b.report.converged, (a.report.message, b.report.message)
+    assert not np.allclose(a.probes["tip"], b.probes["tip"])
+    assert ha.probe_rows[-1][1] != hb.probe_rows[-1][1]

@@ -27,6 +27,10 @@ def all_sections() -> list[Section]:
 
 def table_schema(section: Section) -> dict:
     s = SCHEMA["properties"][section.name]
+    if section.name in registry.owned_sections() and registry.owned_sections()[section.name][1] is not section:
+        # a narrower declaration of a table another analysis owns (thermal's [dynamic]): in its analysis's rule
+        s = next(r["then"]["properties"][section.name] for r in SCHEMA["allOf"]
+                 if section.name in r["then"].get("properties", {}))
     return s["items"] if section.array else s
 
 

@@ -11,9 +11,10 @@ from mpi4py import MPI
 
 from fem_forms.analyses.dynamic.output import MotionWriter, write_csvs, write_gif, write_history_png
 from fem_forms.analyses.dynamic.solve import DynamicResult, solve_dynamic
-from fem_forms.output import results
+from fem_forms.output import probes, results
 from fem_forms.output.quantities import Quantities
 from fem_forms.scene import Scene
+from fem_forms.solvers.heat_step import max_value
 
 __all__ = ["DynamicResult", "run", "solve_dynamic"]
 
@@ -44,6 +45,11 @@ def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> d
     # final probes: recovered stress and strain of the last state, as the static analysis reports them
     for name, values in Quantities(result.system.model).at_probes(scene.output.probes).items():
         summary["probes"].setdefault(name, {}).update(values)
+    T = result.system.model.temperature
+    if T is not None:                              # [thermal]: the temperature at the end
+        summary["max_temperature"] = max_value(T)
+        for name, value in probes.evaluate(T, scene.output.probes).items():
+            summary["probes"][name]["temperature"] = value[0]
     files = {"probes": "probes.csv", "energy": "energy.csv"}
     if scene.output.fields:
         files["motion"] = "motion.xdmf"

@@ -1,4 +1,4 @@
-"""Checkpoints of a dynamic run and --restart: each rank saves its local (u, v, a) arrays, and rank 0
+"""Checkpoints of a dynamic run and --restart: each rank saves its local (u, v, a and, with [thermal], T) arrays, and rank 0
 the time, step, dt, counters, energies and probe rows so far. A restart needs the same number of ranks
 (the same partitioning) and continues to the same answer as an uninterrupted run."""
 from __future__ import annotations
@@ -12,9 +12,6 @@ import numpy as np
 from fem_forms.analyses.dynamic.energy import Energies
 from fem_forms.errors import InputError
 
-FIELDS = ("unknown", "velocity", "acceleration")
-
-
 def save(folder: Path, result, t: float, step: int, dt: float) -> None:
     """Write the state after an accepted, committed step (each rank its own file, then rank 0 meta)."""
     system = result.system
@@ -22,7 +19,7 @@ def save(folder: Path, result, t: float, step: int, dt: float) -> None:
     if comm.rank == 0:
         folder.mkdir(parents=True, exist_ok=True)
     comm.barrier()
-    arrays = {k: system.state.fields[k].x.array for k in FIELDS}
+    arrays = {k: f.x.array for k, f in system.state.fields.items()}
     tmp = folder / f".rank{comm.rank}.npz"
     np.savez(tmp, **arrays)
     os.replace(tmp, folder / f"rank{comm.rank}.npz")
@@ -52,9 +49,8 @@ def load(out: Path, result) -> tuple[float, int, float]:
         raise InputError(f"--restart {out}: the checkpoint was written by {meta['ranks']} ranks; "
                          f"run with the same number (this run has {comm.size})")
     data = np.load(folder / f"rank{comm.rank}.npz")
-    for k in FIELDS:
-        f = system.state.fields[k]
-        if data[k].shape != f.x.array.shape:
+    for k, f in system.state.fields.items():
+        if k not in data or data[k].shape != f.x.array.shape:
             raise InputError(f"--restart {out}: the checkpoint is of another mesh or discretization")
         f.x.array[:] = data[k]
     system.state.commit()

@@ -16,6 +16,8 @@ def write_csvs(out: Path, result, comm) -> None:
     if comm.rank == 0:
         names = list(result.system.scene.output.probes)
         head = ["time"] + [f"{n}_{c}" for n in names for c in COMPONENTS]
+        if result.system.model.temperature is not None:
+            head += [f"{n}_T" for n in names]
         lines = [",".join(head)] + [",".join(f"{x:.10g}" for x in row) for row in result.probe_rows]
         (out / "probes.csv").write_text("\n".join(lines) + "\n")
         lines = ["time,kinetic,elastic,external_work,dissipated"] + \
@@ -40,10 +42,11 @@ class MotionWriter:
 
     def __call__(self, system, t: float, step: int) -> None:
         if self.xdmf is not None:
+            shown = (system.u, system.v) + ((system.model.temperature,) if system.model.temperature is not None else ())
             if self._p1 is None:
-                self._p1 = (fields.p1_interpolant(system.u, "displacement"),
-                            fields.p1_interpolant(system.v, "velocity"))
-            for g, f in zip(self._p1, (system.u, system.v)):
+                self._p1 = tuple(fields.p1_interpolant(f, n) for f, n in zip(shown, ("displacement", "velocity",
+                                                                                   "temperature")))
+            for g, f in zip(self._p1, shown):
                 g.interpolate(f)
                 self.xdmf.write_function(g, t)
         if self.with_picture:

@@ -15,6 +15,7 @@ import ufl
 from fem_forms.analyses.dynamic import checkpoint
 from fem_forms.analyses.dynamic.energy import EnergyAccount
 from fem_forms.analyses.dynamic.explicit import ExplicitStepper, check_stable
+from fem_forms.analyses.dynamic.heat import StaggeredStepper
 from fem_forms.analyses.dynamic.implicit import ImplicitStepper
 from fem_forms.analyses.dynamic.system import DynamicSystem, build_system
 from fem_forms.errors import InputError, SolveError
@@ -30,7 +31,7 @@ class DynamicResult:
     system: DynamicSystem
     report: MarchReport
     energy: EnergyAccount
-    probe_rows: list = field(default_factory=list)     # [t, (ux, uy, uz, vx, vy, vz) per probe...]
+    probe_rows: list = field(default_factory=list)     # [t, (ux, uy, uz, vx, vy, vz) per probe..., T per probe...]
     dt_stable: float | None = None
     wall_time_s: float = 0.0
 
@@ -48,12 +49,17 @@ class DynamicResult:
             "energy_final": dict(zip(("kinetic", "elastic", "external_work", "dissipated"),
                                      self.energy.now.row())),
             "dt_stable": self.dt_stable,
-            "physics": s.model.physics + ["inertia"] + _damping_names(s.scene),
+            "physics": s.model.physics + ["inertia"] + _damping_names(s.scene) + _heat_names(s.scene),
             "mpi_ranks": s.model.mesh.comm.size, "wall_time_s": self.wall_time_s,
             "probes": {n: {"point": s.scene.output.probes[n], "displacement": list(last[1 + 6 * i: 4 + 6 * i]),
                            "velocity": list(last[4 + 6 * i: 7 + 6 * i])} for i, n in enumerate(names)}
             if last else {},
         }
+
+
+def _heat_names(scene: Scene) -> list:
+    th = scene.thermal
+    return [] if th is None else ["heat (backward Euler)"] + (["damping heat"] if th.damping_heat else [])
 
 
 def _damping_names(scene: Scene) -> list:
@@ -129,6 +135,9 @@ def probe_row(system: DynamicSystem, t: float) -> list:
     row = [t]
     for n in pts:
         row += list(u[n]) + list(v[n])
+    if system.model.temperature is not None:       # NAME_T columns after every probe's motion
+        T = probes.evaluate(system.model.temperature, pts)
+        row += [T[n][0] for n in pts]
     return row
 
 
@@ -141,6 +150,8 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
     if scene.material.rho <= 0:
         raise InputError("material.rho: dynamic analysis needs a positive density")
     system = build_system(scene)
+    if system.model.temperature is not None:
+        system.model.temperature.x.array[:] = scene.thermal.initial_temperature
     released = set(dyn.initial_loads) if dyn.initial == "static" else set()
     probes.evaluate(system.u, scene.output.probes)          # a probe outside the mesh is bad input
     if dyn.initial == "static":
@@ -154,6 +165,8 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
         stepper = ExplicitStepper(system, released)
     else:
         stepper = ImplicitStepper(system, released, scene.solver.petsc)
+    if system.model.temperature is not None:
+        stepper = StaggeredStepper(system, stepper)
     account = EnergyAccount(system, released)
     result = DynamicResult(system, MarchReport(), account, dt_stable=dt_stable)
     t_start, step0, dt = 0.0, 0, dyn.dt

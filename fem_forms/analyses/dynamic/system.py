@@ -91,7 +91,10 @@ def build_system(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> DynamicSystem
     model = build_model(scene, comm=comm)
     V, u = model.V, model.u
     v, a = fem.Function(V, name="velocity"), fem.Function(V, name="acceleration")
-    state = State({"unknown": u, "velocity": v, "acceleration": a})
+    fields = {"unknown": u, "velocity": v, "acceleration": a}
+    if model.temperature is not None:              # [thermal]: committed and rolled back with the motion
+        fields["temperature"] = model.temperature
+    state = State(fields)
     model.state = state
     old = state.old
     td = TimeDiscrete(model.mesh, old["unknown"], old["velocity"], old["acceleration"],

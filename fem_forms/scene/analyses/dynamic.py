@@ -5,6 +5,7 @@ from dataclasses import dataclass
 
 from fem_forms.errors import InputError
 from fem_forms.scene.analyses import Analysis
+from fem_forms.scene.analyses.heat import THERMAL, check_coupled
 from fem_forms.scene.reader import Key, Section, Table
 
 SCHEMES = ("newmark", "generalized-alpha", "central-difference")
@@ -95,6 +96,7 @@ def _check(scene) -> None:
     for i, fix in enumerate(scene.fix):
         if any(v != 0.0 for v in fix.value):
             raise InputError(f"fix[{i}].value: dynamic analysis holds supports fixed (value must be zero)")
+    check_coupled(scene)
 
 
 ANALYSIS = Analysis(
@@ -105,6 +107,7 @@ ANALYSIS = Analysis(
         Section("dynamic", "time span, step, scheme, mass matrix and initial state", DynamicSpec,
                 keys=DYNAMIC_KEYS, rules=_dynamic_rules),
         Section("damping", "Rayleigh and viscous (Kelvin-Voigt) damping", DampingSpec, keys=DAMPING_KEYS),
+        THERMAL,                         # [thermal]: transient heat, staggered with the motion step by step
     ),
     outputs=("results.json", "probes.csv", "energy.csv", "motion.xdmf", "motion.gif", "history.png",
              "checkpoint/"),

@@ -1,5 +1,6 @@
-"""Static analysis: equilibrium under the scene's loads. It owns no section of its own."""
+"""Static analysis: equilibrium under the scene's loads (and, with [thermal], a steady temperature's strain)."""
 from fem_forms.scene.analyses import Analysis
+from fem_forms.scene.analyses.heat import THERMAL, check_coupled
 
 ANALYSIS = Analysis(
     name="static",
@@ -7,4 +8,6 @@ ANALYSIS = Analysis(
     runner="fem_forms.analyses.static:run",
     outputs=("results.json", "fields.xdmf", "deformed.png", "newton_history.csv"),
     formulations=("displacement", "mixed"),
+    sections=(THERMAL,),                  # [thermal]: steady temperature, then its thermal strain
+    check=check_coupled,
 )
