@@ -212,3 +212,43 @@ def test_two_ranks_agree(tmp_path):
     a, b = (o["probes"]["tip"]["displacement"] for o in outs)
     assert np.allclose(a, b, rtol=1e-8, atol=1e-12)
     assert outs[1]["energy_balance_error"] < 1e-8
+
+
+@pytest.mark.mpi
+def test_restart_under_two_ranks_reproduces_an_uninterrupted_run(tmp_path):
+    """Two ranks (same partitioning): a run stopped at its last checkpoint and continued with --restart
+    ends where an uninterrupted 2-rank run ends, probe histories and energies included."""
+    d = beam({"duration": 0.02, "dt": 1e-3, "checkpoint_every": 5, "output_every": 5})
+    half = dict(d, dynamic={**d["dynamic"], "duration": 0.01})
+    (tmp_path / "full.toml").write_text(to_toml(d))
+    (tmp_path / "half.toml").write_text(to_toml(half))
+    full, cont = tmp_path / "full", tmp_path / "cont"
+    for args in ((str(tmp_path / "full.toml"), "--out", str(full)),
+                 (str(tmp_path / "half.toml"), "--out", str(cont)),
+                 (str(tmp_path / "full.toml"), "--out", str(cont), "--restart", str(cont))):
+        p = mpirun(["-m", "fem_forms", "run", *args, "-q"], n=2)
+        assert p.returncode == 0, p.stderr
+    a, b = (json.loads((o / "results.json").read_text()) for o in (full, cont))
+    assert a["mpi_ranks"] == b["mpi_ranks"] == 2
+    assert b["steps"] == a["steps"] == 20 and b["time_reached"] == pytest.approx(0.02)
+    assert np.allclose(b["probes"]["tip"]["displacement"], a["probes"]["tip"]["displacement"],
+                       rtol=1e-7, atol=1e-12)
+    assert abs(a["probes"]["tip"]["displacement"][2]) > 1e-4          # the beam did move
+    pa, pb = (np.loadtxt(o / "probes.csv", delimiter=",", skiprows=1) for o in (full, cont))
+    assert pa.shape == pb.shape == (21, 7)
+    assert np.allclose(pb, pa, rtol=1e-7, atol=1e-9 * np.abs(pa).max())
+    for k in ("kinetic", "elastic", "external_work"):
+        assert b["energy_final"][k] == pytest.approx(a["energy_final"][k], rel=1e-7)
+    assert sorted(f.name for f in (cont / "checkpoint").glob("rank*.npz")) == ["rank0.npz", "rank1.npz"]
+    # control: the continued run starts from the checkpoint's state, not from rest (a first half under
+    # twice the load, continued under the full scene, ends elsewhere)
+    other = tmp_path / "other"
+    half["load"] = [dict(d["load"][0], value=[0.0, 0.0, 2 * P])]
+    (tmp_path / "other.toml").write_text(to_toml(half))
+    for args in ((str(tmp_path / "other.toml"), "--out", str(other)),
+                 (str(tmp_path / "full.toml"), "--out", str(other), "--restart", str(other))):
+        p = mpirun(["-m", "fem_forms", "run", *args, "-q"], n=2)
+        assert p.returncode == 0, p.stderr
+    c = json.loads((other / "results.json").read_text())
+    assert abs(c["probes"]["tip"]["displacement"][2] - a["probes"]["tip"]["displacement"][2]) > \
+        0.1 * abs(a["probes"]["tip"]["displacement"][2])
