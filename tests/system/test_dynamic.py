@@ -94,6 +94,22 @@ def test_rayleigh_decay_per_cycle(frequency):
     assert r.energy.now.dissipated > 0.5 * r.energy.history[0][1].elastic
 
 
+def test_initial_static_keeps_the_loads_not_released(frequency):
+    """initial = "static" with gravity kept and a tip push held (initial_loads = [1]): the run starts from
+    the static state under both loads and, heavily damped (zeta 0.6 on mode 1), settles onto the static
+    state under gravity alone (both from the static analysis, another path through the package)."""
+    period, omega = 1.0 / frequency, 2 * math.pi * frequency
+    d = beam({"duration": 2.5 * period, "dt": period / 20, "initial": "static", "initial_loads": [1]},
+             damping={"rayleigh": {"alpha": 2 * 0.6 * omega}})
+    d["load"] = [{"type": "gravity", "g": [0.0, 0.0, -9.81]}, d["load"][0]]
+    both = solve_static(as_static(d)).probes["tip"][2]
+    gravity = solve_static(as_static(dict(d, load=d["load"][:1]))).probes["tip"][2]
+    t, uz = tip_z(solve_dynamic(ff.Scene.from_dict(d)))
+    assert uz[0] == pytest.approx(both, rel=1e-6)
+    assert uz[-1] == pytest.approx(gravity, rel=1e-3)
+    assert abs(gravity) > 0.2 * abs(both - gravity)          # gravity's sag is a good part of the start
+
+
 def test_viscous_equals_stiffness_proportional_rayleigh():
     beta = 2e-3
     mu = E / (2 * (1 + NU))

@@ -25,8 +25,9 @@ DYNAMIC_KEYS = (
         default=10, exclusive_minimum=0),
     Key("checkpoint_every", "integer", "checkpoint every N steps for --restart (0: never)", default=100,
         minimum=0),
-    Key("initial", "string", "rest, or static: start from the equilibrium under initial_loads, then "
-        "release them", default="rest", choices=("rest", "static")),
+    Key("initial", "string", "rest, or static: start from the equilibrium under initial_loads (and the "
+        "other loads at their t = 0 values), then release the initial_loads", default="rest",
+        choices=("rest", "static")),
     Key("initial_loads", "vector", "indices into [[load]] of the loads held for initial = static "
         "(released at t = 0)", default=[], integer=True, minimum=0),
     Key("initial_velocity", "either", "initial velocity field", default=[0.0, 0.0, 0.0], attr="velocity",
