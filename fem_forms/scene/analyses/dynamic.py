@@ -66,7 +66,8 @@ def _dynamic_rules(s: DynamicSpec, t: Table) -> None:
         raise InputError(f"{t.key('initial_loads')}: only with initial = \"static\"")
 
 
-RAYLEIGH = Key("rayleigh", "table", "Rayleigh damping C = alpha M + beta K (K: the tangent at rest)", keys=(
+RAYLEIGH = Key("rayleigh", "table", "Rayleigh damping C = alpha M + beta K (K: the tangent at rest; beta K "
+               "also damps rotations, so under large rotations use viscous)", keys=(
     Key("alpha", "number", "mass-proportional coefficient", default=0.0, unit="1/s", minimum=0),
     Key("beta", "number", "stiffness-proportional coefficient", default=0.0, unit="s", minimum=0)))
 VISCOUS = Key("viscous", "table", "Kelvin-Voigt viscous stress from the rate of Green strain", keys=(
