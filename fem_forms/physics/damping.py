@@ -4,7 +4,9 @@ an implicit step, a Function in an explicit one or in the energy accounting); it
 virtual_work(ctx, velocity) >= 0.
 
 - Rayleigh: C = alpha M + beta K0, K0 the elastic tangent at rest (second variation of the material's
-  energy at u = 0, by ufl.derivative): exactly beta K for the linear material.
+  energy at u = 0, by ufl.derivative): exactly beta K for the linear material. beta K0 is not objective:
+  it sees a rotation's velocity as strain rate (measured: a free neo-Hookean cube spun a quarter turn
+  lost 98 % of its kinetic energy; a sagged silicone beam stopped swinging within one period).
 - Viscous (Kelvin-Voigt): S_v = 2 eta_s dev(E_dot) + eta_b tr(E_dot) I with E_dot = sym(F^T grad v)
   the rate of Green strain, power S_v : E_dot; the linear material takes the small-strain limit
   E_dot = sym(grad v). With eta_s = beta mu and eta_b = beta kappa it is beta K for the linear material.

@@ -94,6 +94,22 @@ def test_rayleigh_decay_per_cycle(frequency):
     assert r.energy.now.dissipated > 0.5 * r.energy.history[0][1].elastic
 
 
+def test_initial_static_keeps_the_loads_not_released(frequency):
+    """initial = "static" with gravity kept and a tip push held (initial_loads = [1]): the run starts from
+    the static state under both loads and, heavily damped (zeta 0.6 on mode 1), settles onto the static
+    state under gravity alone (both from the static analysis, another path through the package)."""
+    period, omega = 1.0 / frequency, 2 * math.pi * frequency
+    d = beam({"duration": 2.5 * period, "dt": period / 20, "initial": "static", "initial_loads": [1]},
+             damping={"rayleigh": {"alpha": 2 * 0.6 * omega}})
+    d["load"] = [{"type": "gravity", "g": [0.0, 0.0, -9.81]}, d["load"][0]]
+    both = solve_static(as_static(d)).probes["tip"][2]
+    gravity = solve_static(as_static(dict(d, load=d["load"][:1]))).probes["tip"][2]
+    t, uz = tip_z(solve_dynamic(ff.Scene.from_dict(d)))
+    assert uz[0] == pytest.approx(both, rel=1e-6)
+    assert uz[-1] == pytest.approx(gravity, rel=1e-3)
+    assert abs(gravity) > 0.2 * abs(both - gravity)          # gravity's sag is a good part of the start
+
+
 def test_viscous_equals_stiffness_proportional_rayleigh():
     beta = 2e-3
     mu = E / (2 * (1 + NU))
@@ -107,6 +123,29 @@ def test_viscous_equals_stiffness_proportional_rayleigh():
     assert a.energy.now.dissipated == pytest.approx(b.energy.now.dissipated, rel=1e-8)
 
 
+def test_viscous_damping_spares_a_rigid_rotation_rayleigh_beta_does_not():
+    """A free neo-Hookean cube spun a quarter turn: Kelvin-Voigt damping acts on the rate of Green strain,
+    zero for a rotation, and dissipates almost nothing (only the centrifugal stretch rate); stiffness-
+    proportional Rayleigh damping (beta K at rest, not objective) with the same beta dissipates nearly all
+    the kinetic energy. Why the silicone demo damps with [damping] viscous."""
+    beta, w = 1e-3, 10.0
+    mu, kappa = E / (2 * (1 + NU)), E / (3 * (1 - 2 * NU))
+    d = {"title": "spinning cube", "analysis": "dynamic",
+         "mesh": {"size": [0.1, 0.1, 0.1], "cells": [2, 2, 2], "cell": "hexahedron"},
+         "material": {"model": "neo-hookean", "E": E, "nu": NU, "rho": RHO},
+         "discretization": {"degree": 1},
+         "dynamic": {"duration": math.pi / 2 / w, "dt": math.pi / 2 / w / 40,
+                     "initial_velocity": {"angular": [0.0, 0.0, w], "about": [0.05, 0.05, 0.05]}},
+         "output": {"picture": False, "fields": False}}
+    spun = {}
+    for name, damping in (("viscous", {"viscous": {"shear": beta * mu, "bulk": beta * kappa}}),
+                          ("rayleigh", {"rayleigh": {"beta": beta}})):
+        r = solve_dynamic(ff.Scene.from_dict(dict(d, damping=damping)))
+        spun[name] = r.energy.now.dissipated / r.energy.history[0][1].kinetic
+    assert spun["viscous"] < 1e-3, spun          # measured 6e-5 of the initial kinetic energy
+    assert spun["rayleigh"] > 0.9, spun          # measured 0.98: the cube stops turning
+
+
 def test_hyperelastic_newmark_stays_bounded():
     """A soft neo-Hookean beam under a large sudden load: no energy is created (bounded balance error)."""
     d = beam({"duration": 0.3, "dt": 5e-3}, model="neo-hookean", cells=(6, 1, 1))
@@ -115,6 +154,19 @@ def test_hyperelastic_newmark_stays_bounded():
     assert r.report.time_reached == pytest.approx(0.3)
     assert r.energy.balance_error() < 0.05
     assert abs(tip_z(r)[1]).max() > 0.1                 # large motion indeed
+
+
+def test_released_soft_beam_takes_no_rejected_steps():
+    """A soft neo-Hookean Q2 beam held bent by a large tip load, then let go: the constant-acceleration
+    predictor (a_n full of the release's high modes) inverted cells and cut most steps; the
+    constant-velocity predictor takes every step at the scene's dt, in a few Newton iterations each."""
+    d = beam({"duration": 0.05, "dt": 5e-3, "initial": "static", "initial_loads": [0]}, model="neo-hookean",
+             cells=(4, 1, 1), discretization={"degree": 2})
+    d["load"][0]["value"] = [0.0, 0.0, -3000.0]
+    r = solve_dynamic(ff.Scene.from_dict(d))
+    assert r.report.rejected == 0 and r.report.steps == 10
+    assert r.report.newton_iterations <= 6 * r.report.steps
+    assert tip_z(r)[1][0] < -0.2                        # a large initial bend (L = 1 m)
 
 
 def test_generalized_alpha_second_order():
@@ -212,3 +264,43 @@ def test_two_ranks_agree(tmp_path):
     a, b = (o["probes"]["tip"]["displacement"] for o in outs)
     assert np.allclose(a, b, rtol=1e-8, atol=1e-12)
     assert outs[1]["energy_balance_error"] < 1e-8
+
+
+@pytest.mark.mpi
+def test_restart_under_two_ranks_reproduces_an_uninterrupted_run(tmp_path):
+    """Two ranks (same partitioning): a run stopped at its last checkpoint and continued with --restart
+    ends where an uninterrupted 2-rank run ends, probe histories and energies included."""
+    d = beam({"duration": 0.02, "dt": 1e-3, "checkpoint_every": 5, "output_every": 5})
+    half = dict(d, dynamic={**d["dynamic"], "duration": 0.01})
+    (tmp_path / "full.toml").write_text(to_toml(d))
+    (tmp_path / "half.toml").write_text(to_toml(half))
+    full, cont = tmp_path / "full", tmp_path / "cont"
+    for args in ((str(tmp_path / "full.toml"), "--out", str(full)),
+                 (str(tmp_path / "half.toml"), "--out", str(cont)),
+                 (str(tmp_path / "full.toml"), "--out", str(cont), "--restart", str(cont))):
+        p = mpirun(["-m", "fem_forms", "run", *args, "-q"], n=2)
+        assert p.returncode == 0, p.stderr
+    a, b = (json.loads((o / "results.json").read_text()) for o in (full, cont))
+    assert a["mpi_ranks"] == b["mpi_ranks"] == 2
+    assert b["steps"] == a["steps"] == 20 and b["time_reached"] == pytest.approx(0.02)
+    assert np.allclose(b["probes"]["tip"]["displacement"], a["probes"]["tip"]["displacement"],
+                       rtol=1e-7, atol=1e-12)
+    assert abs(a["probes"]["tip"]["displacement"][2]) > 1e-4          # the beam did move
+    pa, pb = (np.loadtxt(o / "probes.csv", delimiter=",", skiprows=1) for o in (full, cont))
+    assert pa.shape == pb.shape == (21, 7)
+    assert np.allclose(pb, pa, rtol=1e-7, atol=1e-9 * np.abs(pa).max())
+    for k in ("kinetic", "elastic", "external_work"):
+        assert b["energy_final"][k] == pytest.approx(a["energy_final"][k], rel=1e-7)
+    assert sorted(f.name for f in (cont / "checkpoint").glob("rank*.npz")) == ["rank0.npz", "rank1.npz"]
+    # control: the continued run starts from the checkpoint's state, not from rest (a first half under
+    # twice the load, continued under the full scene, ends elsewhere)
+    other = tmp_path / "other"
+    half["load"] = [dict(d["load"][0], value=[0.0, 0.0, 2 * P])]
+    (tmp_path / "other.toml").write_text(to_toml(half))
+    for args in ((str(tmp_path / "other.toml"), "--out", str(other)),
+                 (str(tmp_path / "full.toml"), "--out", str(other), "--restart", str(other))):
+        p = mpirun(["-m", "fem_forms", "run", *args, "-q"], n=2)
+        assert p.returncode == 0, p.stderr
+    c = json.loads((other / "results.json").read_text())
+    assert abs(c["probes"]["tip"]["displacement"][2] - a["probes"]["tip"]["displacement"][2]) > \
+        0.1 * abs(a["probes"]["tip"]["displacement"][2])

@@ -84,8 +84,10 @@ class ImplicitStepper:
         s.set_load_time(t + dt, t, self.released)
         old = s.state.old
         u = s.u
-        u.x.array[:] = old["unknown"].x.array + dt * old["velocity"].x.array + \
-            0.5 * dt * dt * old["acceleration"].x.array             # constant-acceleration predictor
+        # constant-velocity predictor: a_n carries the undamped high modes Newmark keeps (an impulsive
+        # load or release), and the constant-acceleration guess u_n + dt v_n + dt^2/2 a_n then inverted
+        # cells (measured: a released silicone beam, Q2, 30 of 43 steps rejected; this way 0 of 20)
+        u.x.array[:] = old["unknown"].x.array + dt * old["velocity"].x.array
         u.x.scatter_forward()
         r0 = drv.residual_norm()
         rec = drv.solve_step()

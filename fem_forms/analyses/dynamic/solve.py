@@ -23,7 +23,7 @@ from fem_forms.output import probes
 from fem_forms.physics.inertia import Inertia
 from fem_forms.scene import Scene
 from fem_forms.solvers import continuation, snes
-from fem_forms.solvers.time_stepping import MarchReport, march
+from fem_forms.solvers.time_stepping import MarchReport, march, piecewise_linear
 
 
 @dataclass
@@ -79,10 +79,12 @@ def initial_velocity(system: DynamicSystem) -> None:
 
 
 def initial_static(system: DynamicSystem) -> None:
-    """Equilibrium under the loads listed in [dynamic] initial_loads (the others off)."""
+    """Equilibrium under the loads listed in [dynamic] initial_loads (released at t = 0) together with the
+    other loads at their t = 0 values (gravity kept on: the body starts sagged, pushed, then let go)."""
     held = set(system.scene.dynamic.initial_loads)
     for term in system.loads:
-        term.factor.value = 1.0 if term.index in held else 0.0
+        term.factor.value = 1.0 if term.index in held else \
+            piecewise_linear(system.scene.load[term.index].history, 0.0)
     m = system.model
     problem = snes.NonlinearProblem(m.u, m.residual, m.jacobian, m.bcs, energy=m.energy if m.conservative else None,
                                     set_load=m.load.set, inadmissible=m.inadmissible,

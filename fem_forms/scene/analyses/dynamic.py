@@ -26,8 +26,9 @@ DYNAMIC_KEYS = (
         default=10, exclusive_minimum=0),
     Key("checkpoint_every", "integer", "checkpoint every N steps for --restart (0: never)", default=100,
         minimum=0),
-    Key("initial", "string", "rest, or static: start from the equilibrium under initial_loads, then "
-        "release them", default="rest", choices=("rest", "static")),
+    Key("initial", "string", "rest, or static: start from the equilibrium under initial_loads (and the "
+        "other loads at their t = 0 values), then release the initial_loads", default="rest",
+        choices=("rest", "static")),
     Key("initial_loads", "vector", "indices into [[load]] of the loads held for initial = static "
         "(released at t = 0)", default=[], integer=True, minimum=0),
     Key("initial_velocity", "either", "initial velocity field", default=[0.0, 0.0, 0.0], attr="velocity",
@@ -66,7 +67,8 @@ def _dynamic_rules(s: DynamicSpec, t: Table) -> None:
         raise InputError(f"{t.key('initial_loads')}: only with initial = \"static\"")
 
 
-RAYLEIGH = Key("rayleigh", "table", "Rayleigh damping C = alpha M + beta K (K: the tangent at rest)", keys=(
+RAYLEIGH = Key("rayleigh", "table", "Rayleigh damping C = alpha M + beta K (K: the tangent at rest; beta K "
+               "also damps rotations, so under large rotations use viscous)", keys=(
     Key("alpha", "number", "mass-proportional coefficient", default=0.0, unit="1/s", minimum=0),
     Key("beta", "number", "stiffness-proportional coefficient", default=0.0, unit="s", minimum=0)))
 VISCOUS = Key("viscous", "table", "Kelvin-Voigt viscous stress from the rate of Green strain", keys=(
