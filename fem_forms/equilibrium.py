@@ -109,7 +109,8 @@ def solve_static(scene: Scene, material=None, model: Model | None = None) -> Sta
     result = StaticResult(model, report)
     if report.converged:
         model.sync_displacement()
-        result.energy = model.mesh.comm.allreduce(fem.assemble_scalar(fem.form(model.energy)), op=MPI.SUM)
+        if model.energy is not None:                       # (none without a conservative term)
+            result.energy = model.mesh.comm.allreduce(fem.assemble_scalar(fem.form(model.energy)), op=MPI.SUM)
         result.max_displacement = max_norm(model.u)
         result.probes = probes.evaluate(model.u, scene.output.probes)
         result.quantities = Quantities(model)

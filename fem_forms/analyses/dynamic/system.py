@@ -92,6 +92,7 @@ def build_system(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> DynamicSystem
     V, u = model.V, model.u
     v, a = fem.Function(V, name="velocity"), fem.Function(V, name="acceleration")
     state = State({"unknown": u, "velocity": v, "acceleration": a})
+    state.adopt_history(model.state)                 # plastic history committed with each accepted step
     model.state = state
     old = state.old
     td = TimeDiscrete(model.mesh, old["unknown"], old["velocity"], old["acceleration"],
