@@ -17,6 +17,7 @@ from fem_forms.physics import rigid_motion
 from fem_forms.scene import Scene
 from fem_forms.solvers import continuation, snes
 from fem_forms.solvers.linear import rigid_body_modes
+from fem_forms.solvers.time_stepping import piecewise_linear
 
 
 @dataclass
@@ -84,16 +85,38 @@ def max_norm(f: fem.Function) -> float:
     return f.function_space.mesh.comm.allreduce(local, op=MPI.MAX)
 
 
+def load_path(model: Model) -> tuple:
+    """(set_load, stops) of the continuation. Without any [[load]] history: lambda scales every load and
+    prescribed displacement. With one (load, then unload: plasticity): lambda is pseudo-time over the
+    histories' span, each load follows its own history (a load without one is held at 1, as in the
+    dynamic analysis), prescribed displacements still scale with lambda, and every history corner is a
+    step end."""
+    loads = [t for t in model.terms[1:] if model.scene.load[t.index].history]
+    if not loads:
+        return model.load.set, ()
+    hist = {t.index: model.scene.load[t.index].history for t in model.terms[1:]}
+    t_end = max(h[-1][0] for h in hist.values() if h)
+
+    def set_load(lam: float) -> None:
+        model.load.set(lam)
+        model.load.constant.value = 1.0
+        for t in model.terms[1:]:
+            t.factor.value = piecewise_linear(hist[t.index], lam * t_end)
+    stops = tuple(sorted({p[0] / t_end for h in hist.values() if h for p in h if 0 < p[0] < t_end}))
+    return set_load, stops
+
+
 def solve_static(scene: Scene, material=None, model: Model | None = None) -> StaticResult:
     """Solve the scene's equilibrium. `material` may be a Material or a user's psi(F) function.
     Raises InputError for bad input; a failed solve is returned with report.converged False."""
     t0 = time.perf_counter()
     model = model or build_model(scene, material)
     probes.evaluate(model.u, scene.output.probes)          # a probe outside the mesh is bad input
+    set_load, stops = load_path(model)
     problem = snes.NonlinearProblem(
         model.unknown, model.residual, model.jacobian, model.bcs,
         energy=model.energy if model.conservative else None,
-        set_load=model.load.set, inadmissible=model.inadmissible, state=model.state)
+        set_load=set_load, inadmissible=model.inadmissible, state=model.state)
     linear_kind = "direct" if scene.discretization.formulation == "mixed" else scene.solver.linear
     r0 = rigid_motion.rest_residual(model)
     if rigid_motion.nothing_to_solve(model, r0):
@@ -104,7 +127,7 @@ def solve_static(scene: Scene, material=None, model: Model | None = None) -> Sta
         rigid_motion.check_supports_hold_loads(model, r0)
         report = continuation.solve(problem, scene.solver.petsc, steps=scene.solver.steps,
                                     max_cutbacks=scene.solver.max_cutbacks, linear_kind=linear_kind,
-                                    near_nullspace=lambda: rigid_body_modes(model.V))
+                                    near_nullspace=lambda: rigid_body_modes(model.V), stops=stops)
     r0.destroy()
     result = StaticResult(model, report)
     if report.converged:

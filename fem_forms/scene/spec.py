@@ -319,7 +319,7 @@ LOAD_TYPES = {
 }
 # one key every load type shares: the load's factor over time (dynamic analysis), piecewise linear
 LOAD_HISTORY = Key("history", "points", "[time, factor] pairs, piecewise linear in time, held after the last "
-                   "(dynamic analysis; default: constant 1)", length=2, min_items=1,
+                   "(dynamic; static: pseudo-time of the load steps, e.g. load then unload; default: constant 1)", length=2, min_items=1,
                    note="must list [time, factor] pairs")
 LOAD_VARIANTS = Variants(Key("type", "string", "kind of load", required=True, choices=tuple(LOAD_TYPES)),
                          LOAD_TYPES)

@@ -1,0 +1,159 @@
+"""Plasticity against closed forms: von Mises bar with hardening, the perfectly plastic thick sphere (Hill 1950:
+elastic, yielding, collapse), O'Brien permanent set and exact return, quadratic Newton, 2 MPI ranks."""
+import importlib.util
+import json
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+import fem_forms as ff
+from fem_forms.output.plastic import plastic_summary
+from helpers import ROOT, mpirun, toml_dumps
+
+E, NU, SY, A, B = 210e9, 0.3, 240e6, 1.0, 2.0
+_geo = importlib.util.spec_from_file_location("thick_sphere", ROOT / "verification" / "geometry" / "thick_sphere.py")
+thick_sphere = importlib.util.module_from_spec(_geo)
+_geo.loader.exec_module(thick_sphere)
+
+
+@pytest.fixture(scope="module")
+def sphere_mesh(tmp_path_factory):
+    return thick_sphere.build(tmp_path_factory.mktemp("sphere") / "thick_sphere.msh", A, B, h=0.3)
+
+
+def sphere_scene(mesh, P: float) -> dict:
+    return {"title": "thick sphere", "analysis": "static", "mesh": {"generator": "file", "file": str(mesh)},
+            "material": {"model": "linear", "E": E, "nu": NU,
+                         "plasticity": {"model": "von-mises", "yield_stress": SY}},
+            "fix": [{"where": {"group": g}, "components": [g[0]]} for g in ("x0", "y0", "z0")],
+            "load": [{"type": "pressure", "where": {"group": "inner"}, "value": P}],
+            "solver": {"steps": 4, "max_cutbacks": 4, "petsc": {"snes_max_it": 15}},
+            "output": {"picture": False, "fields": ["displacement"], "probes": {"outer": [B, 0.0, 0.0]}}}
+
+
+def lame_outer(P):
+    return 1.5 * (1 - NU) * P * A**3 * B / (E * (B**3 - A**3))
+
+
+def plastic_outer(P):
+    c = brentq(lambda c: 2 * SY * math.log(c / A) + 2 * SY / 3 * (1 - c**3 / B**3) - P, A, B, xtol=1e-14)
+    return (1 - NU) * SY * c**3 / (E * B**2)
+
+
+def solve(d):
+    return ff.solve_static(ff.Scene.from_dict(d))
+
+
+def test_von_mises_bar_with_linear_hardening_matches_closed_form():
+    """Uniaxial stress past yield: strain T/E + (T - sigma_y)/H (isotropic hardening, alpha = eps_p axial)."""
+    T, H = 300e6, 20e9
+    d = {"analysis": "static", "mesh": {"generator": "box", "size": [2.0, 1.0, 0.5], "cells": [2, 2, 2]},
+         "material": {"model": "linear", "E": 200e9, "nu": 0.3,
+                      "plasticity": {"model": "von-mises", "yield_stress": 250e6, "hardening": H}},
+         "discretization": {"degree": 1},
+         "fix": [{"where": {"axis": a, "at": 0.0}, "components": [a]} for a in "xyz"],
+         "load": [{"type": "traction", "where": {"axis": "x", "at": 2.0}, "value": [T, 0, 0]}],
+         "solver": {"steps": 3}, "output": {"picture": False, "fields": False, "probes": {"c": [2.0, 1.0, 0.5]}}}
+    r = solve(d)
+    assert r.report.converged
+    expect = T / 200e9 + (T - 250e6) / H
+    assert r.probes["c"][0] / 2.0 == pytest.approx(expect, rel=1e-8)
+    s = plastic_summary(r.model)
+    assert s["max_plastic_strain"] == pytest.approx((T - 250e6) / H, rel=1e-8)
+    assert s["yielded_fraction"] == pytest.approx(1.0)
+
+
+def test_thick_sphere_elastic_yielding_and_quadratic_newton(sphere_mesh):
+    """Below first yield (140 MPa) Lame; at 250 MPa the plastic front c = 1.33 a gives u_b. The flat facets
+    of the h = 0.3 mesh make both -2.7 % (geometry): the ratio u_b(250)/u_b(100) removes that and must match
+    the closed-form ratio to 1 %."""
+    elastic = solve(sphere_scene(sphere_mesh, 100e6))
+    plastic = solve(sphere_scene(sphere_mesh, 250e6))
+    assert elastic.report.converged and plastic.report.converged
+    ue, up = elastic.probes["outer"][0], plastic.probes["outer"][0]
+    assert ue == pytest.approx(lame_outer(100e6), rel=0.035)
+    assert up == pytest.approx(plastic_outer(250e6), rel=0.035)
+    assert up / ue == pytest.approx(plastic_outer(250e6) / lame_outer(100e6), rel=0.01)
+    assert plastic_summary(elastic.model) == {"max_plastic_strain": 0.0, "yielded_fraction": 0.0}
+    s = plastic_summary(plastic.model)
+    yielded = (1.3306552630878314**3 - A**3) / (B**3 - A**3)       # volume fraction a < r < c: 0.194
+    assert 0.0 < s["max_plastic_strain"] < 0.01
+    assert yielded < s["yielded_fraction"] < 1.5 * yielded          # cells cut by the front count whole
+    # consistent tangent: the last step's residuals fall quadratically (exponent near 2)
+    res = plastic.report.steps[-1].residuals
+    rates = [math.log(res[k + 1] / res[k]) / math.log(res[k] / res[k - 1]) for k in range(1, len(res) - 1)
+             if res[k + 1] > 1e-9 * res[0]]
+    assert len(res) <= 7 and max(rates[-2:]) > 1.8, res
+
+
+def test_thick_sphere_beyond_collapse_exits_3_with_the_load_factor(sphere_mesh, tmp_path):
+    P = 350e6
+    path = tmp_path / "scene.toml"
+    path.write_text(toml_dumps(sphere_scene(sphere_mesh, P)))
+    p = subprocess.run([sys.executable, "-m", "fem_forms", "run", str(path), "--out", str(tmp_path / "out"), "-q"],
+                       cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert p.returncode == 3, p.stderr
+    assert "plastic collapse" in p.stderr and "load factor" in p.stderr
+    res = json.loads((tmp_path / "out" / "results.json").read_text())
+    assert res["converged"] is False
+    carried = res["collapse"]["load_factor"] * P
+    assert carried == pytest.approx(2 * SY * math.log(B / A), rel=0.02)
+    assert carried < 2 * SY * math.log(B / A) * 1.005
+
+
+def obrien_bar(T: float, g1=0.01, g2=0.5) -> dict:
+    return {"analysis": "static", "mesh": {"generator": "box", "size": [1.0, 0.1, 0.1], "cells": [4, 1, 1]},
+            "material": {"model": "linear", "E": 1e9, "nu": 0.3,
+                         "plasticity": {"model": "obrien", "elastic_limit": g1, "plastic_limit": g2}},
+            "discretization": {"degree": 1},
+            "fix": [{"where": {"axis": a, "at": 0.0}, "components": [a]} for a in "xyz"],
+            "load": [{"type": "traction", "where": {"axis": "x", "at": 1.0}, "value": [T, 0, 0],
+                      "history": [[0, 0], [1, 1], [2, 0]]}],
+            "solver": {"steps": 1}, "output": {"picture": False, "fields": False, "probes": {"c": [1.0, 0.1, 0.1]}}}
+
+
+@pytest.mark.parametrize("T", [5e6, 2e7])
+def test_obrien_bar_released_keeps_a_permanent_set_only_past_the_elastic_limit(T):
+    """Load to T (one step: the history's peak is a step end), release to 0. The elastic strain at the peak is
+    uniaxial: |dev| = (1 + nu) T sqrt(6) / (3 E); past gamma1 the plastic strain (|dev| - gamma1)/|dev| dev
+    stays, stress-free: the released bar keeps eps_p_xx L. Below gamma1 it returns to zero exactly."""
+    r = solve(obrien_bar(T))
+    assert r.report.converged and [s.load for s in r.report.steps if s.accepted] == [0.5, 1.0]
+    n = (1 + 0.3) * T * math.sqrt(6) / (3 * 1e9)
+    set_ = max(n - 0.01, 0) / n * 2 * (1 + 0.3) * T / (3 * 1e9)
+    ux = r.probes["c"][0]
+    if n < 0.01:
+        assert abs(ux) < 1e-15 and plastic_summary(r.model)["max_plastic_strain"] == 0.0
+    else:
+        assert set_ > 1e-3 and ux == pytest.approx(set_, rel=1e-9)
+        assert plastic_summary(r.model)["max_plastic_strain"] == pytest.approx(set_ * math.sqrt(1.5), rel=1e-9)
+
+
+def test_obrien_plastic_limit_caps_the_plastic_strain():
+    """At T = 40 MPa the flow (|dev| - gamma1 = 0.032) exceeds gamma2 = 0.015: |eps_p| is cut to gamma2 along
+    dev = diag(2, -1, -1)/sqrt 6, so the released bar keeps eps_p_xx = gamma2 sqrt(2/3)."""
+    r = solve(obrien_bar(4e7, g1=0.01, g2=0.015))
+    assert (1 + 0.3) * 4e7 * math.sqrt(6) / (3 * 1e9) - 0.01 > 0.015
+    assert plastic_summary(r.model)["max_plastic_strain"] == pytest.approx(0.015, rel=1e-9)
+    assert r.probes["c"][0] == pytest.approx(0.015 * math.sqrt(2 / 3), rel=1e-9)
+
+
+def test_two_ranks_give_the_serial_plastic_answer(sphere_mesh, tmp_path):
+    d = sphere_scene(sphere_mesh, 250e6)
+    d["output"]["fields"] = ["displacement"]
+    path = tmp_path / "scene.toml"
+    path.write_text(toml_dumps(d))
+    serial = solve(d)
+    p = mpirun(["-m", "fem_forms", "run", str(path), "--out", str(tmp_path / "out")])
+    assert p.returncode == 0, p.stderr
+    par = json.loads((tmp_path / "out" / "results.json").read_text())
+    assert par["mpi_ranks"] == 2
+    np.testing.assert_allclose(par["probes"]["outer"]["displacement"], serial.probes["outer"], rtol=1e-8, atol=1e-14)
+    s = plastic_summary(serial.model)
+    assert par["max_plastic_strain"] == pytest.approx(s["max_plastic_strain"], rel=1e-8)
+    assert par["yielded_fraction"] == pytest.approx(s["yielded_fraction"], rel=1e-12)
+    assert (tmp_path / "out" / "fields.h5").stat().st_size > 0
