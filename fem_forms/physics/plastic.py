@@ -112,6 +112,10 @@ class VonMisesSolid(PlasticSolid):
     def virtual_work(self, ctx: Context, v) -> ufl.Form:
         return ctx.volume(ufl.inner(self.stress(ctx), self.strain_variation(ctx, v)))
 
+    def pk1(self, ctx: Context):
+        """The stress for output (small strain: every stress measure is sigma)."""
+        return self.stress(ctx)
+
     def new_history(self, ctx: Context) -> tuple:
         _, eps_p, alpha = self.plastic.return_map(self.material.mu, self.strain(ctx), self.eps_p, self.alpha)
         return eps_p, alpha
@@ -122,6 +126,11 @@ class OBrienSolid(PlasticSolid):
 
     def energy(self, ctx: Context) -> ufl.Form:
         return ctx.volume(self.elastic_energy(self.plastic.elastic_strain(self.strain(ctx), self.eps_p)))
+
+    def pk1(self, ctx: Context):
+        """First Piola-Kirchhoff stress F S of S = dpsi/dE at the elastic strain (S itself for small strain)."""
+        S = self.elastic_stress(self.plastic.elastic_strain(self.strain(ctx), self.eps_p))
+        return ctx.F * S if self.green else S
 
     def new_history(self, ctx: Context) -> tuple:
         eps_p = self.plastic.update(self.strain(ctx), self.eps_p)

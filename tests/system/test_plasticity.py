@@ -32,16 +32,20 @@ def sphere_scene(mesh, P: float) -> dict:
             "fix": [{"where": {"group": g}, "components": [g[0]]} for g in ("x0", "y0", "z0")],
             "load": [{"type": "pressure", "where": {"group": "inner"}, "value": P}],
             "solver": {"steps": 4, "max_cutbacks": 4, "petsc": {"snes_max_it": 15}},
-            "output": {"picture": False, "fields": ["displacement"], "probes": {"outer": [B, 0.0, 0.0]}}}
+            "output": {"picture": False, "fields": ["displacement"], "probes": {"outer": [B, 0.0, 0.0], "inner": [A, 0.0, 0.0]}}}
 
 
 def lame_outer(P):
     return 1.5 * (1 - NU) * P * A**3 * B / (E * (B**3 - A**3))
 
 
+def front(P):
+    """Radius c of the plastic front: P = 2 sigma_y ln(c/a) + (2 sigma_y / 3)(1 - c^3/b^3)."""
+    return brentq(lambda c: 2 * SY * math.log(c / A) + 2 * SY / 3 * (1 - c**3 / B**3) - P, A, B, xtol=1e-14)
+
+
 def plastic_outer(P):
-    c = brentq(lambda c: 2 * SY * math.log(c / A) + 2 * SY / 3 * (1 - c**3 / B**3) - P, A, B, xtol=1e-14)
-    return (1 - NU) * SY * c**3 / (E * B**2)
+    return (1 - NU) * SY * front(P)**3 / (E * B**2)
 
 
 def solve(d):
@@ -79,8 +83,13 @@ def test_thick_sphere_elastic_yielding_and_quadratic_newton(sphere_mesh):
     assert up == pytest.approx(plastic_outer(250e6), rel=0.035)
     assert up / ue == pytest.approx(plastic_outer(250e6) / lame_outer(100e6), rel=0.01)
     assert plastic_summary(elastic.model) == {"max_plastic_strain": 0.0, "yielded_fraction": 0.0}
+    # recovered stresses come from the return mapping: von Mises = sigma_y at the yielded inner surface,
+    # hoop stress sigma_y c^3 / b^3 at the elastic outer surface
+    c = front(250e6)
+    assert plastic.probe_stresses["inner"]["von_mises"] == pytest.approx(SY, rel=0.02)
+    assert plastic.probe_stresses["outer"]["stress"][1][1] == pytest.approx(SY * c**3 / B**3, rel=0.04)
     s = plastic_summary(plastic.model)
-    yielded = (1.3306552630878314**3 - A**3) / (B**3 - A**3)       # volume fraction a < r < c: 0.194
+    yielded = (c**3 - A**3) / (B**3 - A**3)                         # volume fraction a < r < c: 0.194
     assert 0.0 < s["max_plastic_strain"] < 0.01
     assert yielded < s["yielded_fraction"] < 1.5 * yielded          # cells cut by the front count whole
     # consistent tangent: the last step's residuals fall quadratically (exponent near 2)
@@ -156,4 +165,17 @@ def test_two_ranks_give_the_serial_plastic_answer(sphere_mesh, tmp_path):
     s = plastic_summary(serial.model)
     assert par["max_plastic_strain"] == pytest.approx(s["max_plastic_strain"], rel=1e-8)
     assert par["yielded_fraction"] == pytest.approx(s["yielded_fraction"], rel=1e-12)
-    assert (tmp_path / "out" / "fields.h5").stat().st_size > 0
+    xdmf = (tmp_path / "out" / "fields.xdmf").read_text()
+    assert 'Name="plastic_strain"' in xdmf and 'Name="equivalent_plastic_strain"' in xdmf
+
+
+def test_a_quadrature_rule_with_a_negative_weight_is_refused(tmp_path):
+    """basix's degree-3 rule on tetrahedra weighs its centroid negatively: no history may live there."""
+    d = obrien_bar(5e6)
+    d["discretization"]["quadrature_degree"] = 3
+    path = tmp_path / "scene.toml"
+    path.write_text(toml_dumps(d))
+    p = subprocess.run([sys.executable, "-m", "fem_forms", "run", str(path), "--out", str(tmp_path / "out"), "-q"],
+                       cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert p.returncode == 2 and "quadrature_degree = 3" in p.stderr and len(p.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "out" / "results.json").exists()
