@@ -55,7 +55,8 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
     while lam < 1.0 - 1e-12:
         trial = min([1.0, lam + dlam] + [s for s in stops if s > lam + 1e-12])
         set_load(trial)
-        if predictor and last_step is not None and last_dlam > 0:
+        corner = any(abs(lam - s) < 1e-12 for s in stops)     # the load path turns: no extrapolation across
+        if predictor and last_step is not None and last_dlam > 0 and not corner:
             u.x.array[:] = old.x.array + ((trial - lam) / last_dlam) * last_step
             u.x.scatter_forward()
         drv.load_factor = trial
