@@ -74,6 +74,10 @@ class PlasticSolid(Term):
     def elastic_stress(self, e):
         return 2 * self.material.mu * e + self.material.lmbda * ufl.tr(e) * ufl.Identity(3)
 
+    def elastic_law_energy(self, ctx: Context) -> ufl.Form:
+        """int psi(total strain) dX: the elastic law alone (the stiffness at rest, for Rayleigh damping)."""
+        return ctx.volume(self.elastic_energy(self.strain(ctx)))
+
     def new_history(self, ctx: Context) -> tuple:
         """(plastic strain, equivalent plastic strain) after the step, as UFL expressions of ctx's u."""
         raise NotImplementedError
@@ -115,6 +119,12 @@ class VonMisesSolid(PlasticSolid):
     def pk1(self, ctx: Context):
         """The stress for output (small strain: every stress measure is sigma)."""
         return self.stress(ctx)
+
+    def stored_energy(self, ctx: Context) -> ufl.Form:
+        """int psi(elastic strain) dX after the return mapping (energy accounting; not a potential of the
+        residual: the plastic work is dissipated)."""
+        e, _, _ = self.plastic.return_map(self.material.mu, self.strain(ctx), self.eps_p, self.alpha)
+        return ctx.volume(self.elastic_energy(e))
 
     def new_history(self, ctx: Context) -> tuple:
         _, eps_p, alpha = self.plastic.return_map(self.material.mu, self.strain(ctx), self.eps_p, self.alpha)

@@ -179,3 +179,28 @@ def test_a_quadrature_rule_with_a_negative_weight_is_refused(tmp_path):
                        cwd=ROOT, capture_output=True, text=True, timeout=600)
     assert p.returncode == 2 and "quadrature_degree = 3" in p.stderr and len(p.stderr.strip().splitlines()) == 1
     assert not (tmp_path / "out" / "results.json").exists()
+
+
+def test_dynamic_slow_loading_reaches_the_static_plastic_answer(tmp_path):
+    """The hardening bar loaded slowly (ramp over 20 ms, about 12 wave periods, mass-proportional damping):
+    its history is committed with each accepted time step, and the end state is the static closed form
+    T/E + (T - sigma_y)/H to 1 %, the equivalent plastic strain (T - sigma_y)/H to 5 % (dynamic overshoot)."""
+    T, H, sy, E = 300e6, 20e9, 250e6, 200e9
+    d = {"analysis": "dynamic", "mesh": {"generator": "box", "size": [2.0, 1.0, 0.5], "cells": [2, 2, 2]},
+         "material": {"model": "linear", "E": E, "nu": 0.3, "rho": 7800.0,
+                      "plasticity": {"model": "von-mises", "yield_stress": sy, "hardening": H}},
+         "discretization": {"degree": 1},
+         "fix": [{"where": {"axis": a, "at": 0.0}, "components": [a]} for a in "xyz"],
+         "load": [{"type": "traction", "where": {"axis": "x", "at": 2.0}, "value": [T, 0, 0],
+                   "history": [[0, 0], [0.02, 1]]}],
+         "dynamic": {"duration": 0.03, "dt": 5e-4}, "damping": {"rayleigh": {"alpha": 2000.0, "beta": 0.0}},
+         "output": {"picture": False, "fields": False, "probes": {"c": [2.0, 1.0, 0.5]}}}
+    path = tmp_path / "scene.toml"
+    path.write_text(toml_dumps(d))
+    p = subprocess.run([sys.executable, "-m", "fem_forms", "run", str(path), "--out", str(tmp_path / "out"), "-q"],
+                       cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert p.returncode == 0, p.stderr
+    res = json.loads((tmp_path / "out" / "results.json").read_text())
+    assert res["probes"]["c"]["displacement"][0] / 2.0 == pytest.approx(T / E + (T - sy) / H, rel=0.01)
+    assert res["max_plastic_strain"] == pytest.approx((T - sy) / H, rel=0.05)
+    assert res["yielded_fraction"] == 1.0
