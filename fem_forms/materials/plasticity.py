@@ -2,10 +2,11 @@
 
 Two models, each a function of the total strain and the COMMITTED history (plastic strain eps_p,
 equivalent plastic strain alpha) returning the stress and the new history:
-- von Mises (J2) with linear isotropic hardening, small strain: radial return. Trial elastic strain
+- von Mises (J2) with linear isotropic hardening. Small strain (material "linear"): radial return. Trial elastic strain
   eps - eps_p, trial deviatoric stress s = 2 mu dev(eps - eps_p), q = sqrt(3/2 s:s), yield function
   f = q - (sigma_y + H alpha). If f > 0: dgamma = f / (3 mu + H), n = 3/2 s / q, eps_p += dgamma n,
   alpha += dgamma. ufl.derivative of the resulting stress is the algorithmic consistent tangent.
+  Finite strain (material "neo-hookean"): Simo's multiplicative J2 (return_map_finite), history C_p^-1.
 - O'Brien, Bargteil & Hodgins (2002), as the lecture gives it: eps_e = E - eps_p with E the total strain
   (Green strain for stvk, small strain for linear), eps' = dev eps_e; if |eps'| > gamma1 (Frobenius):
   d eps_p = (|eps'| - gamma1)/|eps'| eps', then eps_p := (eps_p + d eps_p) min(1, gamma2/|eps_p + d eps_p|).
@@ -54,6 +55,27 @@ class VonMises:
         dgamma = ufl.conditional(ufl.gt(f, 0), f, 0) / (3 * mu + self.hardening)
         eps_p = eps_p_old + dgamma * 1.5 * s / q
         return eps - eps_p, eps_p, alpha_old + dgamma
+
+
+    def return_map_finite(self, mu, kappa, F, Cp_inv_old, alpha_old):
+        """Simo's finite-strain J2 (Simo & Hughes, Computational Inelasticity, 1998, Box 9.1), closed form on
+        the isochoric elastic left Cauchy-Green tensor, no eigen-decomposition. Elastic law (Simo's split):
+        psi = kappa/2 (ln J)^2 + mu/2 (tr bbar_e - 3). Returns (Kirchhoff stress, new C_p^-1, new alpha)."""
+        I = ufl.Identity(3)
+        J = ufl.det(F)
+        be_trial = F * Cp_inv_old * F.T
+        bbar = J ** (-2.0 / 3.0) * be_trial
+        Ie = ufl.tr(bbar) / 3
+        s_trial = mu * dev(bbar)
+        norm = ufl.sqrt(ufl.inner(s_trial, s_trial) + _GUARD * self.yield_stress**2)
+        f = norm - (2.0 / 3.0) ** 0.5 * (self.yield_stress + self.hardening * alpha_old)
+        mu_bar = mu * Ie
+        dgamma = ufl.conditional(ufl.gt(f, 0), f, 0) / (2 * mu_bar * (1 + self.hardening / (3 * mu_bar)))
+        s = s_trial - 2 * mu_bar * dgamma * s_trial / norm
+        tau = kappa * ufl.ln(J) * I + s
+        be_new = J ** (2.0 / 3.0) * (s / mu + Ie * I)
+        Finv = ufl.inv(F)
+        return tau, Finv * be_new * Finv.T, alpha_old + (2.0 / 3.0) ** 0.5 * dgamma
 
 
 @dataclass(frozen=True)

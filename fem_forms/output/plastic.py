@@ -62,7 +62,7 @@ def plastic_fields(model) -> list[fem.Function]:
         return []
     out = []
     for name, expr, space in (
-            ("plastic_strain", term.eps_p, fem.TensorFunctionSpace(model.mesh, ("DG", 0))),
+            ("plastic_strain", term.plastic_strain, fem.TensorFunctionSpace(model.mesh, ("DG", 0))),
             ("equivalent_plastic_strain", term.equivalent, fem.FunctionSpace(model.mesh, ("DG", 0)))):
         f = fem.Function(space, name=name)
         n = space.dofmap.index_map.size_local * space.dofmap.index_map_bs

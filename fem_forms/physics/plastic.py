@@ -101,6 +101,11 @@ class PlasticSolid(Term):
                                        "outside small strain, no equilibrium found near this load")
 
     @property
+    def plastic_strain(self):
+        """The plastic strain tensor written as a field."""
+        return self.eps_p
+
+    @property
     def equivalent(self):
         """The scalar reported as max_plastic_strain: alpha (von Mises), |eps_p| (O'Brien)."""
         return self.alpha
@@ -151,11 +156,64 @@ class OBrienSolid(PlasticSolid):
         return ufl.sqrt(ufl.inner(self.eps_p, self.eps_p))
 
 
+class FiniteVonMisesSolid(PlasticSolid):
+    """Finite-strain J2 (Simo): the history `eps_p` holds C_p^-1 (identity at rest); non-conservative."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        bs = self.eps_p.function_space.dofmap.index_map_bs
+        self.eps_p.x.array[:] = np.tile(np.eye(3).ravel(), self.eps_p.x.array.size // bs)
+
+    def mechanical_F(self, ctx: Context):
+        """F with the thermal stretch taken out multiplicatively: F (1 + eps_th)^-1."""
+        return ctx.F if ctx.thermal_strain is None else ctx.F / (1 + ctx.thermal_strain)
+
+    def _map(self, ctx: Context):
+        kappa = self.material.lmbda + 2 * self.material.mu / 3
+        return self.plastic.return_map_finite(self.material.mu, kappa, self.mechanical_F(ctx), self.eps_p,
+                                              self.alpha)
+
+    def pk1(self, ctx: Context):
+        """P = tau F^-T (times F_th^-T with a thermal stretch)."""
+        tau, _, _ = self._map(ctx)
+        P = tau * ufl.inv(self.mechanical_F(ctx)).T
+        return P if ctx.thermal_strain is None else P / (1 + ctx.thermal_strain)
+
+    def virtual_work(self, ctx: Context, v) -> ufl.Form:
+        return ctx.volume(ufl.inner(self.pk1(ctx), ufl.grad(v)))
+
+    def new_history(self, ctx: Context) -> tuple:
+        _, Cp_inv, alpha = self._map(ctx)
+        return Cp_inv, alpha
+
+    def _psi(self, F, Cp_inv):
+        J = ufl.det(F)
+        kappa = self.material.lmbda + 2 * self.material.mu / 3
+        bbar = J ** (-2.0 / 3.0) * F * Cp_inv * F.T
+        return 0.5 * kappa * ufl.ln(J) ** 2 + 0.5 * self.material.mu * (ufl.tr(bbar) - 3)
+
+    def stored_energy(self, ctx: Context) -> ufl.Form:
+        """int psi at the committed C_p^-1 (energy accounting; the plastic work is not in it)."""
+        return ctx.volume(self._psi(self.mechanical_F(ctx), self.eps_p))
+
+    def elastic_law_energy(self, ctx: Context) -> ufl.Form:
+        return ctx.volume(self._psi(self.mechanical_F(ctx), ufl.Identity(3)))
+
+    @property
+    def plastic_strain(self):
+        """Plastic Green strain (C_p - I) / 2 for output."""
+        return 0.5 * (ufl.inv(self.eps_p) - ufl.Identity(3))
+
+
 def plastic_term(material, plastic, model_name: str, mesh, degree: int) -> PlasticSolid:
-    """The term for a plastic model on a bound material ('linear': small strain, 'stvk': Green strain)."""
-    cls = VonMisesSolid if isinstance(plastic, VonMises) else OBrienSolid
+    """The term for a plastic model on a bound material: von Mises small strain ('linear') or finite strain
+    ('neo-hookean'); O'Brien on the small strain ('linear') or the Green strain ('stvk')."""
     assert isinstance(plastic, (VonMises, OBrien))
-    return cls(material, plastic, model_name, mesh, degree, green=model_name == "stvk")
+    if isinstance(plastic, OBrien):
+        cls = OBrienSolid
+    else:
+        cls = FiniteVonMisesSolid if model_name == "neo-hookean" else VonMisesSolid
+    return cls(material, plastic, model_name, mesh, degree, green=model_name in ("stvk", "neo-hookean"))
 
 
 def _evaluator(f: fem.Function, expr, points: np.ndarray):

@@ -5,8 +5,8 @@ from fem_forms.errors import InputError
 from fem_forms.materials.plasticity import MODELS as PLASTIC_MODELS
 from fem_forms.scene.reader import Key
 
-PLASTICITY = Key("plasticity", "table", "plastic flow: von Mises (small strain, with model = 'linear') or "
-                 "O'Brien (linear or stvk)", keys=(
+PLASTICITY = Key("plasticity", "table", "plastic flow: von Mises (small strain with model = 'linear', "
+                 "finite strain with 'neo-hookean') or O'Brien (linear or stvk)", keys=(
     Key("model", "string", "plastic model", choices=PLASTIC_MODELS, attr="plasticity_model"),
     Key("yield_stress", "number", "von Mises yield stress", unit="Pa", exclusive_minimum=0),
     Key("hardening", "number", "linear isotropic hardening modulus (0: perfectly plastic; von Mises)",
@@ -17,7 +17,7 @@ PLASTICITY = Key("plasticity", "table", "plastic flow: von Mises (small strain, 
         exclusive_minimum=0)))
 
 # the hyperelastic models each plastic model is written for (others are refused when the scene is read)
-PLASTIC_MATERIALS = {"von-mises": ("linear",), "obrien": ("linear", "stvk")}
+PLASTIC_MATERIALS = {"von-mises": ("linear", "neo-hookean"), "obrien": ("linear", "stvk")}
 
 
 def material_plasticity_rules(s, given: dict | None) -> None:

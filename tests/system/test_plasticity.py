@@ -71,6 +71,35 @@ def test_von_mises_bar_with_linear_hardening_matches_closed_form():
     assert s["yielded_fraction"] == pytest.approx(1.0)
 
 
+@pytest.mark.parametrize("T", [260e6, 300e6])
+def test_finite_strain_von_mises_bar_meets_its_closed_form_and_the_small_strain_limit(T):
+    """Simo's multiplicative J2 on the neo-Hookean split, same hardening bar: the Kirchhoff stress tau = T l
+    (dead nominal traction T, stretch l) meets ln l = tau/E + (tau - sigma_y)/H in uniaxial stress (logarithmic
+    strains; the elastic part to O(elastic strain^2)); and it tends to the small-strain answer T/E + (T -
+    sigma_y)/H as the strain goes to zero."""
+    H, sy, Em = 20e9, 250e6, 200e9
+    d = {"analysis": "static", "mesh": {"generator": "box", "size": [2.0, 1.0, 0.5], "cells": [2, 2, 2]},
+         "material": {"model": "neo-hookean", "E": Em, "nu": 0.3,
+                      "plasticity": {"model": "von-mises", "yield_stress": sy, "hardening": H}},
+         "discretization": {"degree": 1},
+         "fix": [{"where": {"axis": a, "at": 0.0}, "components": [a]} for a in "xyz"],
+         "load": [{"type": "traction", "where": {"axis": "x", "at": 2.0}, "value": [T, 0, 0]}],
+         "solver": {"steps": 3}, "output": {"picture": False, "fields": False, "probes": {"c": [2.0, 1.0, 0.5]}}}
+    r = solve(d)
+    assert r.report.converged
+    stretch = 1.0
+    for _ in range(50):                               # fixed point: ln l = T l / E + (T l - sigma_y) / H
+        stretch = math.exp(T * stretch / Em + (T * stretch - sy) / H)
+    strain = r.probes["c"][0] / 2.0
+    assert strain == pytest.approx(stretch - 1, rel=5e-3)
+    small = T / Em + (T - sy) / H
+    # the two differ by the stress measure, tau - T = T strain, amplified by the plastic compliance 1/H:
+    # a difference of first order in the strain that vanishes with it
+    assert 0 < strain - small < 2 * T * small / H
+    res = r.report.steps[-1].residuals
+    assert len(res) <= 5 and res[-1] < 1e-8 * res[0]      # two or three Newton steps per load step
+
+
 def test_thick_sphere_elastic_yielding_and_quadratic_newton(sphere_mesh):
     """Below first yield (140 MPa) Lame; at 250 MPa the plastic front c = 1.33 a gives u_b. The flat facets
     of the h = 0.3 mesh make both -2.7 % (geometry): the ratio u_b(250)/u_b(100) removes that and must match

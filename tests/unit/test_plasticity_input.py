@@ -39,8 +39,10 @@ def test_models_are_built_from_their_keys():
     ({"model": "obrien", "elastic_limit": 0.01, "plastic_limit": 0.1, "yield_stress": 1.0}, {},
      "yield_stress: only for model = 'von-mises'"),
     ({"model": "von-mises", "yield_stress": 1e8, "flow": 1}, {}, "material.plasticity.flow: unknown key"),
-    ({"model": "von-mises", "yield_stress": 1e8}, {"material__model": "neo-hookean"},
-     "finite-strain von-mises on 'neo-hookean' is not implemented"),
+    ({"model": "von-mises", "yield_stress": 1e8}, {"material__model": "mooney-rivlin"},
+     "finite-strain von-mises on 'mooney-rivlin' is not implemented"),
+    ({"model": "obrien", "elastic_limit": 0.01, "plastic_limit": 0.1}, {"material__model": "neo-hookean"},
+     "written for material.model = 'linear' or 'stvk' only"),
     ({"model": "von-mises", "yield_stress": 1e8}, {"discretization__formulation": "mixed"}, "mixed formulation"),
 ])
 def test_bad_plasticity_is_refused_in_one_line(plasticity, over, words):
