@@ -233,3 +233,31 @@ def test_dynamic_slow_loading_reaches_the_static_plastic_answer(tmp_path):
     assert res["probes"]["c"]["displacement"][0] / 2.0 == pytest.approx(T / E + (T - sy) / H, rel=0.01)
     assert res["max_plastic_strain"] == pytest.approx((T - sy) / H, rel=0.05)
     assert res["yielded_fraction"] == 1.0
+
+
+@pytest.mark.parametrize("model, plasticity", [
+    ("linear", {"model": "von-mises", "yield_stress": 1e6}),
+    ("neo-hookean", {"model": "von-mises", "yield_stress": 1e6}),
+    ("stvk", {"model": "obrien", "elastic_limit": 1e-4, "plastic_limit": 0.1})])
+def test_a_thermal_strain_expands_freely_without_stress_or_plastic_flow(model, plasticity):
+    """Context.thermal_strain (set by a coupled temperature) is taken out of the total strain: a block on
+    rollers under eps_th = 1e-3 expands by eps_th L (small strain) or stretches by 1 + eps_th (finite), with
+    no stress, so no plastic strain even with a yield stress far below E eps_th."""
+    from dolfinx import fem
+    from fem_forms.model import build_model
+    from fem_forms.physics.assemble import equilibrium_forms
+    from fem_forms.solvers import continuation, snes
+    d = {"analysis": "static", "mesh": {"generator": "box", "size": [1.0, 1.0, 1.0], "cells": [2, 2, 2]},
+         "material": {"model": model, "E": 1e9, "nu": 0.3, "plasticity": plasticity},
+         "discretization": {"degree": 1},
+         "fix": [{"where": {"axis": a, "at": 0.0}, "components": [a]} for a in "xyz"]}
+    m = build_model(ff.Scene.from_dict(d))
+    m.context.thermal_strain = fem.Constant(m.mesh, 1e-3)
+    forms = equilibrium_forms(m.terms, m.context, m.u, __import__("ufl").TestFunction(m.V))
+    problem = snes.NonlinearProblem(m.u, forms.residual, forms.jacobian, m.bcs, state=m.state)
+    assert continuation.solve(problem, {"snes_rtol": 1e-12}).converged
+    x = m.V.tabulate_dof_coordinates()
+    np.testing.assert_allclose(m.u.x.array.reshape(-1, 3), 1e-3 * x, atol=1e-12)
+    m.terms[0].attach(m.state, m.context)             # the history update of the new forms, then commit
+    m.state.commit()
+    assert plastic_summary(m)["max_plastic_strain"] < 1e-12
