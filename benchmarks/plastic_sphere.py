@@ -56,7 +56,8 @@ def main() -> None:
         walls[P] = (statistics.median(times), result.report.newton_iterations, result.report.load_steps)
         for k, step in enumerate(s for s in result.report.steps if s.accepted):
             res = step.residuals
-            lines.append(f"| {P / 1e6:.0f} MPa | {result.model.dofs} | {k + 1} ({step.load:.3g}) | {step.iterations} | "
+            lines.append(f"| {P / 1e6:.0f} MPa | {result.model.dofs} | {k + 1} ({step.load:.3g}) | "
+                         f"{step.iterations} | "
                          f"{', '.join(f'{r:.2e}' for r in res)} | {', '.join(f'{o:.2f}' for o in orders(res))} |")
     lines += ["", "| pressure | Newton iterations / load steps | wall time (median of 3) |", "|---|---|---|"]
     for P in PRESSURES:

@@ -2,9 +2,9 @@
 
 Two models, each a function of the total strain and the COMMITTED history (plastic strain eps_p,
 equivalent plastic strain alpha) returning the stress and the new history:
-- von Mises (J2) with linear isotropic hardening. Small strain (material "linear"): radial return. Trial elastic strain
-  eps - eps_p, trial deviatoric stress s = 2 mu dev(eps - eps_p), q = sqrt(3/2 s:s), yield function
-  f = q - (sigma_y + H alpha). If f > 0: dgamma = f / (3 mu + H), n = 3/2 s / q, eps_p += dgamma n,
+- von Mises (J2) with linear isotropic hardening. Small strain (material "linear"): radial return.
+  Trial elastic strain eps - eps_p, trial deviatoric stress s = 2 mu dev(eps - eps_p), q = sqrt(3/2 s:s),
+  yield function f = q - (sigma_y + H alpha). If f > 0: dgamma = f / (3 mu + H), n = 3/2 s / q, eps_p += dgamma n,
   alpha += dgamma. ufl.derivative of the resulting stress is the algorithmic consistent tangent.
   Finite strain (material "neo-hookean"): Simo's multiplicative J2 (return_map_finite), history C_p^-1.
 - O'Brien, Bargteil & Hodgins (2002), as the lecture gives it: eps_e = E - eps_p with E the total strain

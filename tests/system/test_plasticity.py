@@ -32,7 +32,8 @@ def sphere_scene(mesh, P: float) -> dict:
             "fix": [{"where": {"group": g}, "components": [g[0]]} for g in ("x0", "y0", "z0")],
             "load": [{"type": "pressure", "where": {"group": "inner"}, "value": P}],
             "solver": {"steps": 4, "max_cutbacks": 4, "petsc": {"snes_max_it": 15}},
-            "output": {"picture": False, "fields": ["displacement"], "probes": {"outer": [B, 0.0, 0.0], "inner": [A, 0.0, 0.0]}}}
+            "output": {"picture": False, "fields": ["displacement"],
+                       "probes": {"outer": [B, 0.0, 0.0], "inner": [A, 0.0, 0.0]}}}
 
 
 def lame_outer(P):
