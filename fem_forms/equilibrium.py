@@ -132,7 +132,7 @@ def solve_static(scene: Scene, material=None, model: Model | None = None) -> Sta
     result = StaticResult(model, report)
     if report.converged:
         model.sync_displacement()
-        if model.energy is not None:                       # (none without a conservative term)
+        if model.energy is not None and model.terms[0].energy(model.context) is not None:   # von Mises: none
             result.energy = model.mesh.comm.allreduce(fem.assemble_scalar(fem.form(model.energy)), op=MPI.SUM)
         result.max_displacement = max_norm(model.u)
         result.probes = probes.evaluate(model.u, scene.output.probes)
