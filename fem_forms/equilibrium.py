@@ -106,6 +106,15 @@ def load_path(model: Model) -> tuple:
     return set_load, stops
 
 
+def plastic_min_step(model: Model) -> float:
+    """A plastic solid's smallest load increment: max_cutbacks halvings of the first (past the collapse load
+    the steps would otherwise shrink for ever); 0 (no limit) for an elastic one."""
+    if not hasattr(model.terms[0], "plastic"):
+        return 0.0
+    solver = model.scene.solver
+    return 1.0 / solver.steps / 2**solver.max_cutbacks
+
+
 def solve_static(scene: Scene, material=None, model: Model | None = None) -> StaticResult:
     """Solve the scene's equilibrium. `material` may be a Material or a user's psi(F) function.
     Raises InputError for bad input; a failed solve is returned with report.converged False."""
@@ -127,7 +136,8 @@ def solve_static(scene: Scene, material=None, model: Model | None = None) -> Sta
         rigid_motion.check_supports_hold_loads(model, r0)
         report = continuation.solve(problem, scene.solver.petsc, steps=scene.solver.steps,
                                     max_cutbacks=scene.solver.max_cutbacks, linear_kind=linear_kind,
-                                    near_nullspace=lambda: rigid_body_modes(model.V), stops=stops)
+                                    near_nullspace=lambda: rigid_body_modes(model.V), stops=stops,
+                                    min_step=plastic_min_step(model))
     r0.destroy()
     result = StaticResult(model, report)
     if report.converged:

@@ -262,3 +262,20 @@ def test_a_thermal_strain_expands_freely_without_stress_or_plastic_flow(model, p
     m.terms[0].attach(m.state, m.context)             # the history update of the new forms, then commit
     m.state.commit()
     assert plastic_summary(m)["max_plastic_strain"] < 1e-12
+
+
+def test_bar_past_its_collapse_load_stops_at_sigma_y_over_t_with_default_solver_settings():
+    """Perfectly plastic bar under T = 1.1 sigma_y: the continuation brackets the collapse load factor
+    sigma_y / T from below and stops (a smallest increment), in seconds, instead of creeping towards it."""
+    T, sy = 275e6, 250e6
+    d = {"analysis": "static", "mesh": {"generator": "box", "size": [2.0, 1.0, 0.5], "cells": [2, 2, 2]},
+         "material": {"model": "linear", "E": 200e9, "nu": 0.3,
+                      "plasticity": {"model": "von-mises", "yield_stress": sy}},
+         "discretization": {"degree": 1},
+         "fix": [{"where": {"axis": a, "at": 0.0}, "components": [a]} for a in "xyz"],
+         "load": [{"type": "traction", "where": {"axis": "x", "at": 2.0}, "value": [T, 0, 0]}],
+         "solver": {"steps": 4}, "output": {"picture": False, "fields": False}}
+    r = solve(d)
+    assert not r.report.converged
+    assert sy / T * (1 - 1e-3) < r.report.load_reached <= sy / T
+    assert len(r.report.steps) < 60
