@@ -224,7 +224,7 @@ def test_dynamic_slow_loading_reaches_the_static_plastic_answer(tmp_path):
          "load": [{"type": "traction", "where": {"axis": "x", "at": 2.0}, "value": [T, 0, 0],
                    "history": [[0, 0], [0.02, 1]]}],
          "dynamic": {"duration": 0.03, "dt": 5e-4}, "damping": {"rayleigh": {"alpha": 2000.0, "beta": 0.0}},
-         "output": {"picture": False, "fields": False, "probes": {"c": [2.0, 1.0, 0.5]}}}
+         "output": {"picture": False, "fields": ["displacement"], "probes": {"c": [2.0, 1.0, 0.5]}}}
     path = tmp_path / "scene.toml"
     path.write_text(toml_dumps(d))
     p = subprocess.run([sys.executable, "-m", "fem_forms", "run", str(path), "--out", str(tmp_path / "out"), "-q"],
@@ -234,6 +234,7 @@ def test_dynamic_slow_loading_reaches_the_static_plastic_answer(tmp_path):
     assert res["probes"]["c"]["displacement"][0] / 2.0 == pytest.approx(T / E + (T - sy) / H, rel=0.01)
     assert res["max_plastic_strain"] == pytest.approx((T - sy) / H, rel=0.05)
     assert res["yielded_fraction"] == 1.0
+    assert 'Name="equivalent_plastic_strain"' in (tmp_path / "out" / "motion.xdmf").read_text()
 
 
 @pytest.mark.parametrize("model, plasticity", [
