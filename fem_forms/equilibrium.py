@@ -22,6 +22,7 @@ from fem_forms.physics import rigid_motion
 from fem_forms.scene import Scene
 from fem_forms.solvers import continuation, snes
 from fem_forms.solvers.linear import rigid_body_modes
+from fem_forms.solvers.time_stepping import piecewise_linear
 
 
 @dataclass
@@ -117,6 +118,36 @@ def check_modulus(model: Model) -> None:
                              "is not positive")
 
 
+def load_path(model: Model) -> tuple:
+    """(set_load, stops) of the continuation. Without any [[load]] history: lambda scales every load and
+    prescribed displacement. With one (load, then unload: plasticity): lambda is pseudo-time over the
+    histories' span, each load follows its own history (a load without one is held at 1, as in the
+    dynamic analysis), prescribed displacements still scale with lambda, and every history corner is a
+    step end."""
+    loads = [t for t in model.terms[1:] if model.scene.load[t.index].history]
+    if not loads:
+        return model.load.set, ()
+    hist = {t.index: model.scene.load[t.index].history for t in model.terms[1:]}
+    t_end = max(h[-1][0] for h in hist.values() if h)
+
+    def set_load(lam: float) -> None:
+        model.load.set(lam)
+        model.load.constant.value = 1.0
+        for t in model.terms[1:]:
+            t.factor.value = piecewise_linear(hist[t.index], lam * t_end)
+    stops = tuple(sorted({p[0] / t_end for h in hist.values() if h for p in h if 0 < p[0] < t_end}))
+    return set_load, stops
+
+
+def plastic_min_step(model: Model) -> float:
+    """A plastic solid's smallest load increment: max_cutbacks halvings of the first (past the collapse load
+    the steps would otherwise shrink for ever); 0 (no limit) for an elastic one."""
+    if not hasattr(model.terms[0], "plastic"):
+        return 0.0
+    solver = model.scene.solver
+    return 1.0 / solver.steps / 2**solver.max_cutbacks
+
+
 def solve_static(scene: Scene, material=None, model: Model | None = None) -> StaticResult:
     """Solve the scene's equilibrium. `material` may be a Material or a user's psi(F) function.
     Raises InputError for bad input; a failed solve is returned with report.converged False."""
@@ -125,10 +156,11 @@ def solve_static(scene: Scene, material=None, model: Model | None = None) -> Sta
     probes.evaluate(model.u, scene.output.probes)          # a probe outside the mesh is bad input
     if model.temperature is not None:
         solve_temperature(model)
+    set_load, stops = load_path(model)
     problem = snes.NonlinearProblem(
         model.unknown, model.residual, model.jacobian, model.bcs,
         energy=model.energy if model.conservative else None,
-        set_load=model.load.set, inadmissible=model.inadmissible, state=model.state)
+        set_load=set_load, inadmissible=model.inadmissible, state=model.state)
     linear_kind = "direct" if scene.discretization.formulation == "mixed" else scene.solver.linear
     r0 = rigid_motion.rest_residual(model)
     if rigid_motion.nothing_to_solve(model, r0):
@@ -139,12 +171,14 @@ def solve_static(scene: Scene, material=None, model: Model | None = None) -> Sta
         rigid_motion.check_supports_hold_loads(model, r0)
         report = continuation.solve(problem, scene.solver.petsc, steps=scene.solver.steps,
                                     max_cutbacks=scene.solver.max_cutbacks, linear_kind=linear_kind,
-                                    near_nullspace=lambda: rigid_body_modes(model.V))
+                                    near_nullspace=lambda: rigid_body_modes(model.V), stops=stops,
+                                    min_step=plastic_min_step(model))
     r0.destroy()
     result = StaticResult(model, report)
     if report.converged:
         model.sync_displacement()
-        result.energy = model.mesh.comm.allreduce(fem.assemble_scalar(fem.form(model.energy)), op=MPI.SUM)
+        if model.energy is not None and model.terms[0].energy(model.context) is not None:   # von Mises: none
+            result.energy = model.mesh.comm.allreduce(fem.assemble_scalar(fem.form(model.energy)), op=MPI.SUM)
         result.max_displacement = max_norm(model.u)
         result.probes = probes.evaluate(model.u, scene.output.probes)
         result.quantities = Quantities(model)

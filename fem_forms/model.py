@@ -84,7 +84,10 @@ class Model:
         return self._det_F()
 
     def inadmissible(self) -> str | None:
-        """Why the current state is not physical (inverted elements), or None."""
+        """Why the current state is not physical (inverted elements, a small-strain plastic state with
+        large strains), or None."""
+        if hasattr(self.terms[0], "outside_theory") and (why := self.terms[0].outside_theory(self.context)):
+            return why
         if self.scene.material.model == "linear" and self.scene.analysis == "static":
             return None                                  # small-strain theory: J has no meaning
         jmin = self.min_jacobian()
@@ -96,6 +99,8 @@ class Model:
         """Take the material constants, density, load and support values of `scene` (same mesh, same
         kinds of terms): only Constants and Functions change, no form is compiled."""
         set_parameters(self.material, build_material(scene))
+        if hasattr(self.terms[0], "plastic"):
+            set_parameters(self.terms[0].plastic, scene.material.plasticity)
         self.parameters.set_density(scene.material.rho)
         for term in self.terms[1:]:
             term.set_values(scene.load[term.index])
@@ -143,6 +148,9 @@ def build_model(scene: Scene, material=None, comm: MPI.Comm = MPI.COMM_WORLD) ->
     # the mixed energy is a saddle in (u, p): no line-search objective there
     conservative = forms.conservative and disc.formulation != "mixed"
     mat = terms[0].material
+    state = State(fields)
+    if hasattr(terms[0], "attach"):                  # history variables (plasticity)
+        terms[0].attach(state, context)
     return Model(scene, loaded, V, u, mat, context.dx, load, bcs, forms.energy, forms.residual, forms.jacobian,
                  conservative, unknown, u_form, context, terms, context.parameters,
-                 State(fields), warnings, owners, fields.get("temperature"))
+                 state, warnings, owners, fields.get("temperature"))

@@ -34,13 +34,19 @@ class State:
 
     def commit(self) -> None:
         """Accept the current fields: update history variables from them, then make all of it the old state."""
-        for name, update in self._updates.items():
+        new = {name: update() for name, update in self._updates.items()}   # all from the committed history
+        for name, values in new.items():
             h = self.history[name]
-            h.x.array[:] = update()
+            h.x.array[:] = values
             h.x.scatter_forward()
         for name, f in {**self.fields, **self.history}.items():
             self.old[name].x.array[:] = f.x.array
         self.commits += 1
+
+    def adopt_history(self, other: "State") -> None:
+        """Take over the history variables of another State (a driver that builds its own fields)."""
+        for name, function in other.history.items():
+            self.add_history(name, function, other._updates[name])
 
     def rollback(self) -> None:
         """Return every field and history variable to the last committed values."""

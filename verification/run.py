@@ -88,6 +88,16 @@ def bar_conduction(x: float, t: float, L: float = 1.0, kappa: float = 1.0, terms
     return 1.0 - total
 
 
+def thick_sphere_outer_displacement(P: float, E=210e9, nu=0.3, sy=240e6, a=1.0, b=2.0) -> float:
+    """u(b) of the perfectly plastic thick sphere: Lame below first yield, (1 - nu) sy c^3 / (E b^2) with the
+    plastic front c from P = 2 sy ln(c/a) + (2 sy / 3)(1 - c^3/b^3) while yielding (Hill 1950, ch. V)."""
+    from scipy.optimize import brentq
+    if P <= 2 * sy / 3 * (1 - a**3 / b**3):
+        return 1.5 * (1 - nu) * P * a**3 * b / (E * (b**3 - a**3))
+    c = brentq(lambda c: 2 * sy * math.log(c / a) + 2 * sy / 3 * (1 - c**3 / b**3) - P, a, b, xtol=1e-14)
+    return (1 - nu) * sy * c**3 / (E * b**2)
+
+
 # --- cases ------------------------------------------------------------------------------------
 @dataclass
 class Row:
@@ -180,6 +190,8 @@ NAFEMS_FV = ("NAFEMS, Selected Benchmarks for Natural Frequency Analysis (public
              "NAFEMS Ltd, 1987, test FV32")
 BONET_WOOD = ("closed form; energy of Bonet & Wood, Nonlinear Continuum Mechanics for Finite Element "
               "Analysis, 2nd ed., Cambridge UP, 2008, ch. 6")
+HILL = ("closed form: R. Hill, The Mathematical Theory of Plasticity, Oxford UP, 1950, ch. V "
+        "(thick spherical shell, Tresca = von Mises under spherical symmetry)")
 TUTORIAL = ("J. S. Dokken, The FEniCSx tutorial, ch. 2 Hyperelasticity, "
             "https://jsdokken.com/dolfinx-tutorial/chapter2/hyperelasticity.html (v0.5.0)")
 
@@ -214,6 +226,20 @@ CASES = [
          exit_status=3,
          notes="Asks for 2 E: the run must fail (exit 3, `converged` false) and report the load reached by "
                "its cut-backs (8 halvings: the limit is bracketed from below within a few %)."),
+    Case("thick_sphere_yield", "Thick sphere b/a = 2, perfectly plastic, P = 250 MPa (front c = 1.33 a)", HILL,
+         "thick_sphere_yield.toml",
+         [Row("outer displacement u(b)", thick_sphere_outer_displacement(250e6),
+              probe("outer", "displacement", 0), 0.035, "m")],
+         fast=False, mesh=("thick_sphere", {"h": 0.3}),
+         notes="P2 tetrahedra of size 0.3 on flat-faceted spheres: the elastic u(b) at 100 MPa is off by the "
+               "same -2.7 % (geometry), so the error is the facets', not the return mapping's."),
+    Case("thick_sphere_collapse", "Thick sphere b/a = 2, collapse load 2 sigma_y ln(b/a)", HILL,
+         "thick_sphere_collapse.toml",
+         [Row("largest pressure carried", 2 * 240e6 * math.log(2.0),
+              lambda r, ref: float(r["collapse"]["load_factor"]) * 350e6, 0.02, "MPa", scale=1e-6)],
+         fast=False, exit_status=3, mesh=("thick_sphere", {"h": 0.3}),
+         notes="Asks for 350 MPa: the run must exit 3 and report collapse.load_factor (4 halvings of the "
+               "failing step bracket it from below)."),
     Case("cantilever_gravity", "Cantilever under gravity, P2 (L/h = 20)",
          "Euler-Bernoulli w L^4/(8EI) + Timoshenko shear term w L^2/(2 kappa G A) (Timoshenko & Gere, "
          "Mechanics of Materials)", "cantilever_gravity.toml",

@@ -9,6 +9,7 @@ from mpi4py import MPI
 from fem_forms.equilibrium import StaticResult, solve_static
 from fem_forms.errors import SolveError
 from fem_forms.output import fields, pictures, results
+from fem_forms.output.plastic import plastic_fields, plastic_summary, plastic_term
 from fem_forms.output.quantities import output_fields
 from fem_forms.scene import Scene
 
@@ -23,11 +24,15 @@ def write_static_outputs(result: StaticResult, out: "Path") -> dict:
     comm.barrier()
     summary = result.summary()
     files = {}
+    plastic = plastic_term(result.model) is not None
+    if plastic and not result.report.converged:
+        summary["collapse"] = {"load_factor": result.report.load_reached}
     if result.report.converged:
         scene = result.model.scene
+        summary.update(plastic_summary(result.model))
         T = result.model.temperature
         if scene.output.fields:
-            written = output_fields(result.quantities, scene.output.fields)
+            written = output_fields(result.quantities, scene.output.fields) + plastic_fields(result.model)
             if T is not None:
                 written.append(fields.p1_interpolant(T, "temperature"))
             fields.write_fields(out / "fields.xdmf", result.model.mesh, written)
@@ -59,6 +64,9 @@ def run(scene: Scene, out, echo: bool = False) -> dict:
               f"{summary['wall_time_s']:.2f} s -> {out}")
         for name, pr in summary["probes"].items():
             print(f"  probe {name} {pr['point']}: u = [{', '.join(f'{v:.6g}' for v in pr['displacement'])}]")
+    if "collapse" in summary:
+        raise SolveError(f"{scene.title}: plastic collapse: no equilibrium beyond load factor "
+                         f"{summary['collapse']['load_factor']:.6g} ({summary['message']})")
     if not summary["converged"]:
         raise SolveError(f"{scene.title}: did not converge: {summary['message']}")
     return summary

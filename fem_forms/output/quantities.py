@@ -30,8 +30,10 @@ def tensor_expressions(model) -> dict:
     """UFL expressions of the model's deformation gradient, strains and stresses, by name."""
     ctx = model.context
     F = ufl.variable(ctx.F)
-    psi = model.terms[0].density_at(ctx, F)          # the elastic term: pressure and thermal strain included
-    P = ufl.diff(psi, F)
+    if hasattr(model.terms[0], "pk1"):               # a plastic solid: its stress at the committed history
+        P = model.terms[0].pk1(ctx)
+    else:                                            # the elastic term: pressure and thermal strain included
+        P = ufl.diff(model.terms[0].density_at(ctx, F), F)
     sigma = P if isinstance(model.material, LinearElastic) else P * F.T / ufl.det(F)
     I = ufl.Identity(3)
     return {"deformation_gradient": F, "pk1_stress": P, "pk2_stress": ufl.inv(F) * P,

@@ -22,7 +22,6 @@ import numpy as np
 from petsc4py import PETSc
 import ufl
 
-from fem_forms.physics.elastic import ElasticEnergy
 from fem_forms.scene.spec import fix_names
 
 
@@ -48,7 +47,7 @@ def support_forces(model) -> np.ndarray:
 def applied_load(model) -> np.ndarray:
     """Resultant [Fx, Fy, Fz] of all load terms at the current state and load factor (all ranks)."""
     ctx = model.context
-    loads = [t for t in model.terms if not isinstance(t, ElasticEnergy)]
+    loads = model.terms[1:]                                  # terms[0] is the solid (elastic or plastic)
     if not loads:
         return np.zeros(3)
     shape = model.unknown.ufl_shape

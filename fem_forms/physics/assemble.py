@@ -16,6 +16,7 @@ from fem_forms.meshes import LoadedMesh
 from fem_forms.physics.elastic import ElasticEnergy
 import fem_forms.physics.loads
 from fem_forms.physics.parameters import Parameters
+from fem_forms.physics.plastic import plastic_term
 from fem_forms.physics.supports import LoadFactor, body_regions, load_regions
 from fem_forms.physics.terms import Context, LOAD_TERMS, Term
 from fem_forms.scene import Scene
@@ -43,8 +44,14 @@ def scene_physics(scene: Scene, loaded: LoadedMesh, u, material=None, rest_map=N
 
 
 def scene_terms(scene: Scene, material: Material, mesh, model_name: str | None = None) -> list[Term]:
-    """The elastic energy of the scene's material and one term per [[load]], in scene order."""
-    terms: list[Term] = [ElasticEnergy(material, model_name or scene.material.model)]
+    """The elastic energy of the scene's material (its plastic solid with [material.plasticity]) and one
+    term per [[load]], in scene order."""
+    plastic = scene.material.plasticity if model_name in (None, scene.material.model) else None
+    if plastic is not None:
+        solid = plastic_term(material, plastic, scene.material.model, mesh, scene.discretization.quadrature)
+    else:
+        solid = ElasticEnergy(material, model_name or scene.material.model)
+    terms: list[Term] = [solid]
     for i, spec in enumerate(scene.load):
         terms.append(LOAD_TERMS[spec.type](spec, i, mesh))
     return terms
@@ -89,10 +96,13 @@ def equilibrium_forms(terms: list[Term], ctx: Context, unknown: fem.Function, v)
     test function), tangent by ufl.derivative."""
     test, trial = ufl.TestFunction(unknown.function_space), ufl.TrialFunction(unknown.function_space)
     energy = total_energy(terms, ctx)
-    residual = ufl.derivative(energy, unknown, test)
     extra = virtual_work(terms, ctx, v)
-    if extra is not None:
-        residual = residual + extra
+    if energy is None:                               # no conservative term (a plastic solid under pressure)
+        residual = extra
+    else:
+        residual = ufl.derivative(energy, unknown, test)
+        if extra is not None:
+            residual = residual + extra
     jacobian = ufl.derivative(residual, unknown, trial)
     return EquilibriumForms(energy, residual, jacobian, extra is None)
 

@@ -39,7 +39,8 @@ class RayleighDamping(Term):
         """K0(v, w): the second variation of the elastic energy at rest, in directions v and w."""
         rest = self._rest
         trial = ufl.TrialFunction(self.V)
-        k0 = ufl.derivative(ufl.derivative(self.elastic.energy(replace(ctx, u=rest)), rest, w), rest, trial)
+        energy = getattr(self.elastic, "elastic_law_energy", self.elastic.energy)   # a plastic solid: its elastic law
+        k0 = ufl.derivative(ufl.derivative(energy(replace(ctx, u=rest)), rest, w), rest, trial)
         return ufl.replace(expand_derivatives(k0), {trial: v})
 
     def virtual_work(self, ctx: Context, w) -> ufl.Form:

@@ -10,6 +10,8 @@ from typing import Any
 
 from fem_forms.errors import InputError
 from fem_forms.materials import MODELS, Material, make_material
+from fem_forms.materials.plasticity import make_plasticity
+from fem_forms.scene.plasticity import PLASTICITY, material_plasticity_rules
 from fem_forms.surface_meshes import SURFACE_SUFFIXES
 from fem_forms.scene.reader import AXES, Key, Section, Table, Variants, brief, check_vector
 
@@ -192,8 +194,10 @@ MATERIAL_KEYS = (
     Key("C01", "number", "Mooney-Rivlin C01 (default mu / 8)", unit="Pa", minimum=0),
     Key("rho", "number", "mass density (gravity and modal analysis need it)", default=0.0, unit="kg/m^3",
         minimum=0),
+    PLASTICITY,
 )
 _MAT = {k.name: k for k in MATERIAL_KEYS}
+_PLASTIC = {k.name: k for k in PLASTICITY.keys}
 
 
 @dataclass
@@ -206,6 +210,11 @@ class MaterialSpec:
     C10: float | None = None
     C01: float | None = None
     rho: float = _MAT["rho"].field()
+    plasticity_model: str | None = None
+    yield_stress: float | None = None
+    hardening: float = _PLASTIC["hardening"].field()
+    elastic_limit: float | None = None
+    plastic_limit: float | None = None
     _built: tuple | None = field(default=None, repr=False, compare=False)   # (values, Material)
 
     @property
@@ -218,11 +227,18 @@ class MaterialSpec:
                                                  lmbda=self.lmbda, C10=self.C10, C01=self.C01))
         return self._built[1]
 
+    @property
+    def plasticity(self):
+        """The plastic model of [material.plasticity] (VonMises or OBrien), or None."""
+        return make_plasticity(self.plasticity_model, self.yield_stress, self.hardening, self.elastic_limit,
+                               self.plastic_limit)
+
 
 def _material_rules(s: MaterialSpec, t: Table) -> None:
     if (s.E is not None or s.nu is not None) and (s.mu is not None or s.lmbda is not None):
         raise InputError(f"{t.path}: give either E and nu or mu and lambda, not both")
     s.material                                           # builds and validates the model once, now
+    material_plasticity_rules(s, t.data.get("plasticity"))
 
 
 # --- discretization -------------------------------------------------------------------------
@@ -303,7 +319,7 @@ LOAD_TYPES = {
 }
 # one key every load type shares: the load's factor over time (dynamic analysis), piecewise linear
 LOAD_HISTORY = Key("history", "points", "[time, factor] pairs, piecewise linear in time, held after the last "
-                   "(dynamic analysis; default: constant 1)", length=2, min_items=1,
+                   "(dynamic; static: pseudo-time of the load steps, e.g. load then unload; default: constant 1)", length=2, min_items=1,
                    note="must list [time, factor] pairs")
 LOAD_VARIANTS = Variants(Key("type", "string", "kind of load", required=True, choices=tuple(LOAD_TYPES)),
                          LOAD_TYPES)

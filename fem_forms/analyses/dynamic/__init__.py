@@ -12,6 +12,7 @@ from mpi4py import MPI
 from fem_forms.analyses.dynamic.output import MotionWriter, write_csvs, write_gif, write_history_png
 from fem_forms.analyses.dynamic.solve import DynamicResult, solve_dynamic
 from fem_forms.output import probes, results
+from fem_forms.output.plastic import plastic_summary
 from fem_forms.output.quantities import Quantities
 from fem_forms.scene import Scene
 from fem_forms.solvers.heat_step import max_value
@@ -50,6 +51,10 @@ def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> d
         summary["max_temperature"] = max_value(T)
         for name, value in probes.evaluate(T, scene.output.probes).items():
             summary["probes"][name]["temperature"] = value[0]
+    summary.update(plastic_summary(result.system.model))
+    if "max_plastic_strain" in summary:
+        summary["warnings"] = summary.get("warnings", []) + [
+            "plasticity: the plastic work is not in the energy account; energy_balance_error includes it"]
     files = {"probes": "probes.csv", "energy": "energy.csv"}
     if scene.output.fields:
         files["motion"] = "motion.xdmf"

@@ -42,7 +42,8 @@ class EnergyAccount:
         self.comm = m.mesh.comm
         self.ue, self.vm, self.w = (fem.Function(V) for _ in range(3))
         ctx = replace(m.context, u=self.ue)
-        self.elastic = fem.form(m.terms[0].energy(ctx))
+        stored = getattr(m.terms[0], "stored_energy", m.terms[0].energy)   # a plastic solid: psi(elastic strain)
+        self.elastic = fem.form(stored(ctx))
         loads = total_energy(s.loads, ctx)
         power = -ufl.derivative(loads, self.ue, self.w) if loads is not None else None
         vw = virtual_work(s.loads, ctx, self.w)

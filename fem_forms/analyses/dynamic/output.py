@@ -8,6 +8,7 @@ from dolfinx import io
 import numpy as np
 
 from fem_forms.output import fields
+from fem_forms.output.plastic import plastic_fields
 
 COMPONENTS = ("ux", "uy", "uz", "vx", "vy", "vz")
 
@@ -48,6 +49,8 @@ class MotionWriter:
                                                                                    "temperature")))
             for g, f in zip(self._p1, shown):
                 g.interpolate(f)
+                self.xdmf.write_function(g, t)
+            for g in plastic_fields(system.model):       # committed plastic strain (cell averages), if plastic
                 self.xdmf.write_function(g, t)
         if self.with_picture:
             surf = fields.boundary_surface(system.u)

@@ -95,6 +95,7 @@ def build_system(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> DynamicSystem
     if model.temperature is not None:              # [thermal]: committed and rolled back with the motion
         fields["temperature"] = model.temperature
     state = State(fields)
+    state.adopt_history(model.state)                 # plastic history committed with each accepted step
     model.state = state
     old = state.old
     td = TimeDiscrete(model.mesh, old["unknown"], old["velocity"], old["acceleration"],
@@ -104,12 +105,14 @@ def build_system(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> DynamicSystem
     velocity_f = td.mid_f(td.velocity(u), old["velocity"])
     damping = damping_terms(scene, model, ctx_f, velocity_f, with_mass=not lumped)
     test, trial = ufl.TestFunction(V), ufl.TrialFunction(V)
-    energy = (1 / (1 - td.alpha_f)) * total_energy(model.terms, ctx_f)
+    stored = total_energy(model.terms, ctx_f)          # None: no conservative term (a plastic solid)
+    energy = None if stored is None else (1 / (1 - td.alpha_f)) * stored
     if not lumped:
-        energy = energy + DiscreteInertia(td, u).energy(model.context)
-    residual = ufl.derivative(energy, u, test)
+        inertia = DiscreteInertia(td, u).energy(model.context)
+        energy = inertia if energy is None else energy + inertia
     extra = virtual_work(model.terms + damping, ctx_f, test)
-    if extra is not None:
+    residual = extra if energy is None else ufl.derivative(energy, u, test)
+    if energy is not None and extra is not None:
         residual = residual + extra
     v_h = fem.Function(V, name="velocity_h")
     explicit = model.residual

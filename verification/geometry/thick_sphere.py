@@ -1,0 +1,56 @@
+"""Thick-walled sphere (inner radius a, outer b), one eighth of it: gmsh geometry and tetrahedral mesh.
+
+The eighth x, y, z >= 0 of the shell a <= r <= b; its symmetry planes carry roller supports in the scene.
+Named surfaces: "inner" (r = a, the pressure), "outer" (r = b), "x0", "y0", "z0" (symmetry planes).
+
+    python verification/geometry/thick_sphere.py [--a 1] [--b 2] [--h 0.25] [--out thick_sphere.msh]
+"""
+import argparse
+from pathlib import Path
+
+import gmsh
+
+
+def build(out: Path, a: float = 1.0, b: float = 2.0, h: float = 0.25) -> Path:
+    """Write the eighth shell's tetrahedral mesh (cell size h) to `out`."""
+    gmsh.initialize()
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add("thick_sphere")
+        occ = gmsh.model.occ
+        shell, _ = occ.cut([(3, occ.addSphere(0, 0, 0, b))], [(3, occ.addSphere(0, 0, 0, a))])
+        eighth, _ = occ.intersect(shell, [(3, occ.addBox(0, 0, 0, b, b, b))])
+        occ.synchronize()
+        volume = eighth[0][1]
+        gmsh.model.addPhysicalGroup(3, [volume], 1)
+        names = {}
+        for _, s in gmsh.model.getBoundary([(3, volume)], oriented=False):
+            box = gmsh.model.getBoundingBox(2, s)
+            if box[3] < 1e-6:
+                names[s] = "x0"
+            elif box[4] < 1e-6:
+                names[s] = "y0"
+            elif box[5] < 1e-6:
+                names[s] = "z0"
+            else:
+                names[s] = "outer" if max(box[3:]) > 0.5 * (a + b) else "inner"
+        for i, name in enumerate(sorted(set(names.values()))):
+            tag = gmsh.model.addPhysicalGroup(2, [s for s, n in names.items() if n == name], 10 + i)
+            gmsh.model.setPhysicalName(2, tag, name)
+        gmsh.option.setNumber("Mesh.CharacteristicLengthMax", h)
+        gmsh.option.setNumber("Mesh.CharacteristicLengthMin", 0.5 * h)
+        gmsh.model.mesh.generate(3)
+        gmsh.write(str(out))
+    finally:
+        gmsh.finalize()
+    return out
+
+
+if __name__ == "__main__":
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--a", type=float, default=1.0)
+    ap.add_argument("--b", type=float, default=2.0)
+    ap.add_argument("--h", type=float, default=0.25)
+    ap.add_argument("--out", type=Path, default=Path(__file__).with_name("thick_sphere.msh"))
+    args = ap.parse_args()
+    print(build(args.out, args.a, args.b, args.h))
