@@ -1,0 +1,62 @@
+"""Closed-form targets of the verification manual: each a function of the case's parameters, independent of
+the package (scipy solves the implicit ones)."""
+from __future__ import annotations
+
+import math
+
+from time_histories import cantilever_beta_l
+
+def lame(E: float, nu: float) -> tuple[float, float]:
+    return E / (2 * (1 + nu)), E * nu / ((1 + nu) * (1 - 2 * nu))
+
+
+def uniaxial_neo_hookean(T: float, E: float = 1e6, nu: float = 0.3) -> tuple[float, float]:
+    """Stretches (l1, l2) of the compressible neo-Hookean bar under dead traction T, lateral P = 0:
+    mu (l1 - 1/l1) + lambda ln J / l1 = T and mu (l2 - 1/l2) + lambda ln J / l2 = 0, J = l1 l2^2."""
+    from scipy.optimize import fsolve
+    mu, lm = lame(E, nu)
+
+    def eqs(v):
+        l1, l2 = v
+        lnJ = math.log(l1 * l2 * l2)
+        return [mu * (l1 - 1 / l1) + lm * lnJ / l1 - T, mu * (l2 - 1 / l2) + lm * lnJ / l2]
+    l1, l2 = fsolve(eqs, [1.1, 0.95], xtol=1e-14)
+    return float(l1), float(l2)
+
+
+def hydrostatic_neo_hookean(p: float, E: float = 1e6, nu: float = 0.3) -> float:
+    """Stretch l of F = l I under follower pressure p: (mu (l^2 - 1) + 3 lambda ln l) / l^3 = -p."""
+    from scipy.optimize import brentq
+    mu, lm = lame(E, nu)
+    return float(brentq(lambda s: (mu * (s * s - 1) + 3 * lm * math.log(s)) / s**3 + p, 0.3, 1.0, xtol=1e-15))
+
+
+def cantilever_gravity_sag(L=1.0, h=0.05, E=1e9, rho=1000.0, g=9.81) -> float:
+    """Euler-Bernoulli w L^4 / (8 E I) + Timoshenko shear w L^2 / (2 kappa G A), kappa 5/6, nu = 0."""
+    A, I = h * h, h**4 / 12
+    w = rho * g * A
+    return w * L**4 / (8 * E * I) + w * L**2 / (2 * (5 / 6) * (E / 2) * A)
+
+
+def cantilever_frequency(mode: int, L=1.0, t=0.025, E=1e8, rho=1000.0) -> float:
+    """Euler-Bernoulli clamped-free bending frequency of mode 1, 2, ... (square section t x t)."""
+    return cantilever_beta_l(mode)**2 / (2 * math.pi * L**2) * math.sqrt(E * t**2 / 12 / rho)
+
+
+def bar_conduction(x: float, t: float, L: float = 1.0, kappa: float = 1.0, terms: int = 400) -> float:
+    """T / T1 in a bar 0 < x < L initially at 0, x = 0 held at T1 from t = 0, x = L insulated (Fourier series)."""
+    total = 0.0
+    for n in range(terms):
+        b = (2 * n + 1) * math.pi / (2 * L)
+        total += 4 / ((2 * n + 1) * math.pi) * math.sin(b * x) * math.exp(-b * b * kappa * t)
+    return 1.0 - total
+
+
+def thick_sphere_outer_displacement(P: float, E=210e9, nu=0.3, sy=240e6, a=1.0, b=2.0) -> float:
+    """u(b) of the perfectly plastic thick sphere: Lame below first yield, (1 - nu) sy c^3 / (E b^2) with the
+    plastic front c from P = 2 sy ln(c/a) + (2 sy / 3)(1 - c^3/b^3) while yielding (Hill 1950, ch. V)."""
+    from scipy.optimize import brentq
+    if P <= 2 * sy / 3 * (1 - a**3 / b**3):
+        return 1.5 * (1 - nu) * P * a**3 * b / (E * (b**3 - a**3))
+    c = brentq(lambda c: 2 * sy * math.log(c / a) + 2 * sy / 3 * (1 - c**3 / b**3) - P, a, b, xtol=1e-14)
+    return (1 - nu) * sy * c**3 / (E * b**2)
