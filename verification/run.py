@@ -9,8 +9,8 @@ non-zero if any error exceeds its stated tolerance (or a number cannot be read: 
 Each case is a scene file in verification/cases/ (meshes of the NAFEMS cases are written first by the
 gmsh scripts in verification/geometry/ into the output folder), run once as a subprocess of this tree's
 package; its results.json is read, never the package's internals. The cases and their rows are in
-catalogue.py; targets are closed forms (targets.py, time_histories.py), published numbers, or (tutorial beam) a bare-dolfinx reproduction that first has to reproduce
-the tutorial's published Newton counts. Run outputs go to verification/out/ (not committed).
+catalogue.py; targets are closed forms (targets.py, time_histories.py), published numbers, or (tutorial
+beam) a bare-dolfinx reproduction that first has to reproduce the tutorial's published Newton counts. Run outputs go to verification/out/ (not committed).
 """
 from __future__ import annotations
 
