@@ -36,6 +36,19 @@ def surface_points(mesh) -> np.ndarray:
     return np.vstack(mesh.comm.allgather(local))
 
 
+def _beyond(x: np.ndarray, cell_nodes: np.ndarray, surface: np.ndarray, shell: float) -> np.ndarray:
+    """Cells whose nodes all lie farther than `shell` from every surface point. Each node is asked once
+    (not once per cell it belongs to) and the search stops at the shell (distance_upper_bound): finding an
+    interior point's nearest point on a 2-D sheet of points is what costs."""
+    if not len(cell_nodes):
+        return np.zeros(0, bool)
+    used, local = np.unique(cell_nodes, return_inverse=True)
+    tree = cKDTree(surface)
+    bound = np.nextafter(shell, np.inf)                   # a node at exactly `shell` stays in the wall
+    dist, _ = tree.query(x[used], distance_upper_bound=bound)
+    return (dist[local.reshape(cell_nodes.shape)] > shell).all(axis=1)
+
+
 @dataclass
 class Body:
     """One rank's share of the part on one shape (rest, or deformed by u)."""
@@ -51,9 +64,7 @@ class Body:
         n = mesh.topology.index_map(3).size_local
         cn = _cell_nodes(mesh)
         corners = mesh.geometry.x[cn]
-        tree = cKDTree(surface_points(mesh))
-        dist, _ = tree.query(corners.reshape(-1, 3))
-        carvable = dist.reshape(len(cn), -1).min(axis=1) > shell if len(cn) else np.zeros(0, bool)
+        carvable = _beyond(mesh.geometry.x, cn, surface_points(mesh), shell)
         ids = np.asarray(mesh.topology.original_cell_index[:n], dtype=np.int64)
         nown = mesh.geometry.index_map().size_local
         return cls(mesh, ids, carvable, cell_moments(mesh), corners, mesh.geometry.x[:nown].copy())
