@@ -42,11 +42,9 @@ def _beyond(x: np.ndarray, cell_nodes: np.ndarray, surface: np.ndarray, shell: f
     interior point's nearest point on a 2-D sheet of points is what costs."""
     if not len(cell_nodes):
         return np.zeros(0, bool)
-    used, local = np.unique(cell_nodes, return_inverse=True)
-    tree = cKDTree(surface)
     bound = np.nextafter(shell, np.inf)                   # a node at exactly `shell` stays in the wall
-    dist, _ = tree.query(x[used], distance_upper_bound=bound)
-    return (dist[local.reshape(cell_nodes.shape)] > shell).all(axis=1)
+    dist, _ = cKDTree(surface).query(x, distance_upper_bound=bound)
+    return (dist[cell_nodes] > shell).all(axis=1)
 
 
 @dataclass

@@ -24,6 +24,7 @@ GROUP_CELLS = 24            # cells per group (voxels of the centroids' bounding
 WORKING = 1500              # cells in the working set besides the contradicting and fractional ones
 MAX_ROUNDS = 30
 RC_TOL = 1e-9               # x the largest |reduced cost|: a cell at a bound contradicts it beyond this
+OPTIONS = {"dual_feasibility_tolerance": 1e-10, "primal_feasibility_tolerance": 1e-10}
 
 
 def groups(centroids: np.ndarray, per_group: int = GROUP_CELLS) -> np.ndarray:
@@ -33,12 +34,13 @@ def groups(centroids: np.ndarray, per_group: int = GROUP_CELLS) -> np.ndarray:
     span = np.maximum(hi - lo, 1e-12 * max(float((hi - lo).max()), 1e-300))
     h = (np.prod(span) * per_group / max(len(centroids), 1)) ** (1 / 3)
     ijk = np.floor((centroids - lo) / h).astype(np.int64)
-    _, label = np.unique(ijk, axis=0, return_inverse=True)
+    dims = ijk.max(axis=0) + 1
+    _, label = np.unique(ijk[:, 0] + dims[0] * (ijk[:, 1] + dims[1] * ijk[:, 2]), return_inverse=True)
     return label.ravel()
 
 
 def _highs(c, A, b, bounds):
-    r = linprog(c, A_ub=A, b_ub=b, bounds=bounds, method="highs")
+    r = linprog(c, A_ub=A, b_ub=b, bounds=bounds, method="highs", options=OPTIONS)
     if r.status != 0:
         return None, None
     return r.x, -r.ineqlin.marginals
@@ -54,12 +56,13 @@ def solve(c: np.ndarray, A: np.ndarray, b: np.ndarray, n: int, xb: list, labels:
         x, _ = _highs(c, A, b, [(0.0, 1.0)] * n + xb)
         stats["rounds"] = 0
         return x
-    ng = int(labels.max()) + 1
     Ac, cc = A[:, :n], c[:n]
+    ng = int(labels.max()) + 1
     Ag = np.zeros((A.shape[0], ng))
     for i in range(A.shape[0]):
         Ag[i] = np.bincount(labels, weights=Ac[i], minlength=ng)
     cg = np.bincount(labels, weights=cc, minlength=ng)
+    stats["groups"] = ng
     xg, y = _highs(np.concatenate([cg, c[n:]]), np.hstack([Ag, A[:, n:]]), b, [(0.0, 1.0)] * ng + xb)
     if xg is None:                                    # groups too coarse for the requirements
         stats["rounds"] = -1
@@ -78,7 +81,7 @@ def solve(c: np.ndarray, A: np.ndarray, b: np.ndarray, n: int, xb: list, labels:
             return np.concatenate([s, extra])
         frac = (s > 0) & (s < 1)
         keep = work & (frac | (np.abs(rc) <= tol))    # cells the last LP may still need
-        near = np.argsort(np.abs(rc))[:WORKING]
+        near = np.argpartition(np.abs(rc), WORKING)[:WORKING] if n > WORKING else np.arange(n)
         work = wrong | frac | keep
         work[near] = True
         idx = np.flatnonzero(work)
@@ -88,6 +91,7 @@ def solve(c: np.ndarray, A: np.ndarray, b: np.ndarray, n: int, xb: list, labels:
                           [(0.0, 1.0)] * len(idx) + xb)
         if x is None:                                 # cannot happen (the current point is feasible)
             break
+        stats["work"] = max(stats.get("work", 0), len(idx))
         s[idx] = x[:len(idx)]
         extra = x[len(idx):]
         y = y_new
