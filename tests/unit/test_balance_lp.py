@@ -24,18 +24,28 @@ def cells(n, seed):
 
 
 def whole(p):
-    """HiGHS on the whole LP as posed (no scaling, no groups): the reference optimum."""
+    """HiGHS on the whole LP as posed (no scaling, no groups): a reference optimum to HiGHS's default
+    tolerances (its products-of-inertia rows are badly scaled: ~1e-7 relative)."""
     r = linprog(p.c, A_ub=p.A_ub, b_ub=p.b_ub, bounds=p.bounds(), method="highs")
     assert r.status == 0
     return r.x
 
 
+def whole_scaled(p):
+    """HiGHS on the whole LP after lp.scaled, tight tolerances, no groups: the reference for sifting."""
+    c, A, b, xb, col = lp.scaled(p)
+    r = linprog(c, A_ub=A, b_ub=b, bounds=[(0.0, 1.0)] * p.n_cells + xb, method="highs", options=sifting.OPTIONS)
+    assert r.status == 0
+    return r.x / col
+
+
 def check(p, centroids, objective=None):
     """`objective(v)`: the LP's objective with its extra variables at their tightest feasible values
-    (both solvers meet the rows to ~1e-9 only, and an extra variable with a large cost turns that into
+    (solvers meet the rows to ~1e-9 only, and an extra variable with a large cost turns that into
     objective differences of 1e-5 relative); default c . v."""
     objective = objective or (lambda v: p.c @ v)
-    ref = objective(whole(p))
+    ref = objective(whole_scaled(p))
+    loose = objective(whole(p))
     q = lp.Program(p.c, p.A_ub, p.b_ub, p.n_cells, p.extra_bounds, sifting.groups(centroids))
     t = lp.Timing()
     v = lp.solve(q, t)
@@ -43,7 +53,8 @@ def check(p, centroids, objective=None):
     scale = np.abs(p.A_ub).max(axis=1)
     assert np.all((p.A_ub @ v - p.b_ub) / scale <= 1e-6)    # feasible
     assert np.all((v[:p.n_cells] >= -1e-9) & (v[:p.n_cells] <= 1 + 1e-9))
-    assert objective(v) == pytest.approx(ref, rel=1e-7, abs=1e-12 * np.abs(p.c).sum())
+    assert objective(v) == pytest.approx(ref, rel=1e-9, abs=1e-12 * np.abs(p.c).sum())
+    assert objective(v) == pytest.approx(loose, rel=1e-6, abs=1e-12 * np.abs(p.c).sum())
     frac = np.sum((v[:p.n_cells] > 1e-6) & (v[:p.n_cells] < 1 - 1e-6))
     assert frac <= len(p.b_ub)                              # a vertex: at most one fractional cell per row
 

@@ -3,6 +3,7 @@ integrals on the current shape), which of them may be carved, and the geometry n
 from __future__ import annotations
 
 from dataclasses import dataclass
+import time
 
 from dolfinx import cpp, fem, mesh as dmesh
 from mpi4py import MPI
@@ -58,14 +59,20 @@ class Body:
     nodes: np.ndarray            # owned geometry nodes on this shape
 
     @classmethod
-    def rest(cls, mesh, shell: float) -> "Body":
+    def rest(cls, mesh, shell: float, timing: dict | None = None) -> "Body":
+        """The part on its rest shape; `timing` (if given) gets shell_s and moments_s (wall seconds)."""
+        t0 = time.perf_counter()
         n = mesh.topology.index_map(3).size_local
         cn = _cell_nodes(mesh)
         corners = mesh.geometry.x[cn]
         carvable = _beyond(mesh.geometry.x, cn, surface_points(mesh), shell)
+        t1 = time.perf_counter()
+        moments = cell_moments(mesh)
+        if timing is not None:
+            timing.update(shell_s=t1 - t0, moments_s=time.perf_counter() - t1)
         ids = np.asarray(mesh.topology.original_cell_index[:n], dtype=np.int64)
         nown = mesh.geometry.index_map().size_local
-        return cls(mesh, ids, carvable, cell_moments(mesh), corners, mesh.geometry.x[:nown].copy())
+        return cls(mesh, ids, carvable, moments, corners, mesh.geometry.x[:nown].copy())
 
     def deformed(self, u: fem.Function) -> "Body":
         """The same cells on the shape X + u."""

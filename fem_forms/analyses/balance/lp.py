@@ -45,15 +45,16 @@ class Timing:
 
 
 def scaled(p: Program) -> tuple:
-    """(c, A, b, extra bounds, column scale) of p with rows scaled to max |a| = 1 (HiGHS drops matrix
-    entries below 1e-9 in absolute value: products-of-inertia rows have entries of 1e-7 and below),
+    """(c, A, b, extra bounds, column scale) of p with rows scaled to max |a| = 1 over the cells (HiGHS
+    drops matrix entries below 1e-9 in absolute value: products-of-inertia rows have entries of 1e-7),
     extra columns to max |a| = 1 and the objective to max |c| = 1 over the cells (HiGHS's dual
     feasibility tolerance is absolute, 1e-7: a spin objective of 1e-7 per cell would be noise).
     Solve for x, then v = x / column scale."""
     n = p.n_cells
     A = np.array(p.A_ub, dtype=float)
-    r = np.abs(A).max(axis=1)
-    r[r == 0] = 1.0
+    r = np.abs(A[:, :n]).max(axis=1) if n else np.zeros(len(A))      # by the cells: an extra column's -1
+    r = np.where(r > 0, r, np.abs(A).max(axis=1))                     # next to cell entries of 1e-9 would
+    r[r == 0] = 1.0                                                   # leave those rows unscaled
     A /= r[:, None]
     col = np.ones(A.shape[1])
     if A.shape[1] > n:
