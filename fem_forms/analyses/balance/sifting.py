@@ -85,8 +85,7 @@ def solve(c: np.ndarray, A: np.ndarray, b: np.ndarray, n: int, xb: list, labels:
         work = wrong | frac | keep
         work[near] = True
         idx = np.flatnonzero(work)
-        fixed = ~work
-        rhs = b - Ac[:, fixed] @ s[fixed]
+        rhs = b - Ac @ np.where(work, 0.0, s)          # the cells outside the set stay where they are
         x, y_new = _highs(np.concatenate([cc[idx], c[n:]]), np.hstack([Ac[:, idx], A[:, n:]]), rhs,
                           [(0.0, 1.0)] * len(idx) + xb)
         if x is None:                                 # cannot happen (the current point is feasible)
