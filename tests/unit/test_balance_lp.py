@@ -1,7 +1,7 @@
 """The balance LP machinery against independent references: sifting over cell groups reaches the
 optimum HiGHS finds on the whole LP (a stand-like program and a spin-like one with an extra variable);
 the shell test (cells farther than `shell` from the boundary) against brute-force distances."""
-from dolfinx import mesh as dmesh
+from dolfinx import cpp, mesh as dmesh
 from mpi4py import MPI
 import numpy as np
 import pytest
@@ -94,9 +94,17 @@ def test_sifting_reaches_the_whole_lp_optimum_spin_like():
 
 
 def test_shell_cells_against_brute_force_distances():
+    """Surface points: every boundary facet's corners, edge midpoints and centroid (from the facets' own
+    corner coordinates); shell cells: brute-force distances to them."""
     m = dmesh.create_box(MPI.COMM_WORLD, [[0, 0, 0], [0.3, 0.2, 0.2]], [9, 6, 6], dmesh.CellType.tetrahedron)
     cn = _cell_nodes(m)
     surf = surface_points(m)
+    m.topology.create_connectivity(2, 3)
+    tri = m.geometry.x[cpp.mesh.entities_to_geometry(m._mesh, 2, dmesh.exterior_facet_indices(m.topology), False)]
+    naive = np.vstack([tri.reshape(-1, 3), *[(tri[:, i] + tri[:, (i + 1) % 3]) / 2 for i in range(3)],
+                       tri.mean(axis=1)])
+    assert len(tri) == 2 * 2 * (9 * 6 + 9 * 6 + 6 * 6)            # two triangles per boundary square
+    assert np.array_equal(np.unique(np.round(naive, 12), axis=0), np.unique(np.round(surf, 12), axis=0))
     for shell in (0.02, 0.035, 0.05):
         got = _beyond(m.geometry.x, cn, surf, shell)
         d = cdist(m.geometry.x[cn].reshape(-1, 3), surf).min(axis=1).reshape(len(cn), -1)

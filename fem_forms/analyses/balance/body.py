@@ -21,17 +21,19 @@ def _cell_nodes(mesh) -> np.ndarray:
 
 
 def surface_points(mesh) -> np.ndarray:
-    """Points sampled on the boundary (facet corners, edge midpoints, facet centroids) of all ranks."""
+    """Points sampled on the boundary (facet corners, edge midpoints, facet centroids) of all ranks, each
+    corner and edge once per rank (repeated points make a k-d tree's leaves big and its queries slow)."""
     tdim = mesh.topology.dim
     mesh.topology.create_connectivity(tdim - 1, tdim)
     facets = dmesh.exterior_facet_indices(mesh.topology)
     nodes = cpp.mesh.entities_to_geometry(mesh._mesh, tdim - 1, facets, False)
     x = mesh.geometry.x
     if len(nodes):
-        p = x[nodes]
-        k = p.shape[1]
-        mids = [(p[:, i] + p[:, (i + 1) % k]) / 2 for i in range(k)]
-        local = np.vstack([p.reshape(-1, 3), *mids, p.mean(axis=1)])
+        k = nodes.shape[1]
+        edges = np.sort(np.concatenate([nodes[:, [i, (i + 1) % k]] for i in range(k)]), axis=1)
+        edges = np.unique(edges[:, 0] * len(x) + edges[:, 1])
+        local = np.vstack([x[np.unique(nodes)], (x[edges // len(x)] + x[edges % len(x)]) / 2,
+                           x[nodes].mean(axis=1)])
     else:
         local = np.empty((0, 3))
     return np.vstack(mesh.comm.allgather(local))

@@ -1,10 +1,13 @@
-"""Linear programs over the carvable cells, solved by HiGHS (scipy), and their binarisation.
+"""Linear programs over the carvable cells, solved by HiGHS (scipy) after scaling, by sifting over groups of
+neighbouring cells (sifting.py), and their binarisation.
 
 Variables: s (one per carvable cell, the solid fraction in [0, 1]) followed by a few continuous extra
 variables a goal needs (a margin, a bound on the other moments). An LP's optimal vertex is 0/1 except in
 at most as many cells as there are constraints: binarise fixes every cell the LP left at 0 or 1 and solves
 the same problem as a small mixed-integer program (HiGHS milp) over the fractional cells and their nearest
 neighbours, so the binary design meets the constraints exactly rather than approximately.
+Speed (benchmarks/balance_scaling.md): 200k tetrahedra, a spin design's 4 LPs in about 1 s on this machine
+(one HiGHS call on all cells: 1.5-3 s per LP at 56k cells).
 """
 from __future__ import annotations
 
