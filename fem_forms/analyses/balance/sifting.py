@@ -6,9 +6,10 @@ fractional cells as rows and every other cell at the bound its reduced cost pick
 columns, not the rows (56k cells, 12 rows: 1-3 s for 3-13 simplex iterations), so:
 1. solve the LP on groups of neighbouring cells (one column each: the sum of its cells' columns); its
    solution, spread over the cells, is feasible for the full LP;
-2. price every cell with the restricted LP's row duals (rc = c - A^T y, numpy, ms) and re-solve over a
-   working set: the cells whose bound contradicts their reduced cost, the fractional ones and the cells
-   with the smallest |rc|; every other cell stays where it is (its column moves to the right-hand side);
+2. price every cell with the restricted LP's row duals (rc = c + A^T y, numpy, ms) and re-solve over a
+   working set that only grows: the cells whose bound contradicts their reduced cost, the fractional ones
+   and the cells with the smallest |rc|; every other cell stays where it is (its column moves to the
+   right-hand side); the objective never rises and a set that only grows cannot cycle;
 3. repeat until no cell outside the set contradicts its reduced cost: then the duals prove the whole
    LP optimal (KKT), as a single HiGHS solve would.
 When the grouped LP is infeasible (a tight requirement that groups cannot meet), the full LP is solved
@@ -20,8 +21,8 @@ import numpy as np
 from scipy.optimize import linprog
 
 MIN_CELLS = 4000            # below this the full LP is solved directly (fast enough)
-GROUP_CELLS = 24            # cells per group (voxels of the centroids' bounding box)
-WORKING = 1500              # cells in the working set besides the contradicting and fractional ones
+GROUP_CELLS = 12            # cells per group (voxels of the centroids' bounding box)
+WORKING = 500               # cells in the working set besides the contradicting and fractional ones
 MAX_ROUNDS = 30
 RC_TOL = 1e-9               # x the largest |reduced cost|: a cell at a bound contradicts it beyond this
 OPTIONS = {"dual_feasibility_tolerance": 1e-10, "primal_feasibility_tolerance": 1e-10}
@@ -80,9 +81,8 @@ def solve(c: np.ndarray, A: np.ndarray, b: np.ndarray, n: int, xb: list, labels:
             stats["rounds"] = k
             return np.concatenate([s, extra])
         frac = (s > 0) & (s < 1)
-        keep = work & (frac | (np.abs(rc) <= tol))    # cells the last LP may still need
         near = np.argpartition(np.abs(rc), WORKING)[:WORKING] if n > WORKING else np.arange(n)
-        work = wrong | frac | keep
+        work = work | wrong | frac                    # the set only grows: no cycling, at most n cells
         work[near] = True
         idx = np.flatnonzero(work)
         rhs = b - Ac @ np.where(work, 0.0, s)          # the cells outside the set stay where they are
