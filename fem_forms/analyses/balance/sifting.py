@@ -94,6 +94,6 @@ def solve(c: np.ndarray, A: np.ndarray, b: np.ndarray, n: int, xb: list, labels:
         s[idx] = x[:len(idx)]
         extra = x[len(idx):]
         y = y_new
-    stats["rounds"] = -2
+    stats["rounds"] = -1                              # not settled in MAX_ROUNDS: the whole LP
     x, _ = _highs(c, A, b, [(0.0, 1.0)] * n + xb)
     return x
