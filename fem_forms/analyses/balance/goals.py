@@ -17,11 +17,12 @@ they can lose). Every requirement is a row w with w . M(s) <= b; each goal adds 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 import time
 
 import numpy as np
 
-from fem_forms.analyses.balance import lp, rows
+from fem_forms.analyses.balance import lp, rows, sifting
 from fem_forms.errors import SolveError
 
 CENTER_TOLERANCE = 2e-4      # x the part's size: CoM off the axis / vertical
@@ -44,6 +45,11 @@ class Problem:
     def n(self) -> int:
         return self.G.shape[1]
 
+    @cached_property
+    def groups(self) -> np.ndarray:
+        """Neighbouring cells grouped for the LP's sifting (lp.solve)."""
+        return sifting.groups(self.centroids)
+
     def constraint(self, W: np.ndarray, b: np.ndarray, extra: np.ndarray | None = None) -> tuple:
         """Rows W . M(s) (+ extra . y) <= b as (A over (s, y), b - W M0)."""
         A = W @ self.G
@@ -64,7 +70,7 @@ def _band(W: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
 def _program(P: Problem, objective_rows: np.ndarray, W: np.ndarray, b: np.ndarray) -> lp.Program:
     t0 = time.perf_counter()
     A, bb = P.constraint(W, b)
-    p = lp.Program(objective_rows @ P.G, A, bb, P.n)
+    p = lp.Program(objective_rows @ P.G, A, bb, P.n, groups=P.groups)
     P.timing.setup_s += time.perf_counter() - t0
     return p
 
@@ -92,7 +98,7 @@ def stand(P: Problem, normals: np.ndarray, offsets: np.ndarray, frame: tuple, gr
     A, b = P.constraint(-W, np.zeros(len(W)), extra=np.ones((len(W), 1)))      # z - A_k <= 0
     c = np.zeros(P.n + 1)
     c[-1] = -1.0
-    p1 = lp.Program(c, A, b, P.n, ((None, None),))
+    p1 = lp.Program(c, A, b, P.n, ((None, None),), P.groups)
     P.timing.setup_s += time.perf_counter() - t0
     v = lp.solve(p1, P.timing)
     if best_effort and v is not None and v[-1] < 0:
@@ -138,7 +144,7 @@ def spin(P: Problem, axis: np.ndarray, point: np.ndarray, along: bool) -> np.nda
     r = (rows.inertia(a, a, point) @ M1) / max(Ww @ M1)
     v = None
     for _ in range(DINKELBACH_STEPS):
-        p = lp.Program(np.concatenate([-Ia, [r]]), A, b, P.n, ((0.0, None),))
+        p = lp.Program(np.concatenate([-Ia, [r]]), A, b, P.n, ((0.0, None),), P.groups)
         v = lp.solve(p, P.timing)
         if v is None:
             raise SolveError("balance: no carving puts the CoM on the spin axis with the axis principal "

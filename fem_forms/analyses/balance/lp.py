@@ -1,10 +1,13 @@
-"""Linear programs over the carvable cells, solved by HiGHS (scipy), and their binarisation.
+"""Linear programs over the carvable cells, solved by HiGHS (scipy) after scaling, by sifting over groups of
+neighbouring cells (sifting.py), and their binarisation.
 
 Variables: s (one per carvable cell, the solid fraction in [0, 1]) followed by a few continuous extra
 variables a goal needs (a margin, a bound on the other moments). An LP's optimal vertex is 0/1 except in
 at most as many cells as there are constraints: binarise fixes every cell the LP left at 0 or 1 and solves
 the same problem as a small mixed-integer program (HiGHS milp) over the fractional cells and their nearest
 neighbours, so the binary design meets the constraints exactly rather than approximately.
+Speed (benchmarks/balance_scaling.md): 200k tetrahedra, a spin design's 4 LPs in about 1 s on this machine
+(one HiGHS call on all cells: 1.5-3 s per LP at 56k cells).
 """
 from __future__ import annotations
 
@@ -12,10 +15,14 @@ from dataclasses import dataclass, replace
 import time
 
 import numpy as np
-from scipy.optimize import Bounds, LinearConstraint, linprog, milp
+from scipy.optimize import Bounds, LinearConstraint, milp
 from scipy.spatial import cKDTree
 
+from fem_forms.analyses.balance import sifting
+
 INTEGRAL = 1e-6          # an LP value this close to 0 or 1 counts as integral
+MIP_GAP = 1e-2           # binarise's MILP stops within 1 % of the free cells' share of the objective (a few
+                         # dozen cells of tens of thousands); proving optimality took 0.7-17 s (96k-tet boat)
 
 
 @dataclass
@@ -26,6 +33,7 @@ class Program:
     b_ub: np.ndarray
     n_cells: int
     extra_bounds: tuple = ()        # (lo, hi) per extra variable (None: unbounded)
+    groups: np.ndarray | None = None    # a group of neighbouring cells per cell: solve by sifting
 
     def bounds(self) -> list:
         return [(0.0, 1.0)] * self.n_cells + list(self.extra_bounds)
@@ -36,29 +44,46 @@ class Timing:
     setup_s: float = 0.0
     solve_s: float = 0.0
     lps: int = 0
+    rounds: int = 0                 # sifting rounds over all LPs (-1 per LP solved whole as a fallback)
     binarise_s: float = 0.0
     fractional: int = 0
 
 
-def scaled(c: np.ndarray, A: np.ndarray, b: np.ndarray) -> tuple:
-    """c, and each row of A v <= b, divided by its largest |coefficient|: HiGHS's feasibility and
-    optimality tolerances are absolute (about 1e-7), and rows of moments in kg m^2 are smaller than that
-    (a spin design's product-of-inertia rows were ignored: 14x over their bound)."""
-    r = np.abs(A).max(axis=1) if A.size else np.ones(len(b))
-    r[r == 0] = 1.0
-    cmax = np.abs(c).max() if c.size else 1.0
-    return c / (cmax if cmax > 0 else 1.0), A / r[:, None], b / r
+def scaled(p: Program) -> tuple:
+    """(c, A, b, extra bounds, column scale) of p with rows scaled to max |a| = 1 over the cells (HiGHS
+    drops matrix entries below 1e-9 in absolute value: products-of-inertia rows have entries of 1e-7),
+    extra columns to max |a| = 1 and the objective to max |c| = 1 over the cells (HiGHS's dual
+    feasibility tolerance is absolute, 1e-7: a spin objective of 1e-7 per cell would be noise).
+    Solve for x, then v = x / column scale."""
+    n = p.n_cells
+    A = np.array(p.A_ub, dtype=float)
+    r = np.abs(A[:, :n]).max(axis=1) if n else np.zeros(len(A))      # by the cells: an extra column's -1
+    r = np.where(r > 0, r, np.abs(A).max(axis=1))                     # next to cell entries of 1e-9 would
+    r[r == 0] = 1.0                                                   # leave those rows unscaled
+    A /= r[:, None]
+    col = np.ones(A.shape[1])
+    if A.shape[1] > n:
+        ce = np.abs(A[:, n:]).max(axis=0)
+        col[n:] = np.where(ce > 0, ce, 1.0)
+    A /= col
+    xb = [tuple(None if v is None else v * col[n + k] for v in bb) for k, bb in enumerate(p.extra_bounds)]
+    c = p.c / col
+    top = float(np.abs(c[:n]).max()) if n else 0.0
+    c = c / (top if top > 0 else max(float(np.abs(c).max()), 1e-300))
+    return c, A, p.b_ub / r, xb, col
 
 
 def solve(p: Program, timing: Timing | None = None) -> np.ndarray | None:
-    """The LP's optimal v, or None when infeasible."""
+    """The LP's optimal v, or None when infeasible (by sifting when p has cell groups)."""
     t0 = time.perf_counter()
-    c, A, b = scaled(p.c, p.A_ub, p.b_ub)
-    r = linprog(c, A_ub=A, b_ub=b, bounds=p.bounds(), method="highs")
+    c, A, b, xb, col = scaled(p)
+    stats = {}
+    x = sifting.solve(c, A, b, p.n_cells, xb, p.groups, stats)
     if timing is not None:
         timing.solve_s += time.perf_counter() - t0
         timing.lps += 1
-    return r.x if r.status == 0 else None
+        timing.rounds += stats.get("rounds", 0)
+    return None if x is None else x / col
 
 
 def binarise(p: Program, v: np.ndarray, centroids: np.ndarray, timing: Timing | None = None,
@@ -92,24 +117,21 @@ def binarise(p: Program, v: np.ndarray, centroids: np.ndarray, timing: Timing | 
 
 
 def _milp_on(p: Program, fixed: np.ndarray, free: np.ndarray) -> np.ndarray | None:
-    """The program with cells outside `free` fixed at `fixed`, the free ones binary."""
+    """The program with cells outside `free` fixed at `fixed`, the free ones binary (scaled as for the LP)."""
     n = p.n_cells
     keep = np.ones(n, dtype=bool)
     keep[free] = False
-    A_cells = p.A_ub[:, :n]
-    b = p.b_ub - A_cells[:, keep] @ fixed[keep]
-    cols = np.concatenate([free, np.arange(n, p.A_ub.shape[1])]).astype(np.int64)
+    c_s, A_s, b_s, xb, col = scaled(p)
+    b = b_s - A_s[:, :n][:, keep] @ fixed[keep]
+    cols = np.concatenate([free, np.arange(n, A_s.shape[1])]).astype(np.int64)
     if not len(cols):                          # nothing left free: the rounded design must hold as it is
-        return fixed.copy() if np.all(b >= -1e-12 * (1 + np.abs(p.b_ub))) else None
-    A = p.A_ub[:, cols]
-    c = p.c[cols]
-    ne = p.A_ub.shape[1] - n
-    lo = np.concatenate([np.zeros(len(free)), [(-np.inf if b_[0] is None else b_[0]) for b_ in p.extra_bounds]])
-    hi = np.concatenate([np.ones(len(free)), [(np.inf if b_[1] is None else b_[1]) for b_ in p.extra_bounds]])
+        return fixed.copy() if np.all(b >= -1e-12 * (1 + np.abs(b_s))) else None
+    ne = A_s.shape[1] - n
+    lo = np.concatenate([np.zeros(len(free)), [(-np.inf if b_[0] is None else b_[0]) for b_ in xb]])
+    hi = np.concatenate([np.ones(len(free)), [(np.inf if b_[1] is None else b_[1]) for b_ in xb]])
     integrality = np.concatenate([np.ones(len(free)), np.zeros(ne)])
-    c, A, b = scaled(c, A, b)
-    r = milp(c, constraints=LinearConstraint(A, -np.inf, b), integrality=integrality, bounds=Bounds(lo, hi),
-             options={"time_limit": 30.0})
+    r = milp(c_s[cols], constraints=LinearConstraint(A_s[:, cols], -np.inf, b), integrality=integrality,
+             bounds=Bounds(lo, hi), options={"time_limit": 30.0, "mip_rel_gap": MIP_GAP})
     if r.x is None or r.status not in (0, 1):
         return None
     s = fixed.copy()
