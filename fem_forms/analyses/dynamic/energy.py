@@ -11,6 +11,7 @@ from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
 from petsc4py import PETSc
 import ufl
+from ufl.algorithms import expand_derivatives
 
 from fem_forms.analyses.dynamic.system import DynamicSystem, damping_terms
 from fem_forms.physics.assemble import total_energy, virtual_work
@@ -49,7 +50,7 @@ class EnergyAccount:
         vw = virtual_work(s.loads, ctx, self.w)
         if vw is not None:
             power = -vw if power is None else power - vw
-        dead = power is not None and vw is None and self.ue not in power.coefficients()
+        dead = power is not None and vw is None and self.ue not in expand_derivatives(power).coefficients()
         self.dead = self._dead_load_vectors(ctx) if dead else None
         self.power = fem.form(power) if power is not None and not dead else None
         dterms = damping_terms(s.scene, m, ctx, self.vm, True)
