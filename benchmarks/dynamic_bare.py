@@ -22,7 +22,8 @@ BARE_SNES = {"snes_type": "newtonls", "snes_max_it": 50, "snes_rtol": 1e-9, "sne
              "snes_stol": 1e-11, "snes_linesearch_max_it": 40, "snes_linesearch_type": "basic",
              "ksp_type": "gmres", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps",
              "ksp_gmres_restart": 100, "ksp_rtol": 1e-6, "ksp_max_it": 100,
-             "snes_lag_preconditioner": 100, "snes_lag_preconditioner_persists": True}
+             "snes_lag_preconditioner": 100, "snes_lag_preconditioner_persists": True,
+             "snes_lag_jacobian": 100, "snes_lag_jacobian_persists": True}
 BARE_LU = {**{k: v for k, v in BARE_SNES.items() if not k.startswith(("ksp_", "snes_lag"))},
            "ksp_type": "preonly"}
 

@@ -117,10 +117,10 @@ def test_hyperelastic_newmark_stays_bounded():
     assert abs(tip_z(r)[1]).max() > 0.1                 # large motion indeed
 
 
-def test_implicit_steps_keep_one_factorisation_and_take_full_newton():
+def test_implicit_steps_keep_one_factorisation():
     """A constant-dt run factors its step tangent once (PETSc's log counts the LU factorisations) and a
-    mildly nonlinear step converges in two full Newton iterations (the energy line search stalled in
-    round-off near the answer: 2-5 per step, measured)."""
+    mildly nonlinear step converges in about three Newton iterations with the kept tangent (before: the
+    energy line search stalled in round-off near the answer, 2-5 per step, and a step was cut)."""
     from petsc4py import PETSc
     PETSc.Log.begin()
     event = PETSc.Log.Event("MatLUFactorNum")
@@ -128,7 +128,7 @@ def test_implicit_steps_keep_one_factorisation_and_take_full_newton():
     r = solve_dynamic(ff.Scene.from_dict(beam({"duration": 0.02, "dt": 1e-3}, model="neo-hookean")))
     assert r.report.steps == 20 and r.report.rejected == 0
     assert event.getPerfInfo()["count"] - before == 1
-    assert r.report.newton_iterations <= 2 * r.report.steps
+    assert r.report.newton_iterations <= 3 * r.report.steps
 
 
 def test_generalized_alpha_second_order():

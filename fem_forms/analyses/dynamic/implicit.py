@@ -57,8 +57,10 @@ class ImplicitStepper:
     """Advance (u, v, a) by one step; the State holds the new values uncommitted until the caller
     commits them (or rolls back)."""
 
-    # rebuild the kept LU factor when the stale one needs more Krylov iterations per Newton step
+    # refresh the kept tangent and its LU factor when the stale ones cost more Krylov iterations per Newton
+    # iteration or more Newton iterations per step than this
     KRYLOV_PER_NEWTON = 15
+    NEWTON_PER_STEP = 5
 
     def __init__(self, system: DynamicSystem, released: set, options: dict | None = None):
         self.s = system
@@ -72,8 +74,11 @@ class ImplicitStepper:
         # the answer its change drowns in round-off, the energy line search stalls and the polish has to
         # finish (measured on the benchmark beam: 2-5 Newton iterations per step, 2 with full Newton and
         # the same answer). The energy line search retries a failed step before dt is cut.
+        # The tangent is kept with its factor (modified Newton: the residual is fresh, so the answer is the
+        # same): one more Newton iteration per step but no tangent assembly, 1.4-1.6x less per step on
+        # the benchmark beam (benchmarks/dynamic_steps.md); refreshed by the rule in step().
         opts = {"snes_lag_preconditioner": 100, "snes_lag_preconditioner_persists": True,
-                "snes_linesearch_type": "basic"}
+                "snes_lag_jacobian": 100, "snes_lag_jacobian_persists": True, "snes_linesearch_type": "basic"}
         opts.update(options or {})
         self.driver = snes.SNESDriver(self.problem, opts, "direct", reuse_factor=True)
         self.line_search_retry = self.driver.E is not None and "snes_linesearch_type" not in (options or {})
@@ -101,8 +106,8 @@ class ImplicitStepper:
         if why is not None:
             self.last_why = why
             return StepOutcome(False, rec.iterations, why)
-        if rec.iterations and rec.krylov_iterations > self.KRYLOV_PER_NEWTON * rec.iterations:
-            drv._build_snes()                      # the factor no longer pays: refactor next step
+        if rec.iterations > self.NEWTON_PER_STEP or rec.krylov_iterations > self.KRYLOV_PER_NEWTON * rec.iterations:
+            drv._build_snes()                      # the kept tangent no longer pays: a fresh one next step
         old = s.state.old
         v, a = s.td.update(s.u.x.array, old["unknown"].x.array, old["velocity"].x.array,
                            old["acceleration"].x.array)
