@@ -64,23 +64,29 @@ def scene_dict(cells, scheme: str, dt: float, steps: int) -> dict:
 
 
 class OursTimer:
-    """Wraps solve_dynamic's march, energy accounting and probe rows to time each step and its extras."""
+    """Wraps solve_dynamic's march, energy accounting and probe rows to time each step and its extras, and
+    the implicit step's acceptance checks (the residual re-assembled after SNES, det F > 0 everywhere)."""
 
     def __init__(self):
         import fem_forms.analyses.dynamic.solve as solve
         from fem_forms.analyses.dynamic.energy import EnergyAccount
+        from fem_forms.model import Model
         from fem_forms.solvers import snes
         self.solve = solve
         self.options = None
         march, advance, probe_row = solve.march, EnergyAccount.advance, solve.probe_row
         build, solve_step = snes.SNESDriver._build_snes, snes.SNESDriver.solve_step
+        residual_norm, inadmissible = snes.SNESDriver.residual_norm, Model.inadmissible
 
         def timed_march(stepper, t0, t_end, dt, on_accept, **kw):
             self.t_march = now()
+            self.check_now = 0.0 * now()
 
             def accept(t, h, step):
                 on_accept(t, h, step)
                 self.stamps.append(now())
+                self.checks.append(self.check_now)
+                self.check_now = 0.0 * now()
             return march(stepper, t0, t_end, dt, accept, **kw)
 
         def timed_advance(account, *a):
@@ -95,6 +101,14 @@ class OursTimer:
             self.probes.append(now() - t)
             return out
 
+        def timed_check(f):
+            def checked(*a):
+                t = now()
+                out = f(*a)
+                self.check_now = self.check_now + now() - t
+                return out
+            return checked
+
         def counted_solve_step(driver, *a, **kw):
             rec = solve_step(driver, *a, **kw)
             self.krylov += rec.krylov_iterations
@@ -107,11 +121,13 @@ class OursTimer:
         EnergyAccount.advance = timed_advance
         snes.SNESDriver._build_snes = recording_build
         snes.SNESDriver.solve_step = counted_solve_step
+        snes.SNESDriver.residual_norm, Model.inadmissible = timed_check(residual_norm), timed_check(inadmissible)
 
     def run(self, cells, scheme: str, dt: float, steps: int) -> dict:
         import fem_forms as ff
         import numpy as np
-        self.stamps, self.energy, self.probes, self.krylov = [], [], [], 0
+        self.stamps, self.energy, self.probes, self.checks, self.krylov = [], [], [], [], 0
+        self.check_now = 0.0 * now()
         scene = ff.Scene.from_dict(scene_dict(cells, scheme, dt, steps))
         lu0 = lu_count()
         t0 = now()
@@ -121,13 +137,15 @@ class OursTimer:
         durations = np.diff(np.array([self.t_march] + self.stamps), axis=0)
         energy, probes = np.array(self.energy), np.array(self.probes)
         same = durations - energy - probes
+        checks = np.array(self.checks)
         lu = lu_count()
         u = res.system.u.x.array.reshape(-1, 3)
         comm = res.system.model.mesh.comm
         return {"dofs": res.system.model.dofs, **split(self.t_march - t0, "setup"), **split(t_end - t0, "total"),
                 "steps": res.report.steps, **split(same[0], "first"), **split(np.median(same[1:], axis=0), "later"),
                 **split(np.median(durations[1:], axis=0), "later_full"),
-                **split(np.median(energy[1:], axis=0), "energy"), **split(np.median(probes[1:], axis=0), "probes"),
+                **split(np.median(energy[1:], axis=0), "energy"), **split(np.median(checks[1:], axis=0), "checks"),
+                **split(np.median((same - checks)[1:], axis=0), "later_unchecked"), **split(np.median(probes[1:], axis=0), "probes"),
                 "newton": res.report.newton_iterations, "krylov": self.krylov,
                 "lu": lu[0] - lu0[0], "lu_time": lu[1] - lu0[1], "dt": dt, "dt_stable": res.dt_stable,
                 "max_u": comm.allreduce(float(np.linalg.norm(u, axis=1).max()), op=max),
@@ -172,14 +190,14 @@ def worker(cells, scheme: str, runs: int, with_lu: bool) -> None:
             print("RESULT " + json.dumps(res), flush=True)
 
 
-def run_worker(cells, scheme: str, runs: int, with_lu: bool, timeout: float) -> list:
+def run_worker(timeout: float, *args) -> list:
+    """This script as a subprocess with the given arguments; its RESULT lines as dicts."""
     env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
-    cmd = [sys.executable, str(Path(__file__).resolve()), "--worker", scheme, str(runs), str(int(with_lu)),
-           *(str(c) for c in cells)]
+    cmd = [sys.executable, str(Path(__file__).resolve()), *(str(a) for a in args)]
     p = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=timeout, cwd=ROOT)
     rows = [json.loads(ln[len("RESULT "):]) for ln in p.stdout.splitlines() if ln.startswith("RESULT ")]
     if p.returncode != 0 or not rows:
-        raise RuntimeError(f"{scheme} {cells} failed (exit {p.returncode}):\n{p.stdout[-2000:]}\n{p.stderr[-4000:]}")
+        raise RuntimeError(f"{args} failed (exit {p.returncode}):\n{p.stdout[-2000:]}\n{p.stderr[-4000:]}")
     return rows
 
 
@@ -222,8 +240,8 @@ def first_period(e: float, rho: float) -> float:
 def pays_table(dofs: int, stable: dict, implicit: dict, explicit: dict) -> str:
     """Steps and cost of each event: both schemes at the accuracy step min(event / 100, T1 / 20), the
     explicit one also at most its stable step (the estimate, 0.9 x 2 / omega_max)."""
-    lines = [f"| part (E, nu, rho) | explicit dt_stable | T1 | event | explicit steps | implicit steps | "
-             f"explicit cost | implicit cost | cheaper |", "|---|---:|---:|---|---:|---:|---:|---:|---|"]
+    lines = ["| part (E, nu, rho) | explicit dt_stable | T1 | event | explicit steps | implicit steps | "
+             "explicit cost | implicit cost | cheaper |", "|---|---:|---:|---|---:|---:|---:|---:|---|"]
     for name, (e, nu, rho) in MATERIALS.items():
         dts, t1 = stable[name], first_period(e, rho)
         for ev, T in EVENTS.items():
@@ -247,8 +265,9 @@ def _dur(x: float) -> str:
 # ============================================================================ report
 def step_table(results: dict) -> str:
     head = ("| dofs | scheme | steps | setup s | first step ms | later steps ms (wall) | later steps ms (CPU) | "
-            "ratio wall | ratio CPU | ours' extras ms/step CPU (energy + probes) | Newton (Krylov) its | LU factorisations |\n"
-            "|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n")
+            "ratio wall | ratio CPU | ours' checks ms/step CPU | ratio CPU without them | ours' extras ms/step CPU "
+            "(energy + probes) | Newton (Krylov) its | LU factorisations |\n"
+            "|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n")
     rows = []
     for (cells, scheme), rs in results.items():
         o = [r for r in rs if r["impl"] == "ours"]
@@ -257,6 +276,7 @@ def step_table(results: dict) -> str:
         rows.append(f"| {o[0]['dofs']:,} | {scheme} | {o[0]['steps']} | {cell('setup', lambda x: f'{x:.2f}')} | "
                     f"{cell('first')} | {cell('later')} | {cell('later_cpu')} | "
                     f"{med(o, 'later') / med(b, 'later'):.2f} | {med(o, 'later_cpu') / med(b, 'later_cpu'):.2f} | "
+                    f"{ms(med(o, 'checks_cpu'))} | {med(o, 'later_unchecked_cpu') / med(b, 'later_cpu'):.2f} | "
                     f"{ms(med(o, 'energy_cpu'))} + {ms(med(o, 'probes_cpu'))} | "
                     f"{o[0]['newton']} ({o[0]['krylov']}) / {b[0]['newton']} ({b[0]['krylov']}) | "
                     f"{o[0]['lu']} / {b[0]['lu']} |")
@@ -309,13 +329,13 @@ def main() -> None:
     for cells in sizes:
         for scheme in SCHEMES:
             n = runs if cells != SIZES[-1] else min(runs, 2)      # the largest size: at most 2 (time)
-            rows = run_worker(cells, scheme, n, scheme == "newmark", args.timeout)
+            rows = run_worker(args.timeout, "--worker", scheme, n, int(scheme == "newmark"), *cells)
             results[(cells, scheme)] = rows
             for r in rows:
                 print(f"  {r['dofs']:>7,} dofs {scheme:18s} {r['impl']:7s}: setup {r['setup']:.2f} s, first "
                       f"{ms(r['first'])} ms, later {ms(r['later'])} ms, {r['newton']} Newton, {r['lu']} LU, "
                       f"load {r['load']:.1f}", file=sys.stderr, flush=True)
-    stable = {r["material"]: r["dt_stable"] for r in _pays_rows(sizes[-1], args.timeout)}
+    stable = {r["material"]: r["dt_stable"] for r in run_worker(args.timeout, "--pays", *sizes[-1])}
     loads.append(os.getloadavg())
     wall = time.perf_counter() - t_start
     last = {s: next(r for r in results[(sizes[-1], s)] if r["impl"] == "ours") for s in SCHEMES}
@@ -340,7 +360,9 @@ def main() -> None:
           "estimate, probe location and the energy account's mass matrix); first step: includes the LU "
           "factorisation for the implicit schemes; later steps: median wall time per step after the first, "
           "ours without its energy accounting and probes (the same work as bare: the step, commit and loop), "
-          "which are listed separately; Newton and Krylov iterations and LU factorisations: totals of one run.", "",
+          "which are listed separately; checks: the implicit step's acceptance checks inside the same work (the "
+          "residual re-assembled after SNES converged and det F > 0 at every quadrature point), which bare does "
+          "not do; Newton and Krylov iterations and LU factorisations: totals of one run.", "",
           f"**Explicit steps per second at {last['central-difference']['dofs']:,} dofs** (P1, lumped mass): "
           f"CPU time per step: ours {sps['ours']:.0f} (same work), {sps_full:.0f} with energy accounting and probes every step; "
           f"bare {sps['bare']:.0f}.", "",
@@ -364,16 +386,6 @@ def main() -> None:
     print(text)
     if args.out:
         Path(args.out).write_text(text)
-
-
-def _pays_rows(cells, timeout: float) -> list:
-    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
-    cmd = [sys.executable, str(Path(__file__).resolve()), "--pays", *(str(c) for c in cells)]
-    p = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=timeout, cwd=ROOT)
-    rows = [json.loads(ln[len("RESULT "):]) for ln in p.stdout.splitlines() if ln.startswith("RESULT ")]
-    if p.returncode != 0 or len(rows) != len(MATERIALS):
-        raise RuntimeError(f"stable steps failed (exit {p.returncode}):\n{p.stderr[-4000:]}")
-    return rows
 
 
 if __name__ == "__main__":
