@@ -284,18 +284,22 @@ class SNESDriver:
         return safety * np.finfo(float).eps * self.A.norm(PETSc.NormType.INFINITY) * \
             max(x.norm(PETSc.NormType.INFINITY), 1e-300) * np.sqrt(self.dofs)
 
-    def solve_step(self) -> StepRecord:
-        """One SNES solve from the current u at the current load."""
+    def solve_step(self, check_start: bool = True) -> StepRecord:
+        """One SNES solve from the current u at the current load. `check_start`: if moving the
+        constrained dofs to their (new) values makes the residual non-finite, start from a linear
+        extension instead; a caller whose supports never move (dynamics) skips this extra assembly."""
         self._history: list[float] = []
         self.p.u.vector.copy(self.x)
-        x_old = self.x.copy()
         # start from a state that satisfies the (current) Dirichlet values, so Newton directions are
         # zero on constrained dofs and descend the energy the line search measures
+        if check_start:
+            x_old = self.x.copy()
         fpetsc.set_bc(self.x, self.p.bcs)
         self.x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-        if not self._finite_residual(self.x):
-            self._linear_extension(x_old)
-        x_old.destroy()
+        if check_start:
+            if not self._finite_residual(self.x):
+                self._linear_extension(x_old)
+            x_old.destroy()
         self.snes.setTolerances(atol=self.base_atol())
         builds0 = 0
         if self.pc_reuse is not None:

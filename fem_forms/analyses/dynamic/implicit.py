@@ -57,8 +57,10 @@ class ImplicitStepper:
     """Advance (u, v, a) by one step; the State holds the new values uncommitted until the caller
     commits them (or rolls back)."""
 
-    # rebuild the kept LU factor when the stale one needs more Krylov iterations per Newton step
+    # refresh the kept tangent and its LU factor when the stale ones cost more Krylov iterations per Newton
+    # iteration or more Newton iterations per step than this
     KRYLOV_PER_NEWTON = 15
+    NEWTON_PER_STEP = 5
 
     def __init__(self, system: DynamicSystem, released: set, options: dict | None = None):
         self.s = system
@@ -68,20 +70,74 @@ class ImplicitStepper:
         self.problem = snes.NonlinearProblem(m.u, system.residual, system.jacobian, m.bcs,
                                              energy=system.energy, inadmissible=m.inadmissible,
                                              state=system.state, extra=extra)
-        opts = {"snes_lag_preconditioner": 100, "snes_lag_preconditioner_persists": True}
+        # Full Newton first: the incremental potential is dominated by its M / (beta dt^2) part, so near
+        # the answer its change drowns in round-off, the energy line search stalls and the polish has to
+        # finish (measured on the benchmark beam: 2-5 Newton iterations per step, 2 with full Newton and
+        # the same answer). The energy line search retries a failed step before dt is cut.
+        # The tangent is kept with its factor (modified Newton: the residual is fresh, so the answer is the
+        # same): one more Newton iteration per step but no tangent assembly, 1.4-1.6x less per step on
+        # the benchmark beam (benchmarks/dynamic_steps.md); refreshed by the rule in step().
+        opts = {"snes_lag_preconditioner": 100, "snes_lag_preconditioner_persists": True,
+                "snes_lag_jacobian": 100, "snes_lag_jacobian_persists": True, "snes_linesearch_type": "basic"}
         opts.update(options or {})
         self.driver = snes.SNESDriver(self.problem, opts, "direct", reuse_factor=True)
+        self.line_search_retry = self.driver.E is not None and "snes_linesearch_type" not in (options or {})
+        self.may_unlag = "snes_lag_jacobian" not in (options or {})
+        self.fresh = True                          # the next step starts from a freshly built tangent
         self.dt_factored = None
         self.last_why = ""
 
     def step(self, t: float, dt: float) -> StepOutcome:
         s, drv = self.s, self.driver
-        if self.dt_factored is not None and dt != self.dt_factored:
-            drv._build_snes()                      # a new dt: the kept factor is stale
-        self.dt_factored = dt
+        if self.dt_factored is None or abs(dt - self.dt_factored) > 1e-6 * dt:
+            if self.dt_factored is not None:
+                drv._build_snes()                  # a new dt: the kept factor is stale (not the last
+                self.fresh = True                  # step's round-off difference from dt)
+            self.dt_factored = dt
         s.td.dt.value = dt
         s.td.time.value = t + dt
         s.set_load_time(t + dt, t, self.released)
+        rec, why = self._solve(dt)
+        if why is not None and self.line_search_retry:
+            drv.user_options["snes_linesearch_type"] = "bt"     # the energy line search, same dt
+            drv._build_snes()
+            rec2, why = self._solve(dt)
+            rec.iterations += rec2.iterations
+            rec.krylov_iterations += rec2.krylov_iterations
+            drv.user_options["snes_linesearch_type"] = "basic"
+            drv._build_snes()
+        if why is not None:
+            self.last_why = why
+            self.fresh = True
+            return StepOutcome(False, rec.iterations, why)
+        self._refresh(rec)
+        old = s.state.old
+        v, a = s.td.update(s.u.x.array, old["unknown"].x.array, old["velocity"].x.array,
+                           old["acceleration"].x.array)
+        s.v.x.array[:] = v
+        s.a.x.array[:] = a
+        return StepOutcome(True, rec.iterations, error=self.error_estimate(dt))
+
+    def _refresh(self, rec) -> None:
+        """A fresh tangent and factor for the next step when the kept ones cost too many iterations. If
+        even a fresh tangent needs that many (large motion of a soft part: measured 6.8 per step at
+        dt 1e-2 on a silicone beam), assemble the tangent at every Newton iteration from then on and keep
+        only the factor (60 instead of 136 Newton iterations there, 2 factorisations instead of 20)."""
+        drv = self.driver
+        kept_tangent = drv.user_options.get("snes_lag_jacobian") != 1
+        slow = kept_tangent and rec.iterations > self.NEWTON_PER_STEP
+        if slow or rec.krylov_iterations > self.KRYLOV_PER_NEWTON * max(rec.iterations, 1):
+            if slow and self.fresh and self.may_unlag:
+                drv.user_options["snes_lag_jacobian"] = 1
+            drv._build_snes()
+            self.fresh = True
+        else:
+            self.fresh = False
+
+    def _solve(self, dt: float):
+        """One SNES solve from the constant-acceleration predictor; (record, why rejected or None).
+        A rejected solve leaves the State rolled back and the driver rebuilt."""
+        s, drv = self.s, self.driver
         old = s.state.old
         u = s.u
         # constant-velocity predictor: a_n carries the undamped high modes Newmark keeps (an impulsive
@@ -89,8 +145,9 @@ class ImplicitStepper:
         # cells (measured: a released silicone beam, Q2, 30 of 43 steps rejected; this way 0 of 20)
         u.x.array[:] = old["unknown"].x.array + dt * old["velocity"].x.array
         u.x.scatter_forward()
-        r0 = drv.residual_norm()
-        rec = drv.solve_step()
+        # supports hold still in dynamics (the scene refuses moving ones): no start check needed, and the
+        # residual at the predictor is SNES's first residual (no separate assembly)
+        rec = drv.solve_step(check_start=False)
         why = None if rec.accepted else f"SNES {rec.reason}"
         if why is None:
             if not np.all(np.isfinite(u.x.array)):
@@ -99,20 +156,12 @@ class ImplicitStepper:
                 why = bad
             else:
                 rn = drv.residual_norm()
-                if rn > 1e-6 * max(r0, rec.residuals[0] if rec.residuals else 0.0) and rn > drv.roundoff_floor():
+                if rn > 1e-6 * (rec.residuals[0] if rec.residuals else 0.0) and rn > drv.roundoff_floor():
                     why = f"residual {rn:.3e} after SNES reported convergence"
         if why is not None:
             s.state.rollback()
             drv._build_snes()
-            self.last_why = why
-            return StepOutcome(False, rec.iterations, why)
-        if rec.iterations and rec.krylov_iterations > self.KRYLOV_PER_NEWTON * rec.iterations:
-            drv._build_snes()                      # the factor no longer pays: refactor next step
-        v, a = s.td.update(u.x.array, old["unknown"].x.array, old["velocity"].x.array,
-                           old["acceleration"].x.array)
-        s.v.x.array[:] = v
-        s.a.x.array[:] = a
-        return StepOutcome(True, rec.iterations, error=self.error_estimate(dt))
+        return rec, why
 
     def error_estimate(self, dt: float) -> float:
         """Zienkiewicz-Xie local error dt^2 |beta - 1/6| |a_{n+1} - a_n|, relative to the largest

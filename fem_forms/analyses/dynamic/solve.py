@@ -129,17 +129,17 @@ def initial_acceleration(system: DynamicSystem, released: set) -> None:
     b.destroy()
 
 
-def probe_row(system: DynamicSystem, t: float) -> list:
-    pts = system.scene.output.probes
-    if not pts:
+def probe_row(points: probes.ProbeSet, system: DynamicSystem, t: float) -> list:
+    """[t, then (ux, uy, uz, vx, vy, vz) at each probe] (points located once, before the march)."""
+    if not points.names:
         return [t]
-    u, v = probes.evaluate(system.u, pts), probes.evaluate(system.v, pts)
+    u, v = points.evaluate(system.u), points.evaluate(system.v)
     row = [t]
-    for n in pts:
+    for n in points.names:
         row += list(u[n]) + list(v[n])
     if system.model.temperature is not None:       # NAME_T columns after every probe's motion
-        T = probes.evaluate(system.model.temperature, pts)
-        row += [T[n][0] for n in pts]
+        T = points.evaluate(system.model.temperature)
+        row += [T[n][0] for n in points.names]
     return row
 
 
@@ -155,7 +155,7 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
     if system.model.temperature is not None:
         system.model.temperature.x.array[:] = scene.thermal.initial_temperature
     released = set(dyn.initial_loads) if dyn.initial == "static" else set()
-    probes.evaluate(system.u, scene.output.probes)          # a probe outside the mesh is bad input
+    points = probes.ProbeSet(system.model.mesh, scene.output.probes)   # outside the mesh: bad input
     if dyn.initial == "static":
         initial_static(system)
     initial_velocity(system)
@@ -176,7 +176,7 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
         t_start, step0, dt = checkpoint.load(restart, result)
     else:
         account.start(0.0)
-        result.probe_rows.append(probe_row(system, 0.0))
+        result.probe_rows.append(probe_row(points, system, 0.0))
         if on_frame:
             on_frame(system, 0.0, 0)
 
@@ -186,7 +186,7 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
         account.advance(state["t"], t)
         system.state.commit()
         state["t"] = t
-        result.probe_rows.append(probe_row(system, t))
+        result.probe_rows.append(probe_row(points, system, t))
         if on_frame and step % dyn.output_every == 0:
             on_frame(system, t, step)
         if out is not None and dyn.checkpoint_every and step % dyn.checkpoint_every == 0:
