@@ -147,7 +147,8 @@ def picture(path: Path, res: InverseResult, check: ForwardCheck, title: str) -> 
     panels = [("target", target[0], target_faces, (0.12, 0.47, 0.71, 0.75)),
               ("rest shape to fabricate", rest[0], target_faces, (1.0, 0.5, 0.05, 0.75))]
     if fwd is not None:
-        panels.append((f"forward check (mismatch {check.mismatch_max:.2g} m)", fwd[0],
+        kind = check.solve.kind if check.solve is not None else ""
+        panels.append((f"forward check, {kind} (mismatch {check.mismatch_max:.2g} m)", fwd[0],
                        rest_shape.boundary_faces(fwd[1], fwd[2]), (0.17, 0.63, 0.17, 0.75)))
     view = pictures.view_axes()
     everything = np.vstack([pts for _, pts, _, _ in panels]) @ view[0].T
@@ -156,8 +157,9 @@ def picture(path: Path, res: InverseResult, check: ForwardCheck, title: str) -> 
         box = (500 * k + 10, 50, 500 * k + 490, 310)
         to_px = canvas.fit(box, everything)
         if k > 0:                                    # the target as a faint ghost behind the other panels
-            canvas.surface(to_px, target[0], target_faces, (0.5, 0.5, 0.5, 0.08), view=view)
-        canvas.surface(to_px, pts, faces, pictures.shade(pts, faces, colour, view[1]), (0, 0, 0, 0.2), view=view)
+            canvas.surface(to_px, target[0], target_faces, (0.5, 0.5, 0.5, 0.08), view=view, outward=True)
+        canvas.surface(to_px, pts, faces, pictures.shade(pts, faces, colour, view[1]), (0, 0, 0, 0.2), view=view,
+                       outward=True)
         canvas.text((500 * k + 250, 45), name, 13)
         canvas.triad((500 * k + 40, 290), view)
     canvas.text((250 * len(panels), 15), title, 14)
