@@ -77,6 +77,24 @@ def test_path_check_lands_on_the_target(tmp_path):
     assert data["forward_check"]["tangent"]["stable"]
 
 
+def test_degree_two_checks_agree(tmp_path):
+    """P2 design (E 10 MPa beam): the written straight-edged rest mesh loses the mid-edge rest positions,
+    so the target is only near an equilibrium (1e-4 m, within the 1e-3 x size tolerance); Newton from
+    the target (a few steps) and the load path (4 load steps, many more) find the same equilibrium."""
+    found = {}
+    for kind in ("equilibrium", "path"):
+        d = inverse_beam(E=1e7, check=kind)
+        d["discretization"] = {"degree": 2}
+        _, chk = designed_and_checked(d, tmp_path / kind)
+        assert chk.problems == [] and chk.solve.inertia.stable
+        found[kind] = chk
+    eq, path = found["equilibrium"], found["path"]
+    assert 1e-6 < eq.mismatch_max < 1e-3 * 1.0
+    assert eq.mismatch_max == pytest.approx(path.mismatch_max, rel=1e-6)
+    assert eq.static.report.newton_iterations < path.static.report.newton_iterations
+    assert np.allclose(eq.static.u.x.array, path.static.u.x.array, rtol=0, atol=1e-9)
+
+
 @pytest.mark.parametrize("multiple, negative", [(0.5, 0), (5.0, 2)])
 def test_inertia_counts_the_columns_buckling_modes(tmp_path, multiple, negative):
     """Below Euler's load the straight column is stable; at 5x it is an equilibrium (residual at round-off)
