@@ -43,6 +43,7 @@ CURVED_NEWTON_STEPS = 8
 
 @dataclass
 class ForwardSolve:
+    """What the forward check solved and found; summary() is results.json's "forward_check"."""
     kind: str                   # "equilibrium" | "path"
     static: StaticResult        # the forward model (mesh, u) and its solve report
     inertia: Inertia | None     # of the tangent at the equilibrium found (None: the path solve failed)

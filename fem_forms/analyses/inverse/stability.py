@@ -15,6 +15,7 @@ import ufl
 
 @dataclass
 class Inertia:
+    """Pivot signs of a symmetric LDL^T factorisation: how many negative and null ones, among how many."""
     negative: int               # negative pivots = negative eigenvalues of the constrained tangent
     null: int                   # pivots MUMPS found to be zero (a singular tangent)
     dofs: int
