@@ -6,7 +6,7 @@ import time
 from dolfinx import fem
 import ufl
 
-from fem_forms.design.parameters import InverseResult, target_scene
+from fem_forms.design.parameters import InverseResult, cellwise_exact, one_point_scene, target_scene
 from fem_forms.meshes import LoadedMesh, load_mesh
 from fem_forms.physics.admissibility import SmallestValue
 from fem_forms.physics.assemble import inverse_forms, scene_physics
@@ -27,11 +27,18 @@ def solve_direct(scene: Scene, material=None, loaded: LoadedMesh | None = None) 
     bcs = supports(V, loaded, scene.fix, load, sign=-1.0)
     G = ufl.Identity(3) + ufl.grad(v)                   # dX/dx: the target mesh mapped to the rest shape
     w = fem.Function(V)                                  # the variation: d/dw, then w = 0 (u = -v)
-    ctx, terms = scene_physics(scene, loaded, w - v, material, rest_map=G, load=load)
-    ctx.deformation = ufl.inv(G) + ufl.grad(w) * ufl.inv(G)
-    forms = inverse_forms(terms, ctx, v, w)
+
+    def build(sc: Scene):
+        ctx, terms = scene_physics(sc, loaded, w - v, material, rest_map=G, load=load)
+        ctx.deformation = ufl.inv(G) + ufl.grad(w) * ufl.inv(G)
+        return inverse_forms(terms, ctx, v, w), terms, sc.discretization.quadrature
+
+    one = one_point_scene(scene, mesh)
+    forms, terms, degree = build(one or scene)
+    if one is not None and not cellwise_exact(forms.residual, v):   # a field that varies inside cells
+        forms, terms, degree = build(scene)
     residual, jacobian = forms.residual, forms.jacobian
-    rest_volume = SmallestValue(ufl.det(G), mesh, scene.discretization.quadrature)
+    rest_volume = SmallestValue(ufl.det(G), mesh, degree)
 
     def inadmissible():
         return rest_volume.positive_or("inverted rest-shape elements (min det = {value:.3g})")

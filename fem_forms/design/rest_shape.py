@@ -34,23 +34,40 @@ def triangles(faces: np.ndarray) -> np.ndarray:
     return np.vstack([faces[:, [0, 1, 2]], faces[:, [0, 2, 3]]])
 
 
+GMSH_TYPES = {"tetrahedron": (4, 2), "hexahedron": (5, 3)}      # cell -> (gmsh type of the cell, of a face)
+
+
 def write_volume_mesh(path: Path, points: np.ndarray, cells: np.ndarray, cell_type: str,
                       facet_groups: dict | None = None) -> None:
-    """A gmsh .msh (format 2.2, binary) with named boundary groups, that `generator = "file"` reads back."""
-    import meshio
-    kind = {"tetrahedron": "tetra", "hexahedron": "hexahedron"}[cell_type]
-    face = {"tetrahedron": "triangle", "hexahedron": "quad"}[cell_type]
-    blocks = [(kind, cells)]
-    physical = [np.full(len(cells), 1, dtype=np.int32)]
-    field_data = {}
+    """A gmsh .msh (format 2.2, binary) with named boundary groups, that `generator = "file"` reads back.
+    Written with numpy: the same bytes meshio wrote (checked on the Chen arm), without meshio's import
+    (0.1-0.25 s of every inverse run); binary rather than ASCII: 0.2 s -> 0.002 s for 9,225 points."""
+    cell_kind, face_kind = GMSH_TYPES[cell_type]
+    blocks = [(cell_kind, 1, np.asarray(cells))]
+    names = []
     for k, (name, faces) in enumerate((facet_groups or {}).items()):
-        blocks.append((face, faces))
-        physical.append(np.full(len(faces), 10 + k, dtype=np.int32))
-        field_data[name] = np.array([10 + k, 2])
-    m = meshio.Mesh(points, blocks, cell_data={"gmsh:physical": physical, "gmsh:geometrical": physical},
-                    field_data=field_data)
-    # binary: 0.2 s -> 0.002 s for the Chen-size arm (9,225 points), the same numbers bit for bit
-    meshio.write(str(path), m, file_format="gmsh22", binary=True)
+        blocks.append((face_kind, 10 + k, np.asarray(faces)))
+        names.append(f'2 {10 + k} "{name}"\n')
+    nodes = np.empty(len(points), dtype=[("id", "<i4"), ("x", "<f8", 3)])
+    nodes["id"] = np.arange(1, len(points) + 1)
+    nodes["x"] = points
+    parts = [b"$MeshFormat\n2.2 1 8\n", np.int32(1).tobytes(), b"\n$EndMeshFormat\n"]
+    if names:
+        parts.append(f"$PhysicalNames\n{len(names)}\n{''.join(names)}$EndPhysicalNames\n".encode())
+    parts += [f"$Nodes\n{len(points)}\n".encode(), nodes.tobytes(), b"\n$EndNodes\n",
+              f"$Elements\n{sum(len(c) for _, _, c in blocks)}\n".encode()]
+    first = 1
+    for kind, tag, conn in blocks:
+        if not len(conn):
+            continue
+        rows = np.empty((len(conn), 3 + conn.shape[1]), dtype="<i4")
+        rows[:, 0] = np.arange(first, first + len(conn))          # element number, then its two tags
+        rows[:, 1:3] = tag                                         # (physical = geometrical)
+        rows[:, 3:] = conn + 1
+        parts += [np.array([kind, len(conn), 2], dtype="<i4").tobytes(), rows.tobytes()]
+        first += len(conn)
+    parts.append(b"\n$EndElements\n")
+    Path(path).write_bytes(b"".join(parts))
 
 
 def write_stl(path: Path, points: np.ndarray, tris: np.ndarray, name: str = "rest_shape") -> None:

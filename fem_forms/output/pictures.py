@@ -90,10 +90,18 @@ class Canvas:
         return lambda q: np.stack([cx + k * (q[..., 0] - centre[0]), cy - k * (q[..., 1] - centre[1])], axis=-1)
 
     def surface(self, to_px, points: np.ndarray, polys: np.ndarray, facecolors, outline=None,
-                view=None) -> None:
+                view=None, outward: bool = False) -> None:
         """Polygons of a surface seen from `view`, far ones first. facecolors: one RGBA or one per face
-        (values in [0, 1]); outline: RGBA of the edges or None."""
+        (values in [0, 1]); outline: RGBA of the edges or None. `outward`: the polygons are a closed
+        surface ordered with outward normals, so those facing away are hidden and not drawn (half the
+        polygons: the inverse picture 0.12 -> 0.07 s)."""
         screen, toward = view or view_axes()
+        if outward:
+            p = points[polys[:, :3]]
+            front = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]) @ toward > 0
+            polys = polys[front]
+            if np.ndim(facecolors) == 2 and len(facecolors) == len(front) and len(front) > 1:
+                facecolors = np.asarray(facecolors)[front]
         order = np.argsort((points @ toward)[polys].mean(axis=1), kind="stable")
         px = (to_px(points @ screen.T)[polys[order]] * self.s).reshape(len(order), -1).tolist()
         fills = _bytes(facecolors)

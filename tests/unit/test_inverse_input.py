@@ -12,6 +12,7 @@ BAD = [
      "inverse.match_region: contains no cell"),
     (with_(inverse_beam(method="adjoint"), "inverse.max_move", -1.0), "inverse.max_move = -1.0"),
     (with_(beam_scene(), "inverse", {"method": "direct"}), "inverse: only for analysis = 'inverse'"),
+    (with_(inverse_beam(), "inverse.check", "quick"), "inverse.check = 'quick': must be one of 'equilibrium', 'path'"),
 ]
 
 

@@ -53,10 +53,8 @@ def run(scene: Scene, out: Path, echo: bool = False) -> dict:
         problems += check.problems
         summary["target_mismatch_max"] = check.mismatch_max
         summary["design_gap_max"] = check.design_gap_max
-        if check.static is not None:
-            r = check.static.report
-            summary["forward_check"] = {"newton_iterations": r.newton_iterations, "linear_solver": r.linear_solver,
-                                        "krylov_iterations": r.krylov_iterations, "load_steps": r.load_steps}
+        if check.solve is not None:
+            summary["forward_check"] = check.solve.summary()
         if check.matched_mismatch_max is not None:
             summary["matched_mismatch_max"] = check.matched_mismatch_max
         summary["rest_mesh"] = str((out / "rest_shape.msh"))
@@ -75,7 +73,7 @@ def run(scene: Scene, out: Path, echo: bool = False) -> dict:
     if echo and comm.rank == 0 and not problems:
         print(f"{scene.title}: rest shape by the {res.method} method in {res.iterations} iterations, "
               f"{res.solve_time:.2f} s; largest rest offset {summary['max_rest_offset']:.4g} m; forward check "
-              f"lands within {check.mismatch_max:.3g} m of the target"
+              f"({check.solve.kind}, stable) lands within {check.mismatch_max:.3g} m of the target"
               + ("" if check.matched_mismatch_max is None else
                  f" ({check.matched_mismatch_max:.3g} m where matched)") + f" -> {out}")
     if problems:

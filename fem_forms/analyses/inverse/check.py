@@ -1,7 +1,6 @@
 """Every designed rest shape is checked before it is handed out: written, read back, solved forward."""
 from __future__ import annotations
 
-import copy
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -9,30 +8,35 @@ from mpi4py import MPI
 import numpy as np
 from scipy.spatial import cKDTree
 
+from fem_forms.analyses.inverse import forward
 from fem_forms.design import rest_shape
 from fem_forms.design.parameters import InverseResult
-from fem_forms.equilibrium import solve_static
 from fem_forms.errors import InputError
 from fem_forms.meshes import mesh_size
 from fem_forms.output import fields, pictures
-from fem_forms.scene import MeshSpec, Scene
-
-
-# The forward check's tangent is symmetric and (at the designed equilibrium) positive definite: with
-# the scene's linear = "auto" it runs CG + GAMG (rigid-body near-nullspace) from this size on, and
-# falls back to LU if a linear solve fails. Measured on the Chen-size arm (27,675 dofs, 7 Newton
-# steps): the check's solve 4.5 s CPU with LU, 1.3 s with CG + GAMG; at 10,527 dofs 0.7-1.0 s with LU,
-# 0.5 s with CG + GAMG (benchmarks/fixed_cost.md).
-CHECK_ITERATIVE_ABOVE_DOFS = 10_000
+from fem_forms.scene import Scene
 
 
 @dataclass
 class ForwardCheck:
     mismatch_max: float             # largest distance of the forward-solved shape from the target
-    static: object                  # the StaticResult of the forward solve from the rest shape
+    static: object                  # the StaticResult of the forward solve on the rest shape
     problems: list
     design_gap_max: float = np.inf  # ... from the deformed shape the design predicted
     matched_mismatch_max: float | None = None   # ... from the target on the matched points/region
+    solve: forward.ForwardSolve | None = None   # how the forward check solved, and its tangent's inertia
+
+
+def _stability_problems(solve: forward.ForwardSolve, predicted: str) -> list:
+    """An equilibrium whose tangent is not positive definite is unstable (a buckled branch): refused."""
+    i = solve.inertia
+    if i is None or i.stable:
+        return []
+    where = f"at {predicted}" if solve.kind == "equilibrium" else "at the forward solve's equilibrium"
+    if i.error:
+        return [f"the tangent {where} could not be checked for stability: {i.error}"]
+    return [f"the tangent {where} is not positive definite ({i.negative} negative, {i.null} null pivots of "
+            f"{i.dofs}): an unstable equilibrium (a buckled branch), the design is not usable"]
 
 
 def _matched_vertices(spec, pts_target: np.ndarray, size: float) -> np.ndarray | None:
@@ -51,7 +55,8 @@ def _matched_vertices(spec, pts_target: np.ndarray, size: float) -> np.ndarray |
 
 def check_rest_shape(scene: Scene, res: InverseResult, out: Path) -> ForwardCheck:
     """Write the rest shape (volume .msh + STL), check it crosses no support plane and does not
-    intersect itself, then read it back as a file mesh, solve the forward problem from it and measure
+    intersect itself, then read it back as a file mesh, solve the forward problem on it (from the
+    target, or along the load path: scene.inverse.check), check the equilibrium is stable and measure
     the largest distance of the deformed shape from the target."""
     mesh = res.loaded.mesh
     comm = mesh.comm
@@ -91,25 +96,21 @@ def check_rest_shape(scene: Scene, res: InverseResult, out: Path) -> ForwardChec
     pts_design = comm.bcast(designed[0] if comm.rank == 0 else None, root=0)
     if problems and any("cannot write" in p for p in problems):
         return ForwardCheck(np.inf, None, problems)
-    # independent forward check: read the written mesh back and solve the static problem on it
-    fscene = copy.deepcopy(scene)
-    fscene.analysis = "static"
-    fscene.mesh = MeshSpec(generator="file", file=out / "rest_shape.msh")
-    fscene.output.probes = {}
+    # independent forward check: read the written mesh back and solve the forward problem on it
     vmap = res.v.function_space.dofmap
-    if fscene.solver.linear == "auto" and vmap.index_map.size_global * vmap.index_map_bs >= CHECK_ITERATIVE_ABOVE_DOFS:
-        fscene.solver.linear = "iterative-then-direct"
-        # GAMG graph squared on the finest level only, threshold 0.01: on the Chen arm 265 CG iterations
-        # instead of 462 (7 Newton steps instead of 8), the check's solve 2.0 -> 1.3 s CPU
-        for k, v in {"pc_gamg_square_graph": 1, "pc_gamg_threshold": 0.01}.items():
-            fscene.solver.petsc.setdefault(k, v)
+    fscene = forward.forward_scene(scene, out / "rest_shape.msh", vmap.index_map.size_global * vmap.index_map_bs)
     try:
-        static = solve_static(fscene)
+        solve = (forward.solve_at_target(fscene, pts_rest, pts_design) if scene.inverse.check == "equilibrium"
+                 else forward.solve_along_path(fscene))
     except InputError as e:
         return ForwardCheck(np.inf, None, problems + [f"the rest shape is not a valid mesh: {e}"])
+    static = solve.static
+    predicted = "the target" if res.deformed_offset is None else "the shape the design predicted"
+    problems += _stability_problems(solve, predicted)
     if not static.report.converged:
-        return ForwardCheck(np.inf, static, problems + [f"the forward solve from the rest shape failed: "
-                                                        f"{static.report.message}"])
+        what = (f"{predicted} is not an equilibrium of the rest shape" if solve.kind == "equilibrium"
+                else "the forward solve from the rest shape failed")
+        return ForwardCheck(np.inf, static, problems + [f"{what}: {static.report.message}"], solve=solve)
     fmesh = static.model.mesh
     X = fmesh.geometry.x
     dist, idx = cKDTree(pts_rest).query(X)
@@ -125,10 +126,9 @@ def check_rest_shape(scene: Scene, res: InverseResult, out: Path) -> ForwardChec
     matched_max = None if matched is None else largest(to_target, matched[idx])
     tol = scene.inverse.check_tolerance or 1e-3 * size
     if gap > tol:
-        what = "the target" if res.deformed_offset is None else "the shape the design predicted"
-        problems.append(f"the forward solve from the rest shape lands {gap:.3g} m from {what} "
+        problems.append(f"the forward solve on the rest shape lands {gap:.3g} m from {predicted} "
                         f"(tolerance {tol:.3g} m): another equilibrium, the design is not usable")
-    return ForwardCheck(mismatch, static, problems, gap, matched_max)
+    return ForwardCheck(mismatch, static, problems, gap, matched_max, solve)
 
 
 def picture(path: Path, res: InverseResult, check: ForwardCheck, title: str) -> None:
@@ -147,7 +147,8 @@ def picture(path: Path, res: InverseResult, check: ForwardCheck, title: str) -> 
     panels = [("target", target[0], target_faces, (0.12, 0.47, 0.71, 0.75)),
               ("rest shape to fabricate", rest[0], target_faces, (1.0, 0.5, 0.05, 0.75))]
     if fwd is not None:
-        panels.append((f"forward check (mismatch {check.mismatch_max:.2g} m)", fwd[0],
+        kind = check.solve.kind if check.solve is not None else ""
+        panels.append((f"forward check, {kind} (mismatch {check.mismatch_max:.2g} m)", fwd[0],
                        rest_shape.boundary_faces(fwd[1], fwd[2]), (0.17, 0.63, 0.17, 0.75)))
     view = pictures.view_axes()
     everything = np.vstack([pts for _, pts, _, _ in panels]) @ view[0].T
@@ -156,8 +157,9 @@ def picture(path: Path, res: InverseResult, check: ForwardCheck, title: str) -> 
         box = (500 * k + 10, 50, 500 * k + 490, 310)
         to_px = canvas.fit(box, everything)
         if k > 0:                                    # the target as a faint ghost behind the other panels
-            canvas.surface(to_px, target[0], target_faces, (0.5, 0.5, 0.5, 0.08), view=view)
-        canvas.surface(to_px, pts, faces, pictures.shade(pts, faces, colour, view[1]), (0, 0, 0, 0.2), view=view)
+            canvas.surface(to_px, target[0], target_faces, (0.5, 0.5, 0.5, 0.08), view=view, outward=True)
+        canvas.surface(to_px, pts, faces, pictures.shade(pts, faces, colour, view[1]), (0, 0, 0, 0.2), view=view,
+                       outward=True)
         canvas.text((500 * k + 250, 45), name, 13)
         canvas.triad((500 * k + 40, 290), view)
     canvas.text((250 * len(panels), 15), title, 14)

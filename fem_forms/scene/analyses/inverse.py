@@ -13,6 +13,10 @@ METHOD = Key("method", "string", "how the rest shape is found", default="direct"
              choices=("direct", "adjoint", "fixed-point"))
 COMMON_KEYS = (
     Key("target", "file", "another mesh file as the target shape (default: the scene's mesh)"),
+    Key("check", "string", "how the design is checked on its read-back rest mesh: equilibrium (the forward "
+        "residual at the target, a few Newton steps at most, and the tangent's inertia there) or path (a "
+        "forward solve ramping the loads from the rest shape)", default="equilibrium",
+        choices=("equilibrium", "path")),
     Key("check_tolerance", "number", "the forward check must land within this of the target", unit="m",
         exclusive_minimum=0, default_note="1e-3 x the body's size"),
     Key("iterations", "integer", "adjoint / fixed-point iteration limit", default=200, exclusive_minimum=0),
@@ -40,6 +44,7 @@ class InverseSpec:
     """[inverse]: how to find the rest shape that deforms into the target under the scene's loads."""
     method: str = _K["method"].field()                     # "direct" | "adjoint" | "fixed-point"
     target: Path | None = None             # another mesh file as target (default: the scene's mesh)
+    check: str = _K["check"].field()       # "equilibrium" | "path": how the forward check solves
     check_tolerance: float | None = None   # forward check must land within this (m); default 1e-3 x size
     iterations: int = _K["iterations"].field()             # adjoint / fixed-point iteration limit
     tolerance: float = _K["tolerance"].field()             # adjoint: gradient norm; fixed point: update size

@@ -1,0 +1,129 @@
+"""The forward check's solve on the read-back rest mesh, with the forward forms (not the inverse ones).
+
+check = "equilibrium" (default): the design claims that the target is an equilibrium of the rest shape
+under the loads. So start Newton from that claim, u = target - rest at every node, at full load: if the
+forward residual there is at tolerance within EQUILIBRIUM_NEWTON_STEPS Newton steps, the claim holds
+(degree 2: see CURVED_NEWTON_STEPS).
+The tolerance is where a static solve of the rest shape from zero would stop: snes_rtol (1e-9) times
+the residual at the rest shape under the full load.
+check = "path": ramp the loads from the rest shape with Newton (load continuation), as a user's static
+run of the rest mesh would; it costs about as much as the design itself.
+Either way the tangent's inertia at the equilibrium found tells whether it is stable."""
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass
+from pathlib import Path
+
+from dolfinx import fem
+from scipy.spatial import cKDTree
+import numpy as np
+
+from fem_forms.analyses.inverse.stability import Inertia, tangent_inertia
+from fem_forms.equilibrium import StaticResult, solve_static
+from fem_forms.model import build_model
+from fem_forms.scene import MeshSpec, Scene
+from fem_forms.solvers import continuation, snes
+from fem_forms.solvers.linear import rigid_body_modes
+
+# The check's tangent is symmetric and (at the designed equilibrium) positive definite: with the scene's
+# linear = "auto" it runs CG + GAMG (rigid-body near-nullspace) from this size on, and falls back to LU
+# if a linear solve fails. Measured on the Chen-size arm (27,675 dofs, path check, 7 Newton steps): the
+# solve 4.5 s CPU with LU, 1.3 s with CG + GAMG; at 10,527 dofs 0.7-1.0 s with LU, 0.5 s with CG + GAMG.
+CHECK_ITERATIVE_ABOVE_DOFS = 10_000
+# Newton steps the equilibrium check may take from the predicted equilibrium. Degree 1 designs are the
+# exact discrete inverse of the forward problem on the written mesh: they start at the design's own
+# tolerance and take 0 or 1. Degree 2 designs lose their mid-edge rest positions in the written
+# (straight-edged) mesh, so the target is only near an equilibrium of it (measured on a 10x2x2 beam,
+# E 10 MPa: residual 580x the load's at the target, the equilibrium 1e-4 m away): Newton takes up to
+# CURVED_NEWTON_STEPS from there, and the distance to the target is checked as for the path check.
+EQUILIBRIUM_NEWTON_STEPS = 2
+CURVED_NEWTON_STEPS = 8
+
+
+@dataclass
+class ForwardSolve:
+    """What the forward check solved and found; summary() is results.json's "forward_check"."""
+    kind: str                   # "equilibrium" | "path"
+    static: StaticResult        # the forward model (mesh, u) and its solve report
+    inertia: Inertia | None     # of the tangent at the equilibrium found (None: the path solve failed)
+    start_residual: float | None = None   # equilibrium check: |R(target)| / |R(rest shape)| at full load
+
+    def summary(self) -> dict:
+        r = self.static.report
+        out = {"kind": self.kind, "newton_iterations": r.newton_iterations, "linear_solver": r.linear_solver,
+               "krylov_iterations": r.krylov_iterations, "load_steps": r.load_steps}
+        if self.start_residual is not None:
+            out["start_residual_relative"] = self.start_residual
+        if self.inertia is not None:
+            out["tangent"] = self.inertia.summary()
+        return out
+
+
+def forward_scene(scene: Scene, rest_mesh: Path, dofs: int) -> Scene:
+    """The static scene of the rest shape read back from its file, with the check's linear solver."""
+    fscene = copy.deepcopy(scene)
+    fscene.analysis = "static"
+    fscene.mesh = MeshSpec(generator="file", file=rest_mesh)
+    fscene.output.probes = {}
+    if fscene.solver.linear == "auto" and dofs >= CHECK_ITERATIVE_ABOVE_DOFS:
+        fscene.solver.linear = "iterative-then-direct"
+        # GAMG graph squared on the finest level only, threshold 0.01: on the Chen arm 265 CG iterations
+        # instead of 462 (7 Newton steps instead of 8), the path check's solve 2.0 -> 1.3 s CPU
+        for k, v in {"pc_gamg_square_graph": 1, "pc_gamg_threshold": 0.01}.items():
+            fscene.solver.petsc.setdefault(k, v)
+    return fscene
+
+
+def predicted_displacement(u: fem.Function, pts_rest: np.ndarray, pts_target: np.ndarray) -> None:
+    """u = target - rest position at every node of the read-back rest mesh (its points matched to the
+    written ones by position); P2 spaces take the P1 interpolant."""
+    V = u.function_space
+    nodal = u if V.ufl_element().degree() == 1 else fem.Function(fem.VectorFunctionSpace(V.mesh, ("Lagrange", 1)))
+    X = nodal.function_space.tabulate_dof_coordinates()
+    idx = cKDTree(pts_rest).query(X)[1]
+    nodal.x.array[:] = (pts_target[idx] - X).ravel()
+    if nodal is not u:
+        u.interpolate(nodal)
+    u.x.scatter_forward()
+
+
+def solve_at_target(fscene: Scene, pts_rest: np.ndarray, pts_target: np.ndarray) -> ForwardSolve:
+    """Newton from the predicted equilibrium at full load, at most EQUILIBRIUM_NEWTON_STEPS steps
+    (CURVED_NEWTON_STEPS for degree 2)."""
+    model = build_model(fscene)
+    steps = EQUILIBRIUM_NEWTON_STEPS if fscene.discretization.degree == 1 else CURVED_NEWTON_STEPS
+    predicted_displacement(model.u, pts_rest, pts_target)
+    model.load.set(1.0)
+    problem = snes.NonlinearProblem(model.unknown, model.residual, model.jacobian, model.bcs,
+                                    energy=model.energy if model.conservative else None, set_load=None,
+                                    inadmissible=model.inadmissible, state=model.state)
+    # full Newton steps: at an equilibrium the energy's changes are round-off, an energy line search sees
+    # no decrease and wastes a step (measured on the soft beam: 2 steps with it, 1 without)
+    options = {"snes_linesearch_type": "basic", **fscene.solver.petsc, "snes_max_it": steps}
+    driver = snes.SNESDriver(problem, options, fscene.solver.linear, "fem_forms_check_",
+                             near_nullspace=lambda: rigid_body_modes(model.V))
+    try:
+        scale = driver.load_scale()              # the residual at the rest shape (u = 0) under full load
+        start = driver.residual_norm() / max(scale, 1e-300)
+        # at tolerance: where a static solve of the rest shape would stop (snes_rtol of that residual)
+        driver.user_options.setdefault("snes_atol", driver.options["snes_rtol"] * scale)
+        report = continuation.solve(problem, driver=driver, max_cutbacks=0)
+    finally:
+        driver.snes.destroy()
+    if not report.converged:
+        step = report.steps[-1] if report.steps else None
+        last = step.residuals[-1] / max(scale, 1e-300) if step and step.residuals else float("nan")
+        report.message = (f"its residual there is {start:.2e} of the load's (tolerance "
+                          f"{driver.options['snes_rtol']:.0e}), {last:.2e} after {steps} "
+                          f"Newton steps ({step.note if step else report.message})")
+    # at the equilibrium found, or (failed solve, rolled back) at the target itself
+    inertia = tangent_inertia(model.jacobian, model.bcs)
+    return ForwardSolve("equilibrium", StaticResult(model, report), inertia, start)
+
+
+def solve_along_path(fscene: Scene) -> ForwardSolve:
+    """Load continuation from the rest shape (the scene's steps and cut-backs), as `fem-forms run` would."""
+    static = solve_static(fscene)
+    inertia = tangent_inertia(static.model.jacobian, static.model.bcs) if static.report.converged else None
+    return ForwardSolve("path", static, inertia)
