@@ -49,7 +49,7 @@ def solve_direct(scene: Scene, material=None, loaded: LoadedMesh | None = None) 
     report = continuation.solve(problem, options, steps=scene.solver.steps,
                                 max_cutbacks=scene.solver.max_cutbacks, linear_kind=scene.solver.linear,
                                 near_nullspace=lambda: rigid_body_modes(V), prefix="fem_forms_inverse_",
-                                reuse_factor=True)
+                                reuse_factor="chord")
     res = InverseResult("direct", v, loaded, report.converged, report.newton_iterations, report.message,
                         history=[{"load": s.load, "iterations": s.iterations, "accepted": s.accepted,
                                   "reason": s.reason, "note": s.note} for s in report.steps],

@@ -21,7 +21,7 @@ from fem_forms.state import State
 def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1,
           max_cutbacks: int = 12, linear_kind: str = "auto",
           near_nullspace: Callable[[], PETSc.NullSpace] | None = None,
-          prefix: str = "fem_forms_", predictor: bool = True, reuse_factor: bool = False,
+          prefix: str = "fem_forms_", predictor: bool = True, reuse_factor: bool | str = False,
           driver: SNESDriver | None = None, stops: tuple = (), min_step: float = 0.0) -> SolveReport:
     """Continuation lambda: 0 -> 1 in `steps` increments, the increment grown 1.5x after a success and
     halved after a failure (at most `max_cutbacks` halvings in a row). A step is accepted only when
@@ -66,7 +66,7 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
         progress.report("load_step", load=trial, step=len(report.steps) + 1)
         rec = drv.solve_step()
         rec.load = trial
-        why = None
+        why, same_step = None, False
         if not rec.accepted:
             why = f"SNES {rec.reason}"
             if rec.reason == "DIVERGED_LINEAR_SOLVE" and drv.stale_preconditioner_failed():
@@ -75,6 +75,9 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
                   and linear_kind in linear.FALLBACK_TO_DIRECT):
                 drv.linear_kind = "direct"           # indefinite tangent: fall back to LU
                 report.linear_solver = "iterative->direct"
+            elif drv.reuse_factor == "chord":
+                drv.reuse_factor = True              # the chord stalled: Newton (the stale LU preconditions)
+                same_step = True                     # retries this step at its size
             elif rec.reason == "DIVERGED_LINEAR_SOLVE" and drv.reuse_factor:
                 drv.reuse_factor = False             # stale LU too far off: factor every iteration
         else:
@@ -104,8 +107,9 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
             report.load_reached = lam
         else:
             state.rollback()                         # back to the last accepted state, history included
-            cuts += 1
-            dlam *= 0.5
+            if not same_step:
+                cuts += 1
+                dlam *= 0.5
             drv._build_snes()                        # fresh solver state after a failure
             if cuts > max_cutbacks or dlam < min_step:
                 report.message = (f"no convergence: load factor {lam:.6g} reached, the step to "

@@ -88,7 +88,7 @@ class SNESDriver:
 
     def __init__(self, problem: NonlinearProblem, options: dict | None = None, linear_kind: str = "auto",
                  prefix: str = "fem_forms_", near_nullspace: Callable[[], PETSc.NullSpace] | None = None,
-                 reuse_factor: bool = False):
+                 reuse_factor: bool | str = False):
         self.p = problem
         self.reuse_factor = reuse_factor
         self.comm = problem.u.function_space.mesh.comm

@@ -186,3 +186,29 @@ def test_two_ranks_give_the_same_adjoint_design(tmp_path):
     np.testing.assert_allclose(par["probes"]["tip"]["rest_position"], serial["probes"]["tip"]["rest_position"],
                                rtol=0, atol=1e-4 * serial["max_rest_offset"])   # measured: 2e-5
     assert par["matched_mismatch_max"] == pytest.approx(serial["matched_mismatch_max"], rel=1e-4)
+
+
+@pytest.mark.parametrize("E", [3e6, 1e6])
+def test_chord_steps_land_on_newtons_rest_shape(monkeypatch, E):
+    """The direct design's chord iterations (one LU per load step as the operator) give the rest shape of
+    Newton with the fresh tangent; where the chord stalls (E 1 MPa: the rest shape curls up) the step is
+    retried with Newton at the same size, not halved."""
+    from fem_forms.design import direct
+    scene = ff.Scene.from_dict(inverse_beam(E=E, cells=(20, 2, 2)))
+    results = {}
+    for mode in ("chord", True):
+        real = direct.continuation.solve
+        monkeypatch.setattr(direct.continuation, "solve", lambda *a, mode=mode, real=real, **k: real(
+            *a, **{**k, "reuse_factor": mode}))
+        results[mode] = direct.solve_direct(scene)
+        monkeypatch.setattr(direct.continuation, "solve", real)
+    chord, newton = results["chord"], results[True]
+    assert chord.converged and newton.converged
+    v_c, v_n = chord.v.x.array, newton.v.x.array
+    assert np.abs(v_c - v_n).max() <= 1e-10 * np.abs(v_n).max()
+    loads = [h["load"] for h in chord.history]
+    for k, h in enumerate(chord.history):
+        if not h["accepted"]:                           # a stalled chord: the same load again, with Newton
+            assert "DIVERGED_MAX_IT" in h["reason"] and loads[k + 1] == loads[k]
+    if E == 1e6:
+        assert any(not h["accepted"] for h in chord.history)
