@@ -24,7 +24,6 @@ import statistics
 import tempfile
 import time
 
-import gmsh
 
 import fem_forms as ff
 from fem_forms.analyses.balance import _gravity, setting
@@ -33,6 +32,7 @@ from fem_forms.analyses.balance.body import Body
 from fem_forms.analyses.balance.design import design
 from fem_forms.analyses.balance.evaluate import evaluate, unmet
 from fem_forms.meshes import load_mesh
+from fem_forms.occ_parts import mesh_part
 
 SIZES = (25_000, 50_000, 100_000, 200_000)
 QUICK = (25_000, 100_000)
@@ -69,26 +69,6 @@ PARTS = {"stand": (leaning, {"goal": "stand", "margin_angle": 2.0, "shell": 0.00
          "swim": (boat, {"goal": "swim", "waterline": 0.03, "shell": 0.006}, 600.0)}
 
 
-def _gmsh(build, h: float, path: Path | None) -> int:
-    """Mesh the part at size h; write it to path (if given); the number of tetrahedra."""
-    gmsh.initialize()
-    gmsh.option.setNumber("General.Terminal", 0)
-    try:
-        gmsh.model.add("part")
-        vols = [t for d, t in build(gmsh.model.occ) if d == 3]
-        gmsh.model.occ.synchronize()
-        gmsh.model.addPhysicalGroup(3, vols, 1)
-        gmsh.option.setNumber("Mesh.CharacteristicLengthMax", h)
-        gmsh.option.setNumber("Mesh.CharacteristicLengthMin", h / 3)
-        gmsh.model.mesh.generate(3)
-        n = sum(len(t) for t in gmsh.model.mesh.getElements(3)[1])
-        if path is not None:
-            gmsh.write(str(path))
-    finally:
-        gmsh.finalize()
-    return n
-
-
 def mesh_file(goal: str, cells: int) -> Path:
     """The goal's part with about `cells` tetrahedra (h from a coarser mesh's count, N ~ h^-3), cached."""
     CACHE.mkdir(exist_ok=True)
@@ -96,10 +76,10 @@ def mesh_file(goal: str, cells: int) -> Path:
     if not path.exists():
         build = PARTS[goal][0]
         h, got = 0.008, None
-        got = _gmsh(build, h, None)
+        got = mesh_part(None, build, h)
         for _ in range(2):                           # N ~ h^-3 holds only roughly: correct once more
             h *= (got / cells) ** (1 / 3)
-            got = _gmsh(build, h, path)
+            got = mesh_part(path, build, h)
             if abs(got / cells - 1) < 0.1:
                 break
     return path

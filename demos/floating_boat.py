@@ -12,33 +12,27 @@ least 1 % of its size). Prints the mass against the displaced water, the CoM and
 from pathlib import Path
 import sys
 
-import gmsh
-
 import fem_forms as ff
 from fem_forms.analyses import run_analysis
+from fem_forms.occ_parts import mesh_part
 
 
-def boat(path: Path, h: float = 0.008) -> Path:
-    gmsh.initialize()
-    gmsh.option.setNumber("General.Terminal", 0)
-    occ = gmsh.model.occ
+def boat(occ) -> list:
+    """The hull, and the cabin towards the bow fused on its deck (gmsh dim-tags)."""
     hull = occ.addBox(0, 0, 0, 0.24, 0.10, 0.06)
     cabin = occ.addBox(0.13, 0.02, 0.06, 0.08, 0.06, 0.05)
-    out, _ = occ.fuse([(3, hull)], [(3, cabin)])
-    occ.synchronize()
-    gmsh.model.addPhysicalGroup(3, [t for d, t in out if d == 3], 1)
-    gmsh.option.setNumber("Mesh.CharacteristicLengthMax", h)
-    gmsh.option.setNumber("Mesh.CharacteristicLengthMin", h / 3)
-    gmsh.model.mesh.generate(3)
-    gmsh.write(str(path))
-    gmsh.finalize()
+    return occ.fuse([(3, hull)], [(3, cabin)])[0]
+
+
+def _meshed(path: Path, build, h: float) -> Path:
+    mesh_part(path, build, h)
     return path
 
 
 def main(out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
     scene = {"title": "floating boat", "analysis": "balance",
-             "mesh": {"generator": "file", "file": str(boat(out / "boat.msh"))},
+             "mesh": {"generator": "file", "file": str(_meshed(out / "boat.msh", boat, 0.008))},
              "material": {"model": "neo-hookean", "E": 1e10, "nu": 0.3, "rho": 600.0},
              "balance": {"goal": "swim", "waterline": 0.03, "water_density": 1000.0, "shell": 0.008}}
     d = run_analysis(ff.Scene.from_dict(scene), out / "swim")

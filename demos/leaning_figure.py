@@ -6,37 +6,30 @@ The figure (a foot and a column leaning out over the foot's edge) is meshed with
 reports it toppling, `goal = "stand"` carves the interior (a 3 mm wall kept) so that the centre of mass
 lies inside the support polygon shrunk by h tan(2 deg). Prints both toppling angles and the carved share.
 """
-import json
 from pathlib import Path
 import sys
 
-import gmsh
-
 import fem_forms as ff
 from fem_forms.analyses import run_analysis
+from fem_forms.occ_parts import mesh_part
 
 
-def figure(path: Path, lean: float = 0.085, h: float = 0.006) -> Path:
-    gmsh.initialize()
-    gmsh.option.setNumber("General.Terminal", 0)
-    occ = gmsh.model.occ
+def figure(occ, lean: float = 0.085) -> list:
+    """A foot and a column sheared to lean `lean` m out over the foot's edge (gmsh dim-tags)."""
     foot = occ.addBox(-0.03, 0, 0, 0.09, 0.04, 0.03)
     col = occ.addBox(0.02, 0, 0.03, 0.04, 0.04, 0.14)
     occ.affineTransform([(3, col)], [1, 0, lean / 0.14, -lean / 0.14 * 0.03, 0, 1, 0, 0, 0, 0, 1, 0])
-    out, _ = occ.fuse([(3, foot)], [(3, col)])
-    occ.synchronize()
-    gmsh.model.addPhysicalGroup(3, [t for d, t in out if d == 3], 1)
-    gmsh.option.setNumber("Mesh.CharacteristicLengthMax", h)
-    gmsh.option.setNumber("Mesh.CharacteristicLengthMin", h / 3)
-    gmsh.model.mesh.generate(3)
-    gmsh.write(str(path))
-    gmsh.finalize()
+    return occ.fuse([(3, foot)], [(3, col)])[0]
+
+
+def _meshed(path: Path, build, h: float) -> Path:
+    mesh_part(path, build, h)
     return path
 
 
 def main(out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
-    mesh = figure(out / "figure.msh")
+    mesh = _meshed(out / "figure.msh", figure, 0.006)
     scene = {"title": "leaning figure", "analysis": "balance", "mesh": {"generator": "file", "file": str(mesh)},
              "material": {"model": "neo-hookean", "E": 1e6, "nu": 0.3, "rho": 1000.0},
              "balance": {"goal": "stand", "margin_angle": 2.0, "shell": 0.003}}

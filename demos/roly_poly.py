@@ -12,34 +12,28 @@ moment m g d sin(tilt). Prints the rocking centre and radius and the CoM's depth
 from pathlib import Path
 import sys
 
-import gmsh
-
 import fem_forms as ff
 from fem_forms.analyses import run_analysis
+from fem_forms.occ_parts import mesh_part
 
 
-def toy(path: Path, R: float = 0.05, H: float = 0.04, h: float = 0.006) -> Path:
-    gmsh.initialize()
-    gmsh.option.setNumber("General.Terminal", 0)
-    occ = gmsh.model.occ
+def toy(occ, R: float = 0.05, H: float = 0.04) -> list:
+    """The lower half of a sphere of radius R under a cylinder of radius R and height H (gmsh dim-tags)."""
     ball = occ.addSphere(0, 0, 0, R)
     top = occ.addBox(-2 * R, -2 * R, 0, 4 * R, 4 * R, 2 * R)
     dome, _ = occ.cut([(3, ball)], [(3, top)])
-    out, _ = occ.fuse(dome, [(3, occ.addCylinder(0, 0, 0, 0, 0, H, R))])
-    occ.synchronize()
-    gmsh.model.addPhysicalGroup(3, [t for d, t in out if d == 3], 1)
-    gmsh.option.setNumber("Mesh.CharacteristicLengthMax", h)
-    gmsh.option.setNumber("Mesh.CharacteristicLengthMin", h / 3)
-    gmsh.model.mesh.generate(3)
-    gmsh.write(str(path))
-    gmsh.finalize()
+    return occ.fuse(dome, [(3, occ.addCylinder(0, 0, 0, 0, 0, H, R))])[0]
+
+
+def _meshed(path: Path, build, h: float) -> Path:
+    mesh_part(path, build, h)
     return path
 
 
 def main(out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
     scene = {"title": "roly-poly toy", "analysis": "balance",
-             "mesh": {"generator": "file", "file": str(toy(out / "toy.msh"))},
+             "mesh": {"generator": "file", "file": str(_meshed(out / "toy.msh", toy, 0.006))},
              "material": {"model": "neo-hookean", "E": 2e9, "nu": 0.35, "rho": 1200.0},
              "balance": {"goal": "swing", "margin_angle": 5.0, "shell": 0.003, "contact_tolerance": 0.01}}
     d = run_analysis(ff.Scene.from_dict(scene), out / "swing")

@@ -11,35 +11,28 @@ Prints the CoM's distance from the axis before and after, the spin ratio and the
 from pathlib import Path
 import sys
 
-import gmsh
-
 import fem_forms as ff
 from fem_forms.analyses import run_analysis
+from fem_forms.occ_parts import mesh_part
 
 
-def top(path: Path, h: float = 0.005) -> Path:
-    """Cone (radius 0.04, height 0.03) tip down at the origin, disc 0.03 thick, lump 0.02 x 0.02 x 0.01."""
-    gmsh.initialize()
-    gmsh.option.setNumber("General.Terminal", 0)
-    occ = gmsh.model.occ
+def top(occ) -> list:
+    """A cone on its tip at the origin, a disc on it and an off-axis lump on the disc (gmsh dim-tags)."""
     cone = occ.addCone(0, 0, 0.03, 0, 0, -0.03, 0.04, 0)
     disc = occ.addCylinder(0, 0, 0.03, 0, 0, 0.03, 0.04)
     lump = occ.addBox(0.005, -0.01, 0.06, 0.02, 0.02, 0.01)
-    out, _ = occ.fuse([(3, cone)], [(3, disc), (3, lump)])
-    occ.synchronize()
-    gmsh.model.addPhysicalGroup(3, [t for d, t in out if d == 3], 1)
-    gmsh.option.setNumber("Mesh.CharacteristicLengthMax", h)
-    gmsh.option.setNumber("Mesh.CharacteristicLengthMin", h / 3)
-    gmsh.model.mesh.generate(3)
-    gmsh.write(str(path))
-    gmsh.finalize()
+    return occ.fuse([(3, cone)], [(3, disc), (3, lump)])[0]
+
+
+def _meshed(path: Path, build, h: float) -> Path:
+    mesh_part(path, build, h)
     return path
 
 
 def main(out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
     scene = {"title": "spinning top", "analysis": "balance",
-             "mesh": {"generator": "file", "file": str(top(out / "top.msh"))},
+             "mesh": {"generator": "file", "file": str(_meshed(out / "top.msh", top, 0.005))},
              "material": {"model": "neo-hookean", "E": 2e9, "nu": 0.35, "rho": 1200.0},
              "balance": {"goal": "spin", "kind": "top", "axis": [0.0, 0.0, 1.0], "shell": 0.003}}
     d = run_analysis(ff.Scene.from_dict(scene), out / "spin")

@@ -2,23 +2,12 @@
 properties and a leaning figure."""
 from pathlib import Path
 
-import gmsh
+from fem_forms.occ_parts import mesh_part
 
 
 def _mesh(path: Path, build, h: float) -> Path:
-    gmsh.initialize()
-    gmsh.option.setNumber("General.Terminal", 0)
-    try:
-        gmsh.model.add("shape")
-        vols = build(gmsh.model.occ)
-        gmsh.model.occ.synchronize()
-        gmsh.model.addPhysicalGroup(3, vols, 1)
-        gmsh.option.setNumber("Mesh.CharacteristicLengthMax", h)
-        gmsh.option.setNumber("Mesh.CharacteristicLengthMin", h / 3)
-        gmsh.model.mesh.generate(3)
-        gmsh.write(str(path))
-    finally:
-        gmsh.finalize()
+    """Mesh the volumes build(occ) returns (their tags) into path."""
+    mesh_part(path, lambda occ: [(3, t) for t in build(occ)], h)
     return path
 
 
