@@ -109,8 +109,10 @@ def sag_design(scene: Scene, gravity: np.ndarray, setting: Callable[[object], Se
     n_carvable = comm.allreduce(int(rest.carvable.sum()), op=MPI.SUM)
     solid = np.ones(int(rest.carvable.sum()))
     rigid_before = evaluate(rest, st, solid)
+    timing = None                                          # the LPs' cost summed over the designs (rank 0)
     if b.goal != "check":
-        solid, _ = design(rest, st)                        # start from the rigid design
+        solid, P = design(rest, st)                        # start from the rigid design
+        timing = P.timing if P is not None else None
     history, met = [], None
     for k in range(MAX_STATIC_SOLVES):
         result = sag.solve(rest.density(solid, st.rho, b.fill_density), stiffness_factors(rest, solid, b.fill_stiffness))
@@ -131,7 +133,8 @@ def sag_design(scene: Scene, gravity: np.ndarray, setting: Callable[[object], Se
         if k == MAX_STATIC_SOLVES - 1:
             break
         try:
-            new, _ = design(bent, st, rest, best_effort=True)
+            new, P = design(bent, st, rest, best_effort=True)
+            timing = timing.add(P.timing) if P is not None else None
         except SolveError:
             if meets:                                      # no redesign on this shape, but this design holds
                 break
@@ -147,4 +150,4 @@ def sag_design(scene: Scene, gravity: np.ndarray, setting: Callable[[object], Se
     after = evaluate(rest, st, solid)
     after["deformed"] = numbers
     return {"solid": solid, "before": rigid_before, "after": after, "mesh": sag.mesh, "rest": rest, "setting": st,
-            "history": history, "u": sag.model.u}
+            "history": history, "u": sag.model.u, "timing": timing}
