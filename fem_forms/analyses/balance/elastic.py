@@ -1,7 +1,8 @@
 """The sagging part: a static solve under gravity with the current carving, held by the scene's [[fix]].
 
-Carved cells carry the fill density and a stiffness scaled by `fill_stiffness` (an ersatz material,
-default 1e-6): the material is wrapped so that its psi(F) is multiplied by a DG0 factor field. The
+Carved cells carry the fill density and a stiffness scaled by `fill_stiffness` = E_fill / E (a fill
+material's own; for an empty fill an ersatz 1e-6): the material is wrapped so that its psi(F) is
+multiplied by a DG0 factor field. The
 factor and the density are fem.Functions, so a new carving compiles nothing; no physics module changes,
 and other analyses' forms stay as they are. (Removing carved cells from the mesh instead would build a
 new mesh, spaces and solver per design and lose the cell correspondence the moments need.)
@@ -28,6 +29,7 @@ from fem_forms.equilibrium import StaticResult, solve_static
 from fem_forms.errors import SolveError
 from fem_forms.model import Model, build_model
 from fem_forms.scene import Load, Scene
+from fem_forms.scene.analyses.balance import fill_stiffness
 
 MAX_STATIC_SOLVES = 4
 FIXED_POINT_CELLS = 0.02        # a redesign changing at most this share of the carvable cells keeps the design
@@ -115,7 +117,8 @@ def sag_design(scene: Scene, gravity: np.ndarray, setting: Callable[[object], Se
         timing = P.timing if P is not None else None
     history, met = [], None
     for k in range(MAX_STATIC_SOLVES):
-        result = sag.solve(rest.density(solid, st.rho, b.fill_density), stiffness_factors(rest, solid, b.fill_stiffness))
+        result = sag.solve(rest.density(solid, st.rho, b.fill_density),
+                           stiffness_factors(rest, solid, fill_stiffness(b)))
         bent = rest.deformed(sag.model.u)
         numbers = evaluate(bent, st, solid, rest)
         numbers["max_displacement"] = result.max_displacement
