@@ -94,5 +94,5 @@ def hollow_hemisphere(R: float, r: float, rho: float) -> dict:
 
 def floating_cylinder(R: float, H: float, T: float) -> dict:
     """Vertical cylinder (uniform, KG = H/2) floating at draught T: V = pi R^2 T, KB = T/2,
-    BM = I / V = (pi R^4 / 4) / V = R^2 / (4 T), GM = KB + BM - KG (Rawson & Tupper, ch. 4)."""
+    BM = I / V = (pi R^4 / 4) / V = R^2 / (4 T), GM = KB + BM - KG (Rawson & Tupper, Basic Ship Theory)."""
     return {"volume": math.pi * R * R * T, "KB": T / 2, "GM": T / 2 + R * R / (4 * T) - H / 2}
