@@ -1,5 +1,6 @@
 """The balance picture marks what the goal means: a rocking (swing) design its rocking circle and centre,
-never a support polygon or a toppling angle; a standing one its support polygon and toppling angle."""
+never a support polygon or a toppling angle; a standing one its support polygon and toppling angle; a
+floating one its centre of buoyancy, waterline and GM."""
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 import numpy as np
@@ -9,7 +10,7 @@ from fem_forms.analyses.balance.output import overlays, panel_title, picture
 SWING = {"mass": 0.512, "center_of_mass": [0.0, 0.0, -0.012], "support_polygon": [[0, 0, -0.05], [0.01, 0, -0.05]],
          "toppling_angle_deg": -3.0, "curvature_center": [0.0, 0.0, 0.0], "curvature_radius": 0.05,
          "com_depth_below_center": 0.012}
-STAND = {"mass": 1.0, "center_of_mass": [0.5, 0.5, 0.5], "toppling_angle_deg": 45.0,
+STAND = {"mass": 1.0, "center_of_mass": [0.5, 0.5, 0.5], "toppling_angle_deg": 45.0, "stands": True,
          "support_polygon": [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]}
 
 
@@ -24,6 +25,13 @@ def test_swing_marks_the_rocking_circle_not_the_support():
 def test_stand_marks_its_support_polygon_and_toppling_angle():
     assert overlays(STAND) == ["CoM", "support polygon"]
     assert panel_title("carved", STAND) == "carved: m = 1 kg, topple 45.0 deg"
+
+
+def test_swim_marks_buoyancy_and_waterline_not_the_support():
+    swim = dict(STAND, center_of_buoyancy=[0.5, 0.5, 0.1], waterline=0.2, metacentric_height=0.0128)
+    del swim["stands"]                                     # evaluate reports stands for stand and check only
+    assert overlays(swim) == ["CoM", "buoyancy", "waterline"]
+    assert panel_title("carved", swim) == "carved: m = 1 kg, GM = 12.8 mm"
 
 
 def test_swing_picture_is_written(tmp_path):

@@ -9,6 +9,7 @@ from dolfinx import fem
 from mpi4py import MPI
 import numpy as np
 
+from fem_forms.design.support import ground_frame
 from fem_forms.output.fields import gather_mesh, write_fields
 
 # faces of a tetrahedron and of a VTK-ordered hexahedron, outward for a positively oriented cell
@@ -74,15 +75,16 @@ def write_outputs(out: Path, mesh, density: np.ndarray, carved: np.ndarray, shif
 
 def overlays(nums: dict) -> list[str]:
     """What a panel marks besides the part, from its numbers: a rocking design (swing) its rocking circle
-    and centre (a toppling angle and support polygon mean nothing for a toy that rolls on its dome); the
-    others their support polygon, centre of buoyancy and spin axis, when reported."""
+    and centre (a toppling angle and support polygon mean nothing for a toy that rolls on its dome); a
+    standing one (stand, check) its support polygon; a floating one its centre of buoyancy and waterline;
+    a top its spin axis."""
     marks = ["CoM"]
     if "curvature_center" in nums:
         return marks + ["rocking circle", "rocking centre"]
-    if len(nums.get("support_polygon") or []) >= 2:
+    if "stands" in nums and len(nums.get("support_polygon") or []) >= 2:
         marks.append("support polygon")
     if (nums.get("center_of_buoyancy") or [None])[0] is not None:
-        marks.append("buoyancy")
+        marks += ["buoyancy", "waterline"]
     if "tip" in nums:
         marks.append("spin axis")
     return marks
@@ -116,8 +118,8 @@ def _rocking(ax, nums: dict, up: np.ndarray) -> None:
 
 def picture(path: Path, mesh, carved: np.ndarray, before: dict, after: dict, title: str,
             extra: str = "", sag: np.ndarray | None = None, up: np.ndarray | None = None) -> None:
-    """Two panels, each with the marks `overlays` names (CoM, support polygon, axis, waterline or rocking
-    circle): the part solid and carved; or, given the sag (displacement per local geometry node,
+    """Two panels, each with the marks `overlays` names (CoM, support polygon, axis, buoyancy and waterline,
+    or rocking circle): the part solid and carved; or, given the sag (displacement per local geometry node,
     elastic = true), the design rigid and sagged. `up`: against gravity (default +z)."""
     flags = mesh.comm.gather(carved, root=0)
     g = gather_mesh(mesh)
@@ -161,6 +163,7 @@ def picture(path: Path, mesh, carved: np.ndarray, before: dict, after: dict, tit
             ax.plot(*np.stack([c, down]).T, "k--", lw=1)
         if "buoyancy" in marks:
             ax.scatter(*nums["center_of_buoyancy"], color="tab:cyan", s=40, label="buoyancy")
+            _waterline(ax, points, up, nums["waterline"])
         if "spin axis" in marks:
             a = np.asarray(nums["spin_axis"])
             t = np.asarray(nums["tip"])
@@ -175,6 +178,17 @@ def picture(path: Path, mesh, carved: np.ndarray, before: dict, after: dict, tit
     fig.savefig(path, dpi=100)
     plt.close(fig)
     mesh.comm.barrier()
+
+
+def _waterline(ax, points: np.ndarray, up: np.ndarray, waterline: float) -> None:
+    """The water surface: the part's horizontal bounding rectangle at `waterline` above its lowest point."""
+    _, e1, e2 = ground_frame(-up)
+    h = points @ up
+    a, b = points @ e1, points @ e2
+    level = h.min() + waterline
+    box = [(a.min(), b.min()), (a.max(), b.min()), (a.max(), b.max()), (a.min(), b.max()), (a.min(), b.min())]
+    loop = np.array([level * up + u * e1 + v * e2 for u, v in box])
+    ax.plot(*loop.T, color="tab:cyan", lw=1.5, label="waterline")
 
 
 def _marked_points(nums: dict) -> np.ndarray:
