@@ -9,6 +9,7 @@ from typing import Callable
 
 from time_histories import (cantilever_tip_static, damped_fit, first_mode_share, harmonic_fit,
                             rayleigh_decay_per_cycle, rayleigh_zeta)
+import targets
 from targets import uniaxial_neo_hookean, hydrostatic_neo_hookean, cantilever_gravity_sag, cantilever_frequency, bar_conduction, thick_sphere_outer_displacement
 
 
@@ -120,6 +121,33 @@ HEMISPHERE = ("closed form: mass properties of homogeneous solids (J. L. Meriam,
               "Mechanics: Dynamics, Wiley, appendix D, table D/4)")
 FLOTATION = ("closed form: Archimedes and the metacentre, BM = I_waterplane / V (K. J. Rawson, E. C. Tupper, "
              "Basic Ship Theory, 5th ed., Butterworth-Heinemann, 2001, vol. 1)")
+
+SOLIDS = ("closed form: mass properties of homogeneous solids (J. L. Meriam, L. G. Kraige, Engineering "
+          "Mechanics: Dynamics, Wiley, appendix D, table D/4); a cavity by difference of two solids and the "
+          "parallel-axis theorem")
+BLOCK = targets.block(0.3, 0.2, 0.5, 7800.0)                     # verification/cases/balance_box.toml
+CYLINDER = targets.cylinder(0.05, 0.12, 1000.0)                  # balance_cylinder.toml
+CONE = targets.cone(0.05, 0.12, 1000.0)                          # balance_cone.toml
+HOLLOW_R, HOLLOW_r = 0.05, 0.03                                  # balance_hollow_hemisphere.toml
+HOLLOW = targets.hollow_hemisphere(HOLLOW_R, HOLLOW_r, 1000.0)
+FLOAT_CYL = targets.floating_cylinder(0.06, 0.05, 0.025)         # balance_floating_cylinder.toml
+
+# Tolerances about twice the errors measured with these meshes (straight-sided tetrahedra inscribed in the
+# curved surfaces lose volume: cylinder -0.12..-0.25 %, cone -0.3..-0.9 %, hollow hemisphere -0.2..-0.5 %,
+# floating cylinder -0.09..-0.13 %); the flat-faced block is exact.
+TOL_CYLINDER, TOL_CONE, TOL_HOLLOW, TOL_FLOAT = 0.005, 0.015, 0.01, 0.003
+
+
+def mass_rows(t: dict, tolerance: float, base_z: float = 0.0) -> list:
+    """Mass, CoM height above the base (at z = base_z), inertia about the CoM along z and across (x)."""
+    return [Row("mass", t["mass"], lambda r, ref: float(r["mass"]), tolerance, "kg"),
+            Row("CoM height above the base", t["z"], lambda r, ref: float(r["center_of_mass"][2]) - base_z,
+                tolerance, "m"),
+            Row("inertia about the axis (z)", t["axial"], lambda r, ref: float(r["inertia"][2][2]), tolerance,
+                "kg m^2"),
+            Row("transverse inertia about the CoM (x)", t["transverse"], lambda r, ref: float(r["inertia"][0][0]),
+                tolerance, "kg m^2")]
+
 
 CASES = [
     Case("uniaxial_tension", "Uniaxial tension, neo-Hookean (stretch 1.54)", BONET_WOOD,
@@ -284,4 +312,33 @@ CASES = [
               lambda r, ref: float(r["metacentric_height"]), 1e-9, "m")],
          notes="goal = \"check\" with a waterline: the cells are clipped at the water plane (exact for flat "
                "faces), BM = I / V with I the waterplane's smaller principal second moment, L B^3 / 12."),
+    Case("balance_box", "Block 0.3 x 0.2 x 0.5 m: mass, CoM, inertia m (b^2 + c^2) / 12", SOLIDS,
+         "balance_box.toml", mass_rows(BLOCK, 1e-9, base_z=-0.2),
+         notes="goal = \"check\" (mass properties only). Flat faces: the tetrahedra (3 x 2 x 4 blocks) fill the "
+               "block exactly, so the only error is round-off."),
+    Case("balance_cylinder", "Solid cylinder R = 0.05, H = 0.12 m: mass, CoM H/2, inertia m R^2 / 2, "
+         "m (3 R^2 + H^2) / 12", SOLIDS, "balance_cylinder.toml", mass_rows(CYLINDER, TOL_CYLINDER),
+         notes="goal = \"check\". gmsh tetrahedra of size R/10 (`generator = \"cylinder\"`): the side is a "
+               "polyhedron inscribed in the cylinder, so mass and inertia come out slightly small."),
+    Case("balance_cone", "Solid cone R = 0.05, H = 0.12 m: mass, CoM H/4, inertia 3/10 m R^2, "
+         "3/80 m (4 R^2 + H^2)", SOLIDS, "balance_cone.toml", mass_rows(CONE, TOL_CONE),
+         notes="goal = \"check\". The triangle (0, 0), (R, 0), (0, H) revolved (`generator = \"revolve\"`), "
+               "gmsh tetrahedra of size R/10 inscribed in the conical surface."),
+    Case("balance_hollow_hemisphere", "Hemisphere R = 0.05 m with a concentric hemispherical cavity r = 0.03 m",
+         SOLIDS, "balance_hollow_hemisphere.toml", mass_rows(HOLLOW, TOL_HOLLOW),
+         mesh=("hemisphere", {"radius": HOLLOW_R, "h": HOLLOW_R / 10, "inner": HOLLOW_r}),
+         notes="goal = \"check\". Both spherical surfaces are polyhedra inscribed by gmsh tetrahedra of size "
+               "R/10: the outer one loses mass, the cavity's gains some back."),
+    Case("balance_floating_cylinder", "Floating vertical cylinder: GM = T/2 + R^2 / (4 T) - H/2", FLOTATION,
+         "balance_floating_cylinder.toml",
+         [Row("displaced volume pi R^2 T", FLOAT_CYL["volume"], lambda r, ref: float(r["displaced_volume"]),
+              TOL_FLOAT, "m^3"),
+          Row("KB (centre of buoyancy height)", FLOAT_CYL["KB"],
+              lambda r, ref: float(r["center_of_buoyancy"][2]), TOL_FLOAT, "m"),
+          Row("mass = displaced water (it floats at T)", 1000.0 * FLOAT_CYL["volume"],
+              lambda r, ref: float(r["mass"]), TOL_FLOAT, "kg"),
+          Row("GM", FLOAT_CYL["GM"], lambda r, ref: float(r["metacentric_height"]), TOL_FLOAT, "m")],
+         notes="goal = \"check\" with a waterline (0.025 m, half the height: density 500). The cells are "
+               "clipped at the water plane; the waterplane is the inscribed polygon of the tetrahedra, so V "
+               "and I = pi R^4 / 4 come out slightly small."),
 ]

@@ -60,3 +60,39 @@ def thick_sphere_outer_displacement(P: float, E=210e9, nu=0.3, sy=240e6, a=1.0, 
         return 1.5 * (1 - nu) * P * a**3 * b / (E * (b**3 - a**3))
     c = brentq(lambda c: 2 * sy * math.log(c / a) + 2 * sy / 3 * (1 - c**3 / b**3) - P, a, b, xtol=1e-14)
     return (1 - nu) * sy * c**3 / (E * b**2)
+
+
+# --- mass properties of homogeneous solids (Meriam & Kraige, Engineering Mechanics: Dynamics, table D/4;
+# composite bodies by difference and the parallel-axis theorem). Each: mass, CoM height above the base
+# (z), inertia about the CoM along the symmetry axis z and across it (x).
+def block(a: float, b: float, c: float, rho: float) -> dict:
+    """Rectangular block a x b x c (x, y, z)."""
+    m = rho * a * b * c
+    return {"mass": m, "z": c / 2, "axial": m * (a * a + b * b) / 12, "transverse": m * (b * b + c * c) / 12}
+
+
+def cylinder(R: float, H: float, rho: float) -> dict:
+    """Solid circular cylinder standing on its base."""
+    m = rho * math.pi * R * R * H
+    return {"mass": m, "z": H / 2, "axial": m * R * R / 2, "transverse": m * (3 * R * R + H * H) / 12}
+
+
+def cone(R: float, H: float, rho: float) -> dict:
+    """Solid right circular cone standing on its base."""
+    m = rho * math.pi * R * R * H / 3
+    return {"mass": m, "z": H / 4, "axial": 0.3 * m * R * R, "transverse": 3 / 80 * m * (4 * R * R + H * H)}
+
+
+def hollow_hemisphere(R: float, r: float, rho: float) -> dict:
+    """Solid hemisphere of radius R (flat face down) minus a concentric one of radius r. About the centre
+    of the flat face a half ball has I_x = I_z = 4/15 pi rho R^5 (half of the ball's 2/5 m R^2)."""
+    m = rho * 2 / 3 * math.pi * (R**3 - r**3)
+    z = 3 / 8 * (R**4 - r**4) / (R**3 - r**3)
+    axial = rho * 4 / 15 * math.pi * (R**5 - r**5)
+    return {"mass": m, "z": z, "axial": axial, "transverse": axial - m * z * z}
+
+
+def floating_cylinder(R: float, H: float, T: float) -> dict:
+    """Vertical cylinder (uniform, KG = H/2) floating at draught T: V = pi R^2 T, KB = T/2,
+    BM = I / V = (pi R^4 / 4) / V = R^2 / (4 T), GM = KB + BM - KG (Rawson & Tupper, Basic Ship Theory)."""
+    return {"volume": math.pi * R * R * T, "KB": T / 2, "GM": T / 2 + R * R / (4 * T) - H / 2}

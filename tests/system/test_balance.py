@@ -86,6 +86,25 @@ def test_box_floats_upright_at_its_waterline(tmp_path):
     assert code == 3 and d is None                    # too heavy even carved
 
 
+def test_results_report_the_lp_sifting(tmp_path):
+    """A yoyo cube of 8000 hexahedra: 5832 carvable cells (more than sifting.MIN_CELLS = 4000), so every LP
+    of the design is sifted, each in at least one round, none falls back to the whole LP; the small leaning
+    figure (fewer cells) solves its LPs whole. The cube's equal moments become a spin ratio above 1."""
+    cube = {"generator": "box", "size": [0.1, 0.1, 0.1], "cells": [20, 20, 20], "cell": "hexahedron"}
+    code, d, _, _ = run(tmp_path, scene(cube, goal="spin", kind="yoyo", axis=[0.0, 0.0, 1.0]))
+    assert code == 0 and d["carvable_cells"] == 18 ** 3 and d["spin_ratio"] > 1
+    lp = d["lp"]
+    assert lp["lps"] >= 1 and lp["sifted_lps"] == lp["lps"] and lp["sifting_fallbacks"] == 0
+    assert lp["sifting_rounds"] >= lp["lps"]
+
+
+def test_small_designs_solve_their_lps_whole(tmp_path, leaning):
+    code, d, _, _ = run(tmp_path, scene({"generator": "file", "file": str(leaning)}, goal="stand",
+                                        margin_angle=2.0, shell=0.003))
+    assert code == 0 and d["carvable_cells"] < 4000
+    assert d["lp"]["lps"] >= 1 and d["lp"]["sifted_lps"] == d["lp"]["sifting_rounds"] == 0
+
+
 @pytest.mark.mpi
 def test_two_ranks_same_design(tmp_path, leaning):
     from helpers import toml_dumps

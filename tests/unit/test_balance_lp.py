@@ -49,7 +49,7 @@ def check(p, centroids, objective=None):
     q = lp.Program(p.c, p.A_ub, p.b_ub, p.n_cells, p.extra_bounds, sifting.groups(centroids))
     t = lp.Timing()
     v = lp.solve(q, t)
-    assert t.rounds >= 1                                    # the sifting path ran (not the fallback)
+    assert t.lps == t.sifted == 1 and t.rounds >= 1 and t.fallbacks == 0   # sifted, no fallback
     scale = np.abs(p.A_ub).max(axis=1)
     assert np.all((p.A_ub @ v - p.b_ub) / scale <= 1e-6)    # feasible
     assert np.all((v[:p.n_cells] >= -1e-9) & (v[:p.n_cells] <= 1 + 1e-9))

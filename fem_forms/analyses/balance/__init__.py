@@ -78,7 +78,7 @@ def run(scene: Scene, out, echo: bool = False) -> dict:
     files = write_outputs(out, mesh, body.density(r["solid"], st.rho, b.fill_density), carved)
     if scene.output.picture:
         picture(out / "balance.png", mesh, carved, r["before"], after, scene.title, f" ({b.goal})",
-                sag=node_values(r["u"]) if b.elastic else None)
+                sag=node_values(r["u"]) if b.elastic else None, up=st.frame[0])
         files["picture"] = "balance.png"
     summary = {"analysis": "balance", "title": scene.title, "goal": b.goal, "elastic": b.elastic,
                **after, "before": r["before"], "cells": comm.allreduce(len(body.ids)),
@@ -86,7 +86,8 @@ def run(scene: Scene, out, echo: bool = False) -> dict:
                "wall_time_s": time.perf_counter() - t0, "files": files}
     if r.get("timing") is not None:
         tm = r["timing"]
-        summary["lp"] = {"setup_s": tm.setup_s, "solve_s": tm.solve_s, "lps": tm.lps,
+        summary["lp"] = {"setup_s": tm.setup_s, "solve_s": tm.solve_s, "lps": tm.lps, "sifted_lps": tm.sifted,
+                         "sifting_rounds": tm.rounds, "sifting_fallbacks": tm.fallbacks,
                          "binarise_s": tm.binarise_s, "fractional_cells": tm.fractional}
     if "design_time_s" in r:
         summary["design_time_s"] = r["design_time_s"]

@@ -1,7 +1,8 @@
 """The sagging part: a static solve under gravity with the current carving, held by the scene's [[fix]].
 
-Carved cells carry the fill density and a stiffness scaled by `fill_stiffness` (an ersatz material,
-default 1e-6): the material is wrapped so that its psi(F) is multiplied by a DG0 factor field. The
+Carved cells carry the fill density and a stiffness scaled by `fill_stiffness` = E_fill / E (a fill
+material's own; for an empty fill an ersatz 1e-6): the material is wrapped so that its psi(F) is
+multiplied by a DG0 factor field. The
 factor and the density are fem.Functions, so a new carving compiles nothing; no physics module changes,
 and other analyses' forms stay as they are. (Removing carved cells from the mesh instead would build a
 new mesh, spaces and solver per design and lose the cell correspondence the moments need.)
@@ -28,6 +29,7 @@ from fem_forms.equilibrium import StaticResult, solve_static
 from fem_forms.errors import SolveError
 from fem_forms.model import Model, build_model
 from fem_forms.scene import Load, Scene
+from fem_forms.scene.analyses.balance import fill_stiffness
 
 MAX_STATIC_SOLVES = 4
 FIXED_POINT_CELLS = 0.02        # a redesign changing at most this share of the carvable cells keeps the design
@@ -109,11 +111,14 @@ def sag_design(scene: Scene, gravity: np.ndarray, setting: Callable[[object], Se
     n_carvable = comm.allreduce(int(rest.carvable.sum()), op=MPI.SUM)
     solid = np.ones(int(rest.carvable.sum()))
     rigid_before = evaluate(rest, st, solid)
+    timing = None                                          # the LPs' cost summed over the designs (rank 0)
     if b.goal != "check":
-        solid, _ = design(rest, st)                        # start from the rigid design
+        solid, P = design(rest, st)                        # start from the rigid design
+        timing = P.timing if P is not None else None
     history, met = [], None
     for k in range(MAX_STATIC_SOLVES):
-        result = sag.solve(rest.density(solid, st.rho, b.fill_density), stiffness_factors(rest, solid, b.fill_stiffness))
+        result = sag.solve(rest.density(solid, st.rho, b.fill_density),
+                           stiffness_factors(rest, solid, fill_stiffness(b)))
         bent = rest.deformed(sag.model.u)
         numbers = evaluate(bent, st, solid, rest)
         numbers["max_displacement"] = result.max_displacement
@@ -131,7 +136,8 @@ def sag_design(scene: Scene, gravity: np.ndarray, setting: Callable[[object], Se
         if k == MAX_STATIC_SOLVES - 1:
             break
         try:
-            new, _ = design(bent, st, rest, best_effort=True)
+            new, P = design(bent, st, rest, best_effort=True)
+            timing = timing.add(P.timing) if P is not None else None
         except SolveError:
             if meets:                                      # no redesign on this shape, but this design holds
                 break
@@ -147,4 +153,4 @@ def sag_design(scene: Scene, gravity: np.ndarray, setting: Callable[[object], Se
     after = evaluate(rest, st, solid)
     after["deformed"] = numbers
     return {"solid": solid, "before": rigid_before, "after": after, "mesh": sag.mesh, "rest": rest, "setting": st,
-            "history": history, "u": sag.model.u}
+            "history": history, "u": sag.model.u, "timing": timing}

@@ -11,7 +11,7 @@ Speed (benchmarks/balance_scaling.md): 200k tetrahedra, a spin design's 4 LPs in
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import astuple, dataclass, replace
 import time
 
 import numpy as np
@@ -41,12 +41,19 @@ class Program:
 
 @dataclass
 class Timing:
+    """What a design's LPs cost: wall seconds, LPs solved, how many by sifting and in how many rounds."""
     setup_s: float = 0.0
     solve_s: float = 0.0
     lps: int = 0
-    rounds: int = 0                 # sifting rounds over all LPs (-1 per LP solved whole as a fallback)
+    sifted: int = 0                 # LPs solved by sifting (the others are small: one HiGHS call on all cells)
+    rounds: int = 0                 # sifting rounds over those LPs
+    fallbacks: int = 0              # sifted LPs finally solved whole (groups too coarse, or MAX_ROUNDS reached)
     binarise_s: float = 0.0
     fractional: int = 0
+
+    def add(self, other: "Timing") -> "Timing":
+        """Sums of both (fractional: the last design's), e.g. over the redesigns of the elastic loop."""
+        return Timing(*(a + b for a, b in zip(astuple(self)[:-1], astuple(other)[:-1])), other.fractional)
 
 
 def scaled(p: Program) -> tuple:
@@ -82,7 +89,10 @@ def solve(p: Program, timing: Timing | None = None) -> np.ndarray | None:
     if timing is not None:
         timing.solve_s += time.perf_counter() - t0
         timing.lps += 1
-        timing.rounds += stats.get("rounds", 0)
+        if "groups" in stats:                       # sifting was tried (enough cells, groups given)
+            timing.sifted += 1
+            timing.rounds += stats.get("rounds", 0)
+            timing.fallbacks += bool(stats.get("fallback"))
     return None if x is None else x / col
 
 

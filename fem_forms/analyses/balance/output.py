@@ -1,5 +1,6 @@
 """Balance outputs: the void and the outer surface as closed STL files, the density as a DG0 XDMF field,
-and one picture of the part before and after carving (CoM, support polygon, axis or waterline)."""
+and one picture of the part before and after carving (CoM, and support polygon, axis, centre of buoyancy
+or rocking circle by goal)."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -8,6 +9,7 @@ from dolfinx import fem
 from mpi4py import MPI
 import numpy as np
 
+from fem_forms.design.support import ground_frame
 from fem_forms.output.fields import gather_mesh, write_fields
 
 # faces of a tetrahedron and of a VTK-ordered hexahedron, outward for a positively oriented cell
@@ -71,10 +73,54 @@ def write_outputs(out: Path, mesh, density: np.ndarray, carved: np.ndarray, shif
     return files | ({"solid_mesh": "solid.vtu"} if any_carved else {})
 
 
+def overlays(nums: dict) -> list[str]:
+    """What a panel marks besides the part, from its numbers: a rocking design (swing) its rocking circle
+    and centre (a toppling angle and support polygon mean nothing for a toy that rolls on its dome); a
+    standing one (stand, check) its support polygon; a floating one its centre of buoyancy and waterline;
+    a top its spin axis."""
+    marks = ["CoM"]
+    if "curvature_center" in nums:
+        return marks + ["rocking circle", "rocking centre"]
+    if "stands" in nums and len(nums.get("support_polygon") or []) >= 2:
+        marks.append("support polygon")
+    if (nums.get("center_of_buoyancy") or [None])[0] is not None:
+        marks += ["buoyancy", "waterline"]
+    if "tip" in nums:
+        marks.append("spin axis")
+    return marks
+
+
+def panel_title(label: str, nums: dict) -> str:
+    """The panel's headline: mass and the goal's own measure of balance."""
+    t = f"{label}: m = {nums['mass']:.4g} kg"
+    if "curvature_center" in nums:
+        d = nums["com_depth_below_center"]
+        return t + (f", R = {1e3 * nums['curvature_radius']:.3g} mm, CoM {1e3 * abs(d):.3g} mm "
+                    f"{'below' if d > 0 else 'above'} the centre")
+    if "metacentric_height" in nums:
+        return t + f", GM = {1e3 * nums['metacentric_height']:.3g} mm"
+    ang = nums.get("toppling_angle_deg")
+    return t + (f", topple {ang:.1f} deg" if ang is not None else "")
+
+
+def _rocking(ax, nums: dict, up: np.ndarray) -> None:
+    """The rocking circle (the fitted sphere's section in a vertical plane, its lower half: the surface
+    the part rolls on), its centre, and the vertical from the centre to the ground."""
+    c, R = np.asarray(nums["curvature_center"]), nums["curvature_radius"]
+    side = np.cross(up, [0.0, 1.0, 0.0] if abs(up[1]) < 0.9 else [1.0, 0.0, 0.0])
+    side /= np.linalg.norm(side)
+    t = np.linspace(-np.pi / 2, np.pi / 2, 61)
+    arc = c + R * (np.sin(t)[:, None] * side - np.cos(t)[:, None] * up)
+    ax.plot(*arc.T, color="tab:green", lw=1.5, label="rocking circle")
+    ax.plot(*np.stack([c, c - R * up]).T, color="tab:green", lw=0.8, ls=":")
+    ax.scatter(*c, color="tab:green", s=40, depthshade=False, label="rocking centre")
+
+
 def picture(path: Path, mesh, carved: np.ndarray, before: dict, after: dict, title: str,
-            extra: str = "", sag: np.ndarray | None = None) -> None:
-    """Two panels, each with its CoM, support polygon and axis/waterline: the part solid and carved; or,
-    given the sag (displacement per local geometry node, elastic = true), the design rigid and sagged."""
+            extra: str = "", sag: np.ndarray | None = None, up: np.ndarray | None = None) -> None:
+    """Two panels, each with the marks `overlays` names (CoM, support polygon, axis, buoyancy and waterline,
+    or rocking circle): the part solid and carved; or, given the sag (displacement per local geometry node,
+    elastic = true), the design rigid and sagged. `up`: against gravity (default +z)."""
     flags = mesh.comm.gather(carved, root=0)
     g = gather_mesh(mesh)
     gs = gather_mesh(mesh, sag) if sag is not None else None
@@ -85,6 +131,7 @@ def picture(path: Path, mesh, carved: np.ndarray, before: dict, after: dict, tit
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    up = np.array([0.0, 0.0, 1.0]) if up is None else np.asarray(up, dtype=float)
     points, cells, _ = g
     outer = boundary_faces(cells)
     carved_all = np.concatenate(flags)
@@ -97,6 +144,7 @@ def picture(path: Path, mesh, carved: np.ndarray, before: dict, after: dict, tit
     hi = np.max([p[3].max(axis=0) for p in panels], axis=0)
     for k, (label, nums, show_void, points) in enumerate(panels):
         ax = fig.add_subplot(1, 2, k + 1, projection="3d")
+        ax.computed_zorder = False                  # the marks drawn over the surfaces, never hidden in the void
         ax.plot_trisurf(points[:, 0], points[:, 1], points[:, 2], triangles=outer, color=(0.7, 0.7, 0.75, 0.15),
                         edgecolor=(0.3, 0.3, 0.3, 0.05), linewidth=0.1)
         if show_void and void is not None and len(void):
@@ -104,30 +152,49 @@ def picture(path: Path, mesh, carved: np.ndarray, before: dict, after: dict, tit
                             linewidth=0)
         c = np.asarray(nums["center_of_mass"])
         ax.scatter(*c, color="k", s=40, depthshade=False, label="CoM")
-        poly = np.asarray(nums.get("support_polygon") or [])
-        if len(poly) >= 2:
+        marks = overlays(nums)
+        if "rocking circle" in marks:
+            _rocking(ax, nums, up)
+        if "support polygon" in marks:
+            poly = np.asarray(nums["support_polygon"])
             loop = np.vstack([poly, poly[:1]])
             ax.plot(loop[:, 0], loop[:, 1], loop[:, 2], color="tab:blue", lw=2, label="support polygon")
             down = np.array([c[0], c[1], poly[:, 2].mean()])
             ax.plot(*np.stack([c, down]).T, "k--", lw=1)
-        if "curvature_center" in nums:
-            ax.scatter(*nums["curvature_center"], color="tab:green", s=40, label="rocking centre")
-        if "center_of_buoyancy" in nums and nums["center_of_buoyancy"][0] is not None:
+        if "buoyancy" in marks:
             ax.scatter(*nums["center_of_buoyancy"], color="tab:cyan", s=40, label="buoyancy")
-        if "tip" in nums:
+            _waterline(ax, points, up, nums["waterline"])
+        if "spin axis" in marks:
             a = np.asarray(nums["spin_axis"])
             t = np.asarray(nums["tip"])
             L = np.ptp(points, axis=0).max()
             ax.plot(*np.stack([t, t + L * a]).T, color="tab:red", lw=1.5, label="spin axis")
-        _style_axes(ax, lo, hi)
-        ang = nums.get("toppling_angle_deg")
-        ax.set_title(f"{label}: m = {nums['mass']:.4g} kg" + (f", topple {ang:.1f} deg" if ang is not None else ""))
+        marked = _marked_points(nums)
+        _style_axes(ax, np.minimum(lo, marked.min(axis=0)), np.maximum(hi, marked.max(axis=0)))
+        ax.set_title(panel_title(label, nums), fontsize=9)
         ax.legend(loc="upper left", fontsize=7)
     fig.suptitle(title + extra)
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)
     mesh.comm.barrier()
+
+
+def _waterline(ax, points: np.ndarray, up: np.ndarray, waterline: float) -> None:
+    """The water surface: the part's horizontal bounding rectangle at `waterline` above its lowest point."""
+    _, e1, e2 = ground_frame(-up)
+    h = points @ up
+    a, b = points @ e1, points @ e2
+    level = h.min() + waterline
+    box = [(a.min(), b.min()), (a.max(), b.min()), (a.max(), b.max()), (a.min(), b.max()), (a.min(), b.min())]
+    loop = np.array([level * up + u * e1 + v * e2 for u, v in box])
+    ax.plot(*loop.T, color="tab:cyan", lw=1.5, label="waterline")
+
+
+def _marked_points(nums: dict) -> np.ndarray:
+    """The points the marks must show besides the part (the rocking centre may lie above a squat toy)."""
+    return np.array([nums["center_of_mass"]] + ([nums["curvature_center"]] if "curvature_center" in nums else []),
+                    dtype=float)
 
 
 def _style_axes(ax, lo: np.ndarray, hi: np.ndarray) -> None:

@@ -51,7 +51,9 @@ def solve(c: np.ndarray, A: np.ndarray, b: np.ndarray, n: int, xb: list, labels:
           stats: dict | None = None) -> np.ndarray | None:
     """Optimal v = (s, extra) of min c.v, A v <= b, 0 <= s <= 1 (the first n), extra within the bounds xb
     (None when infeasible). `labels` (a group per cell) enables sifting; None solves the full LP. Give it
-    a well scaled problem (lp.scaled): the stopping test compares reduced costs."""
+    a well scaled problem (lp.scaled): the stopping test compares reduced costs. `stats` gets groups,
+    rounds (restricted re-solves after the grouped LP), work (largest working set) and fallback (True when
+    the full LP had to be solved after all)."""
     stats = stats if stats is not None else {}
     if labels is None or n < MIN_CELLS:
         x, _ = _highs(c, A, b, [(0.0, 1.0)] * n + xb)
@@ -66,7 +68,7 @@ def solve(c: np.ndarray, A: np.ndarray, b: np.ndarray, n: int, xb: list, labels:
     stats["groups"] = ng
     xg, y = _highs(np.concatenate([cg, c[n:]]), np.hstack([Ag, A[:, n:]]), b, [(0.0, 1.0)] * ng + xb)
     if xg is None:                                    # groups too coarse for the requirements
-        stats["rounds"] = -1
+        stats.update(rounds=0, fallback=True)
         x, _ = _highs(c, A, b, [(0.0, 1.0)] * n + xb)
         return x
     s = xg[labels]
@@ -88,12 +90,13 @@ def solve(c: np.ndarray, A: np.ndarray, b: np.ndarray, n: int, xb: list, labels:
         rhs = b - Ac @ np.where(work, 0.0, s)          # the cells outside the set stay where they are
         x, y_new = _highs(np.concatenate([cc[idx], c[n:]]), np.hstack([Ac[:, idx], A[:, n:]]), rhs,
                           [(0.0, 1.0)] * len(idx) + xb)
+        stats["rounds"] = k + 1
         if x is None:                                 # cannot happen (the current point is feasible)
             break
         stats["work"] = max(stats.get("work", 0), len(idx))
         s[idx] = x[:len(idx)]
         extra = x[len(idx):]
         y = y_new
-    stats["rounds"] = -1                              # not settled in MAX_ROUNDS: the whole LP
+    stats["fallback"] = True                          # not settled in MAX_ROUNDS: the whole LP
     x, _ = _highs(c, A, b, [(0.0, 1.0)] * n + xb)
     return x

@@ -26,8 +26,10 @@ COMMON_KEYS = (
         default=False),
     Key("fill_density", "number", "density of carved cells (0: empty; else a second, lighter material)",
         default=0.0, unit="kg/m^3", minimum=0),
-    Key("fill_stiffness", "number", "elastic: stiffness of carved cells relative to the solid (ersatz "
-        "material)", default=1e-6, exclusive_minimum=0, maximum=1),
+    Key("fill_stiffness", "number", "elastic: Young's modulus of the carved cells over the solid's, E_fill / E "
+        "(the solid's energy density scaled: same model and Poisson ratio); required when fill_density > 0",
+        exclusive_minimum=0, maximum=1,
+        default_note="1e-6, an ersatz for empty cells, when fill_density = 0"),
 )
 SPIN_KEYS = (
     Key("axis", "vector", "spin axis direction (normalised)", default=[0.0, 0.0, 1.0], length=3),
@@ -45,6 +47,12 @@ SWIM_KEYS = (
 VARIANTS = Variants(GOAL, {"check": SWIM_KEYS[:2], "stand": (), "spin": SPIN_KEYS, "swim": SWIM_KEYS,
                            "swing": ()})
 _K = {k.name: k for k in (GOAL,) + COMMON_KEYS + SPIN_KEYS + SWIM_KEYS}
+EMPTY_FILL_STIFFNESS = 1e-6     # relative stiffness of an empty carved cell (elastic): almost none, never 0
+
+
+def fill_stiffness(b: "BalanceSpec") -> float:
+    """E_fill / E of the carved cells: the given fill_stiffness, else the ersatz of an empty fill."""
+    return b.fill_stiffness if b.fill_stiffness is not None else EMPTY_FILL_STIFFNESS
 
 
 @dataclass
@@ -57,7 +65,7 @@ class BalanceSpec:
     shell: float = _K["shell"].field()
     elastic: bool = _K["elastic"].field()
     fill_density: float = _K["fill_density"].field()
-    fill_stiffness: float = _K["fill_stiffness"].field()
+    fill_stiffness: float | None = None            # None: EMPTY_FILL_STIFFNESS for an empty fill
     axis: list = field(default_factory=lambda: [0.0, 0.0, 1.0])     # spin: unit length after parsing
     kind: str = _K["kind"].field()
     water_density: float = _K["water_density"].field()
@@ -84,6 +92,10 @@ def _check(scene) -> None:
                          f"({scene.material.rho}) to move mass by carving")
     if b.goal == "swim" and b.waterline is None:
         raise InputError("balance.waterline: missing (required for goal = 'swim')")
+    if b.elastic and b.fill_density > 0 and b.fill_stiffness is None:
+        raise InputError(f"balance.fill_stiffness: missing: with elastic = true the fill (fill_density = "
+                         f"{b.fill_density}) is a second material; give its Young's modulus over the solid's, "
+                         f"E_fill / E")
     if b.elastic and not scene.fix:
         raise InputError("balance.elastic = true: needs [[fix]] supports that hold the part (e.g. its foot)")
 
