@@ -7,7 +7,7 @@ mesh of size h, written as hemisphere.msh (straight-sided tetrahedra inscribed i
 import argparse
 from pathlib import Path
 
-import gmsh
+from fem_forms.occ_parts import mesh_part
 
 
 def _half_ball(occ, radius: float) -> list:
@@ -19,22 +19,10 @@ def _half_ball(occ, radius: float) -> list:
 
 
 def build(out: Path, radius: float = 0.05, h: float = 0.005, inner: float = 0.0) -> Path:
-    gmsh.initialize()
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.model.add("hemisphere")
-        occ = gmsh.model.occ
+    def solid(occ):
         dome = _half_ball(occ, radius)
-        if inner > 0:
-            dome, _ = occ.cut(dome, _half_ball(occ, inner))
-        occ.synchronize()
-        gmsh.model.addPhysicalGroup(3, [t for d, t in dome if d == 3], 1)
-        gmsh.option.setNumber("Mesh.CharacteristicLengthMax", h)
-        gmsh.option.setNumber("Mesh.CharacteristicLengthMin", h / 3)
-        gmsh.model.mesh.generate(3)
-        gmsh.write(str(out))
-    finally:
-        gmsh.finalize()
+        return occ.cut(dome, _half_ball(occ, inner))[0] if inner > 0 else dome
+    mesh_part(out, solid, h)
     return Path(out)
 
 
