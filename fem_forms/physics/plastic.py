@@ -147,6 +147,19 @@ class VonMisesSolid(PlasticSolid):
         _, eps_p, alpha = self._map(ctx)
         return eps_p, alpha
 
+    def plastic_dissipation(self, start: Context, end: Context) -> ufl.Form:
+        """int (sigma_n + sigma_n+1) / 2 : (eps_p,n+1 - eps_p,n) dX: the plastic work of a step from start's u
+        to end's u, from the committed history of its start (the trapezoidal rule of the energy account)."""
+        e1, eps_p1, _ = self._map(end)
+        mean = 0.5 * (self.stress(start) + self.elastic_stress(end, e1))
+        return end.volume(ufl.inner(mean, eps_p1 - self.eps_p))
+
+    def thermal_work(self, start: Context, end: Context) -> ufl.Form:
+        """-int (sigma_n + sigma_n+1) / 2 : (eps_th,n+1 - eps_th,n) I dX: the work of the thermal expansion in
+        a step (start's context at the old temperature)."""
+        mean = 0.5 * (self.stress(start) + self.stress(end))
+        return end.volume(-ufl.tr(mean) * (end.thermal_strain - start.thermal_strain))
+
 
 class OBrienSolid(PlasticSolid):
     """O'Brien-Bargteil-Hodgins: energy of the elastic strain E - eps_p (committed); explicit update."""

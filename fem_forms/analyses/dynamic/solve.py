@@ -46,7 +46,7 @@ class DynamicResult:
             "dt_min": r.dt_min if r.steps else None, "dt_max": r.dt_max if r.steps else None,
             "rejected_steps": r.rejected, "newton_iterations": r.newton_iterations,
             "energy_balance_error": self.energy.balance_error(),
-            "energy_final": dict(zip(self.energy.columns(), self.energy.now.row())),
+            "energy_final": {c: getattr(self.energy.now, c) for c in self.energy.columns()},
             "dt_stable": self.dt_stable,
             "physics": s.model.physics + ["inertia"] + _damping_names(s.scene) + _heat_names(s.scene),
             "mpi_ranks": s.model.mesh.comm.size, "wall_time_s": self.wall_time_s,
