@@ -13,10 +13,11 @@ from mpi4py import MPI
 import numpy as np
 import pytest
 
+import fem_forms as ff
 from fem_forms.analyses.dynamic import solve_dynamic
 from fem_forms.output.plastic import plastic_summary
 from fem_forms.output.quantities import Quantities
-import fem_forms as ff
+from helpers import mpirun, toml_dumps
 
 T, H, SY, E = 300e6, 20e9, 250e6, 200e9
 
@@ -45,13 +46,13 @@ def test_plastic_work_closes_the_balance_of_a_bar_loaded_past_yield():
 EP, ALPHA, DT, L, A = 2.0e11, 1.2e-5, 100.0, 1.0, 0.01      # E alpha DT = 240 MPa: yields at 200 MPa
 
 
-def heated_and_cooled(t_end: float) -> ff.Scene:
+def heated_and_cooled(t_end: float) -> dict:
     """A 1 x 0.1 x 0.1 m steel bar between rollers, 20 x 1 x 1 cells (every node on a face y = 0 or 0.1,
     both following the temperature history: T is uniform), heated to DT over 2 ms, held 0.5 ms (the march
     does not stop at the history's corners: a cut-back at the onset of yield shifts its steps), cooled back
     over 2 ms."""
     hist = {"history": [[0.0, 0.0], [2e-3, DT], [2.5e-3, DT], [4.5e-3, 0.0], [1.0, 0.0]]}
-    return ff.Scene.from_dict({
+    return {
         "analysis": "dynamic", "mesh": {"size": [L, 0.1, 0.1], "cells": [20, 1, 1]},
         "material": {"model": "linear", "E": EP, "nu": 0.3, "rho": 7800.0,
                      "plasticity": {"model": "von-mises", "yield_stress": SY - 50e6}},
@@ -62,7 +63,7 @@ def heated_and_cooled(t_end: float) -> ff.Scene:
         "thermal": {"conductivity": 50.0, "specific_heat": 500.0, "expansion": ALPHA, "boundary": [
             {"where": {"axis": "y", "at": y}, "temperature": hist} for y in (0.0, 0.1)]},
         "dynamic": {"duration": t_end, "dt": 5e-5, "output_every": 1000, "checkpoint_every": 0},
-        "output": {"picture": False, "fields": [], "probes": {"mid": [0.5, 0.05, 0.05]}}})
+        "output": {"picture": False, "fields": [], "probes": {"mid": [0.5, 0.05, 0.05]}}}
 
 
 @pytest.mark.parametrize("t_end, sigma, rel", [(2.4e-3, -(SY - 50e6), 5e-3), (5e-3, EP * ALPHA * DT - (SY - 50e6), 0.05)])
@@ -72,9 +73,26 @@ def test_heated_past_yield_then_cooled_leaves_a_residual_tension(t_end, sigma, r
     yield surface: the equivalent plastic strain spreads over 1.8e-4 to 3.0e-4 along the bar (2.0e-4 in the
     quasi-static answer) and the plastic work exceeds sigma_y (alpha DT - sigma_y / E) V by 3.5 %."""
     sy = SY - 50e6
-    r = solve_dynamic(heated_and_cooled(t_end))
+    r = solve_dynamic(ff.Scene.from_dict(heated_and_cooled(t_end)))
     s = np.array(Quantities(r.system.model).at_probes(r.system.scene.output.probes)["mid"]["stress"])
     assert s[0, 0] == pytest.approx(sigma, rel=rel)
     e = r.energy
     assert e.now.plastic_work == pytest.approx(sy * (ALPHA * DT - sy / EP) * L * A, rel=0.05)
     assert e.balance_error() < 1e-10                            # 4.4e-13 with thermal and plastic work
+
+
+@pytest.mark.mpi
+def test_two_ranks_agree_on_the_thermal_and_plastic_work(tmp_path):
+    """The heated, held and cooled bar through the CLI on 2 ranks: energy.csv (with thermal_work and
+    plastic_work) as on 1 rank."""
+    d = heated_and_cooled(5e-3)
+    serial = solve_dynamic(ff.Scene.from_dict(d))
+    path = tmp_path / "scene.toml"
+    path.write_text(toml_dumps(d))
+    p = mpirun(["-m", "fem_forms", "run", str(path), "--out", str(tmp_path / "out")])
+    assert p.returncode == 0, p.stderr
+    lines = (tmp_path / "out" / "energy.csv").read_text().splitlines()
+    assert lines[0] == "time,kinetic,elastic,external_work,dissipated,thermal_work,plastic_work"
+    rows = np.loadtxt(lines[1:], delimiter=",")
+    ref = np.array([[t, *e.row()] for t, e in serial.energy.history])
+    np.testing.assert_allclose(rows, ref, rtol=1e-8, atol=1e-8 * ref[:, 5].max())
