@@ -167,9 +167,9 @@ history on x = 0, convection on x = 1, dt = 0.01. "ours" is fem_forms' HeatSolve
 driver with `ksponly`, tangent and factor or multigrid hierarchy kept while dt is unchanged; set time,
 residual assembly, solve, finite check, commit); "bare" assembles the same matrix once and solves each
 step with a kept KSP (right-hand side with lifting, one solve). Step 1 assembles and factors. Our later
-steps assemble the full residual three times (the driver's finite-start check, SNES's right-hand side, and
-the residual after the solve that accepts the step; a profile: 3 x 0.11 s at this size) where bare
-assembles one mass-term right-hand side: that is the overhead in the last column. The
+steps assemble the full residual twice (SNES's right-hand side and the residual after the solve that
+accepts the step; the driver's finite-start check is skipped for heat, `solve_step(check_start=False)`)
+where bare assembles one mass-term right-hand side: that is the overhead in the last column. The
 machine is shared with other jobs (2 cores): timings are medians and the load average is given.
 
 """

@@ -8,7 +8,9 @@ the accepted displacement by fem.Expression) and go back in State.rollback().
 - O'Brien: with the committed plastic strain frozen, the stress comes from an energy psi(E - eps_p)
   (a conservative term, energy line search); the plastic strain is updated explicitly at commit.
 The elastic law on the elastic strain e is the material's: mu e:e + lambda/2 (tr e)^2 (linear: small
-strain; stvk: Green strain). A thermal strain in the Context is taken out of the total strain first.
+strain; stvk: Green strain). A thermal strain in the Context is taken out of the total strain first; a temperature-dependent
+modulus (ctx.extra["modulus_factor"] = E(T) / E) scales mu and lambda (and kappa) as it scales the elastic
+term's psi, while the yield stress and hardening stay.
 """
 from __future__ import annotations
 
@@ -68,15 +70,23 @@ class PlasticSolid(Term):
         """delta E[v]: sym(F^T grad v) for the Green strain, sym(grad v) for the small strain."""
         return ufl.sym(ctx.F.T * ufl.grad(v)) if self.green else ufl.sym(ufl.grad(v))
 
-    def elastic_energy(self, e):
-        return self.material.mu * ufl.inner(e, e) + 0.5 * self.material.lmbda * ufl.tr(e) ** 2
+    def moduli(self, ctx: Context) -> tuple:
+        """(mu, lambda) at the context's temperature: E(T) / E scales both (nu fixed)."""
+        k = ctx.extra.get("modulus_factor")
+        mu, lmbda = self.material.mu, self.material.lmbda
+        return (mu, lmbda) if k is None else (k * mu, k * lmbda)
 
-    def elastic_stress(self, e):
-        return 2 * self.material.mu * e + self.material.lmbda * ufl.tr(e) * ufl.Identity(3)
+    def elastic_energy(self, ctx: Context, e):
+        mu, lmbda = self.moduli(ctx)
+        return mu * ufl.inner(e, e) + 0.5 * lmbda * ufl.tr(e) ** 2
+
+    def elastic_stress(self, ctx: Context, e):
+        mu, lmbda = self.moduli(ctx)
+        return 2 * mu * e + lmbda * ufl.tr(e) * ufl.Identity(3)
 
     def elastic_law_energy(self, ctx: Context) -> ufl.Form:
         """int psi(total strain) dX: the elastic law alone (the stiffness at rest, for Rayleigh damping)."""
-        return ctx.volume(self.elastic_energy(self.strain(ctx)))
+        return ctx.volume(self.elastic_energy(ctx, self.strain(ctx)))
 
     def new_history(self, ctx: Context) -> tuple:
         """(plastic strain, equivalent plastic strain) after the step, as UFL expressions of ctx's u."""
@@ -114,9 +124,12 @@ class PlasticSolid(Term):
 class VonMisesSolid(PlasticSolid):
     """Small-strain J2 plasticity: sigma(eps, committed history) by radial return; non-conservative."""
 
+    def _map(self, ctx: Context) -> tuple:
+        """(elastic strain, plastic strain, equivalent plastic strain) after the radial return."""
+        return self.plastic.return_map(self.moduli(ctx)[0], self.strain(ctx), self.eps_p, self.alpha)
+
     def stress(self, ctx: Context):
-        e, _, _ = self.plastic.return_map(self.material.mu, self.strain(ctx), self.eps_p, self.alpha)
-        return self.elastic_stress(e)
+        return self.elastic_stress(ctx, self._map(ctx)[0])
 
     def virtual_work(self, ctx: Context, v) -> ufl.Form:
         return ctx.volume(ufl.inner(self.stress(ctx), self.strain_variation(ctx, v)))
@@ -128,23 +141,35 @@ class VonMisesSolid(PlasticSolid):
     def stored_energy(self, ctx: Context) -> ufl.Form:
         """int psi(elastic strain) dX after the return mapping (energy accounting; not a potential of the
         residual: the plastic work is dissipated)."""
-        e, _, _ = self.plastic.return_map(self.material.mu, self.strain(ctx), self.eps_p, self.alpha)
-        return ctx.volume(self.elastic_energy(e))
+        return ctx.volume(self.elastic_energy(ctx, self._map(ctx)[0]))
 
     def new_history(self, ctx: Context) -> tuple:
-        _, eps_p, alpha = self.plastic.return_map(self.material.mu, self.strain(ctx), self.eps_p, self.alpha)
+        _, eps_p, alpha = self._map(ctx)
         return eps_p, alpha
+
+    def plastic_dissipation(self, start: Context, end: Context) -> ufl.Form:
+        """int (sigma_n + sigma_n+1) / 2 : (eps_p,n+1 - eps_p,n) dX: the plastic work of a step from start's u
+        to end's u, from the committed history of its start (the trapezoidal rule of the energy account)."""
+        e1, eps_p1, _ = self._map(end)
+        mean = 0.5 * (self.stress(start) + self.elastic_stress(end, e1))
+        return end.volume(ufl.inner(mean, eps_p1 - self.eps_p))
+
+    def thermal_work(self, start: Context, end: Context) -> ufl.Form:
+        """-int (sigma_n + sigma_n+1) / 2 : (eps_th,n+1 - eps_th,n) I dX: the work of the thermal expansion in
+        a step (start's context at the old temperature)."""
+        mean = 0.5 * (self.stress(start) + self.stress(end))
+        return end.volume(-ufl.tr(mean) * (end.thermal_strain - start.thermal_strain))
 
 
 class OBrienSolid(PlasticSolid):
     """O'Brien-Bargteil-Hodgins: energy of the elastic strain E - eps_p (committed); explicit update."""
 
     def energy(self, ctx: Context) -> ufl.Form:
-        return ctx.volume(self.elastic_energy(self.plastic.elastic_strain(self.strain(ctx), self.eps_p)))
+        return ctx.volume(self.elastic_energy(ctx, self.plastic.elastic_strain(self.strain(ctx), self.eps_p)))
 
     def pk1(self, ctx: Context):
         """First Piola-Kirchhoff stress F S of S = dpsi/dE at the elastic strain (S itself for small strain)."""
-        S = self.elastic_stress(self.plastic.elastic_strain(self.strain(ctx), self.eps_p))
+        S = self.elastic_stress(ctx, self.plastic.elastic_strain(self.strain(ctx), self.eps_p))
         return ctx.F * S if self.green else S
 
     def new_history(self, ctx: Context) -> tuple:
@@ -169,8 +194,8 @@ class FiniteVonMisesSolid(PlasticSolid):
         return ctx.F if ctx.thermal_strain is None else ctx.F / (1 + ctx.thermal_strain)
 
     def _map(self, ctx: Context):
-        kappa = self.material.lmbda + 2 * self.material.mu / 3
-        return self.plastic.return_map_finite(self.material.mu, kappa, self.mechanical_F(ctx), self.eps_p,
+        mu, lmbda = self.moduli(ctx)
+        return self.plastic.return_map_finite(mu, lmbda + 2 * mu / 3, self.mechanical_F(ctx), self.eps_p,
                                               self.alpha)
 
     def pk1(self, ctx: Context):
@@ -186,18 +211,18 @@ class FiniteVonMisesSolid(PlasticSolid):
         _, Cp_inv, alpha = self._map(ctx)
         return Cp_inv, alpha
 
-    def _psi(self, F, Cp_inv):
+    def _psi(self, ctx: Context, F, Cp_inv):
+        mu, lmbda = self.moduli(ctx)
         J = ufl.det(F)
-        kappa = self.material.lmbda + 2 * self.material.mu / 3
         bbar = J ** (-2.0 / 3.0) * F * Cp_inv * F.T
-        return 0.5 * kappa * ufl.ln(J) ** 2 + 0.5 * self.material.mu * (ufl.tr(bbar) - 3)
+        return 0.5 * (lmbda + 2 * mu / 3) * ufl.ln(J) ** 2 + 0.5 * mu * (ufl.tr(bbar) - 3)
 
     def stored_energy(self, ctx: Context) -> ufl.Form:
         """int psi at the committed C_p^-1 (energy accounting; the plastic work is not in it)."""
-        return ctx.volume(self._psi(self.mechanical_F(ctx), self.eps_p))
+        return ctx.volume(self._psi(ctx, self.mechanical_F(ctx), self.eps_p))
 
     def elastic_law_energy(self, ctx: Context) -> ufl.Form:
-        return ctx.volume(self._psi(self.mechanical_F(ctx), ufl.Identity(3)))
+        return ctx.volume(self._psi(ctx, self.mechanical_F(ctx), ufl.Identity(3)))
 
     @property
     def plastic_strain(self):

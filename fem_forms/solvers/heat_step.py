@@ -14,10 +14,10 @@ from fem_forms.solvers import snes
 from fem_forms.solvers.time_stepping import StepOutcome
 from fem_forms.state import State
 
-# "auto" takes GMRES + GAMG above this many temperature dofs. Measured at 97,336 P1 dofs (a cube, loaded
-# machine, benchmarks/thermal_step.md): the first step 12.3 s with MUMPS (factor) against 2.4 s (multigrid
-# set-up), later steps 0.55 s against 0.67 s: LU pays off only after about 100 steps of unchanged dt
-# (set [solver] linear = "direct" for long runs); the scalar problem's fill makes LU dear sooner than elasticity's
+# "auto" takes GMRES + GAMG above this many temperature dofs. Measured at 97,336 P1 dofs (a cube, load 3,
+# benchmarks/thermal_step.md): the first step 6.8 s with MUMPS (factor) against 1.3 s (multigrid set-up),
+# later steps 0.215 s against 0.210 s: LU does not pay back at this size (2 ranks: 14.3 s against 2.1 s, then
+# 0.55 s against 0.52 s); the scalar problem's fill makes LU dear sooner than elasticity's
 ITERATIVE_ABOVE_DOFS = 20_000
 # a linear step is accepted when the residual after it (the monitor's) fell by this much (the iterative
 # solver's tolerance is 1e-8 on the preconditioned residual)

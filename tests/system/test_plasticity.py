@@ -235,6 +235,10 @@ def test_dynamic_slow_loading_reaches_the_static_plastic_answer(tmp_path):
     assert res["max_plastic_strain"] == pytest.approx((T - sy) / H, rel=0.05)
     assert res["yielded_fraction"] == 1.0
     assert 'Name="equivalent_plastic_strain"' in (tmp_path / "out" / "motion.xdmf").read_text()
+    # small-strain von Mises: the plastic work is in the energy account (tests/system/test_plastic_energy.py)
+    assert not any("plastic" in w for w in res.get("warnings", [])) and "plastic_work" in res["energy_final"]
+    assert (tmp_path / "out" / "energy.csv").read_text().startswith(
+        "time,kinetic,elastic,external_work,dissipated,plastic_work")
 
 
 @pytest.mark.parametrize("model, plasticity", [

@@ -21,8 +21,9 @@ def write_csvs(out: Path, result, comm) -> None:
             head += [f"{n}_T" for n in names]
         lines = [",".join(head)] + [",".join(f"{x:.10g}" for x in row) for row in result.probe_rows]
         (out / "probes.csv").write_text("\n".join(lines) + "\n")
-        lines = ["time,kinetic,elastic,external_work,dissipated"] + \
-            [",".join(f"{x:.10g}" for x in [t, *e.row()]) for t, e in result.energy.history]
+        cols = result.energy.columns()
+        lines = [",".join(("time",) + cols)] + \
+            [",".join(f"{x:.10g}" for x in [t] + [getattr(e, c) for c in cols]) for t, e in result.energy.history]
         (out / "energy.csv").write_text("\n".join(lines) + "\n")
     comm.barrier()
 
@@ -108,10 +109,10 @@ def write_history_png(path: Path, result) -> None:
     if names:
         a1.legend(fontsize=8)
     t = np.array([h[0] for h in result.energy.history])
-    e = np.array([h[1].row() for h in result.energy.history])
-    for k, label in enumerate(("kinetic", "elastic", "external work", "dissipated")):
-        a2.plot(t, e[:, k], label=label)
-    a2.plot(t, e[:, 0] + e[:, 1] - e[:, 2] + e[:, 3], "k--", label="kin + el - W + D")
+    for name in result.energy.columns():
+        a2.plot(t, [getattr(h[1], name) for h in result.energy.history], label=name.replace("_", " "))
+    a2.plot(t, [h[1].balance() for h in result.energy.history], "k--",
+            label="balance (kin + el - W + D ...)")
     a2.set_xlabel("time [s]")
     a2.set_ylabel("energy [J]")
     a2.legend(fontsize=8)
