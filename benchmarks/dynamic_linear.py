@@ -16,10 +16,10 @@ def _med(rows: list, key: str) -> float:
 
 
 def linear_table(results: dict) -> str:
-    """One row per (size, scheme): CPU costs direct / iterative, the step count from which the iterative
-    path is cheaper overall, iteration and build counts, and the agreement of the two answers."""
+    """One row per (size, scheme): CPU costs direct / iterative, the run lengths (steps) for which the
+    iterative path is cheaper overall, iteration and build counts, and the agreement of the two answers."""
     head = ("| dofs | scheme | first step s CPU | later steps ms CPU | later: iterative / direct | "
-            "whole run of the steps s CPU | iterative cheaper from | Newton (Krylov) its | "
+            "whole run of the steps s CPU | iterative cheaper for | Newton (Krylov) its | "
             "LU factorisations / multigrid builds | max |u| relative difference |\n"
             "|---:|---|---|---|---:|---|---|---|---|---:|\n")
     rows = []
@@ -29,9 +29,9 @@ def linear_table(results: dict) -> str:
         ld, li = _med(d, "later_cpu"), _med(i, "later_cpu")
         n = d[0]["steps"]
         if li < ld:
-            cheaper = "every step" if fi <= fd else f"{1 + (fi - fd) / (ld - li):.0f} steps"
+            cheaper = "runs of any length" if fi <= fd else f"runs of {1 + (fi - fd) / (ld - li):.0f} steps or more"
         else:
-            cheaper = "never" if fi >= fd else f"up to {1 + (fd - fi) / (li - ld):.0f} steps only"
+            cheaper = "no run" if fi >= fd else f"runs up to {1 + (fd - fi) / (li - ld):.0f} steps"
         diff = abs(i[0]["max_u"] - d[0]["max_u"]) / abs(d[0]["max_u"])
         rows.append(f"| {d[0]['dofs']:,} | {scheme} | {fd:.2f} / {fi:.2f} | {1e3 * ld:,.0f} / {1e3 * li:,.0f} | "
                     f"{li / ld:.2f} | {fd + (n - 1) * ld:.1f} / {fi + (n - 1) * li:.1f} ({n} steps) | {cheaper} | "

@@ -355,8 +355,8 @@ def main() -> None:
               "kept tangent) against `\"iterative\"` (CG + GAMG with the rigid-body near-nullspace, a fresh tangent "
               "at every Newton iteration, the multigrid hierarchy kept across Newton iterations and time steps by the "
               "driver's cost rule), interleaved, median of 2 runs; each cell is direct / iterative; 'iterative "
-              "cheaper from': the run length (steps) at which the iterative path's cheaper first step or later "
-              "steps win; max |u| relative difference: the two answers after the last step.", "",
+              "cheaper for': the run lengths (steps, first step + later steps) for which the iterative path costs "
+              "less CPU time in all; max |u| relative difference: the two answers after the last step.", "",
               linear_table(linear_results)]),
           *[f"- {n}" for n in checks(results)], "",
           f"Machine: {platform.node()}, {os.cpu_count()} cores, Python {platform.python_version()}; load average "
