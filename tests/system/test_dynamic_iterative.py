@@ -92,3 +92,23 @@ def test_the_step_check_reads_the_residual_a_fresh_assembly_gives(linear):
         assert fresh == pytest.approx(last, rel=1e-12)          # measured: equal to the last bit
         system.state.commit()
     assert len(records) == 6
+
+
+def test_auto_falls_back_to_mumps_when_cg_fails(monkeypatch):
+    """"auto" above its size threshold starts with CG + GAMG; a CG failure on a fresh hierarchy (here forced by
+    ksp_max_it = 1) switches the run to MUMPS, as the static continuation does, and the step is solved again at
+    the same dt: no step is cut and the motion is the direct one."""
+    import fem_forms as ff
+    from fem_forms.analyses.dynamic import solve_dynamic
+    from fem_forms.solvers import linear
+    direct = solve_dynamic(ff.Scene.from_dict(cantilever("direct")))
+    monkeypatch.setattr(linear, "ITERATIVE_ABOVE_DOFS", 100)          # this small beam counts as large
+    d = cantilever("auto")
+    d["solver"]["petsc"] = {"ksp_max_it": 1}
+    auto = solve_dynamic(ff.Scene.from_dict(d))
+    s = auto.summary()
+    assert s["linear_solver"] == "direct" and s["preconditioner_builds"] >= 1       # started iterative
+    assert s["preconditioner_builds"] == 1 and auto.report.rejected == 0
+    assert auto.report.steps == direct.report.steps
+    ref = np.array(direct.probe_rows)[:, 1:]
+    assert np.allclose(np.array(auto.probe_rows)[:, 1:], ref, rtol=1e-6, atol=1e-6 * np.abs(ref).max(axis=0))

@@ -119,18 +119,18 @@ class ImplicitStepper:
         s.td.time.value = t + dt
         s.set_load_time(t + dt, t, self.released)
         rec, why = self._solve(dt)
+        if why is not None and self._fall_back(rec):        # CG failed on a fresh hierarchy: MUMPS, same dt
+            rec, why = self._again(rec, dt)
         if why is not None and self.line_search_retry:
             drv.user_options["snes_linesearch_type"] = "bt"     # the energy line search, same dt
             drv._build_snes()
-            rec2, why = self._solve(dt)
-            rec.iterations += rec2.iterations
-            rec.krylov_iterations += rec2.krylov_iterations
+            rec, why = self._again(rec, dt)
             drv.user_options["snes_linesearch_type"] = "basic"
             drv._build_snes()
         if why is not None:
             self.last_why = why
             self.fresh = True
-            self._fall_back(rec)
+            self._fall_back(rec)                             # the cut step's retry then runs on MUMPS
             return StepOutcome(False, rec.iterations, why)
         self._refresh(rec)
         old = s.state.old
@@ -142,16 +142,26 @@ class ImplicitStepper:
         return StepOutcome(True, rec.iterations,
                            error=self.error_estimate(dt) if s.scene.dynamic.adaptive else math.nan)
 
-    def _fall_back(self, rec) -> None:
+    def _again(self, rec, dt: float):
+        """Solve the step once more (after a change of solver); the record counts both attempts."""
+        rec2, why = self._solve(dt)
+        rec2.iterations += rec.iterations
+        rec2.krylov_iterations += rec.krylov_iterations
+        return rec2, why
+
+    def _fall_back(self, rec) -> bool:
         """CG failed on a fresh hierarchy (an indefinite tangent): MUMPS from now on, when the scene's
-        choice allows it (as the static continuation does); a kept hierarchy's failure is retried fresh."""
+        choice allows it (as the static continuation does); a kept hierarchy's failure is retried fresh.
+        Returns whether it switched."""
         drv = self.driver
-        if (self.iterative and rec.reason == "DIVERGED_LINEAR_SOLVE" and not self.stale_failed
+        if not (self.iterative and rec.reason == "DIVERGED_LINEAR_SOLVE" and not self.stale_failed
                 and self.linear_kind in linear.FALLBACK_TO_DIRECT):
-            self.iterative = False
-            drv.linear_kind, drv.reuse_factor = "direct", True
-            drv.user_options = self._options()
-            drv._build_snes()
+            return False
+        self.iterative = False
+        drv.linear_kind, drv.reuse_factor = "direct", True
+        drv.user_options = self._options()
+        drv._build_snes()
+        return True
 
     def _refresh(self, rec) -> None:
         """A fresh tangent and factor for the next step when the kept ones cost too many iterations. If
