@@ -188,7 +188,7 @@ def bare_run(cells, scheme: str, dt: float, steps: int, lu_every_newton: bool = 
         stamps, newton, krylov = [], 0, 0
         for _ in range(steps):
             uo, vo, ao = u0.x.array, v0.x.array, a0.x.array
-            u.x.array[:] = uo + dt * vo + 0.5 * dt * dt * ao            # the same predictor as ours
+            u.x.array[:] = uo + dt * vo            # the same (constant-velocity) predictor as ours
             u.vector.copy(x)
             snes.solve(None, x)
             assert snes.getConvergedReason() > 0, snes.getConvergedReason()

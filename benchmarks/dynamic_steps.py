@@ -44,13 +44,15 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "benchmarks"))
+from dynamic_linear import KINDS, LINEAR_SIZES, linear_table  # noqa: E402
+from dynamic_pays import MATERIALS, pays_table  # noqa: E402
 from dynamic_bare import (DEGREE, DT_IMPLICIT, E, GRAVITY, LENGTH, LU_STEPS, NU, QUADRATURE, RHO,  # noqa: E402
                           RHO_INF, SCHEMES, SIZES, STEPS, TIP, WARMUP_CELLS, WIDTH, bare_run, lu_count, now, split)
 
 
 # ============================================================================ ours (fem_forms)
-def scene_dict(cells, scheme: str, dt: float, steps: int) -> dict:
-    return {"title": "dynamic benchmark", "analysis": "dynamic",
+def scene_dict(cells, scheme: str, dt: float, steps: int, linear: str = "auto") -> dict:
+    return {"title": "dynamic benchmark", "analysis": "dynamic", "solver": {"linear": linear},
             "mesh": {"generator": "box", "size": [LENGTH, WIDTH, WIDTH], "cells": list(cells),
                      "cell": "tetrahedron"},
             "material": {"model": "neo-hookean", "E": E, "nu": NU, "rho": RHO},
@@ -65,7 +67,7 @@ def scene_dict(cells, scheme: str, dt: float, steps: int) -> dict:
 
 class OursTimer:
     """Wraps solve_dynamic's march, energy accounting and probe rows to time each step and its extras, and
-    the implicit step's acceptance checks (the residual re-assembled after SNES, det F > 0 everywhere)."""
+    the implicit step's acceptance checks (det F > 0 everywhere; a residual re-assembly if ever called)."""
 
     def __init__(self):
         import fem_forms.analyses.dynamic.solve as solve
@@ -123,12 +125,12 @@ class OursTimer:
         snes.SNESDriver.solve_step = counted_solve_step
         snes.SNESDriver.residual_norm, Model.inadmissible = timed_check(residual_norm), timed_check(inadmissible)
 
-    def run(self, cells, scheme: str, dt: float, steps: int) -> dict:
+    def run(self, cells, scheme: str, dt: float, steps: int, linear: str = "auto") -> dict:
         import fem_forms as ff
         import numpy as np
         self.stamps, self.energy, self.probes, self.checks, self.krylov = [], [], [], [], 0
         self.check_now = 0.0 * now()
-        scene = ff.Scene.from_dict(scene_dict(cells, scheme, dt, steps))
+        scene = ff.Scene.from_dict(scene_dict(cells, scheme, dt, steps, linear))
         lu0 = lu_count()
         t0 = now()
         res = self.solve.solve_dynamic(scene)
@@ -147,6 +149,7 @@ class OursTimer:
                 **split(np.median(energy[1:], axis=0), "energy"), **split(np.median(checks[1:], axis=0), "checks"),
                 **split(np.median((same - checks)[1:], axis=0), "later_unchecked"), **split(np.median(probes[1:], axis=0), "probes"),
                 "newton": res.report.newton_iterations, "krylov": self.krylov,
+                "builds": res.solver.get("preconditioner_builds", 0),
                 "lu": lu[0] - lu0[0], "lu_time": lu[1] - lu0[1], "dt": dt, "dt_stable": res.dt_stable,
                 "max_u": comm.allreduce(float(np.linalg.norm(u, axis=1).max()), op=max),
                 "options": self.options if scheme != "central-difference" else None}
@@ -162,8 +165,9 @@ def stable_dt(cells) -> float:
 
 
 # ============================================================================ driver
-def worker(cells, scheme: str, runs: int, with_lu: bool) -> None:
-    """Warm-up, then ours and bare interleaved `runs` times; one JSON line per run on stdout."""
+def worker(cells, scheme: str, runs: int, mode: int) -> None:
+    """Warm-up, then ours and bare interleaved `runs` times (mode 1: also 'bare LU' once; mode 2: ours
+    with direct and with iterative linear solves instead); one JSON line per run on stdout."""
     import logging
     from petsc4py import PETSc
     sys.path.insert(0, str(ROOT))
@@ -177,14 +181,15 @@ def worker(cells, scheme: str, runs: int, with_lu: bool) -> None:
         dt, dt_warm = 0.5 * stable_dt(cells), 0.5 * stable_dt(WARMUP_CELLS)
     else:
         dt = dt_warm = DT_IMPLICIT
-    ours.run(WARMUP_CELLS, scheme, dt_warm, 3)
-    bare_run(WARMUP_CELLS, scheme, dt_warm, 3)
+    ours.run(WARMUP_CELLS, scheme, dt_warm, 3, "iterative" if mode == 2 else "auto")
+    ours.run(WARMUP_CELLS, scheme, dt_warm, 3) if mode == 2 else bare_run(WARMUP_CELLS, scheme, dt_warm, 3)
     for r in range(runs):
-        impls = ["ours", "bare"] + (["bare LU"] if with_lu and r == 0 else [])    # LU every step: once
+        impls = list(KINDS) if mode == 2 else ["ours", "bare"] + (["bare LU"] if mode == 1 and r == 0 else [])
         for impl in (impls if r % 2 == 0 else impls[::-1]):
             gc.collect()
             load = os.getloadavg()[0]
-            res = ours.run(cells, scheme, dt, steps) if impl == "ours" else \
+            res = ours.run(cells, scheme, dt, steps, impl) if impl in KINDS else ours.run(cells, scheme, dt, steps) \
+                if impl == "ours" else \
                 bare_run(cells, scheme, dt, steps if impl == "bare" else LU_STEPS, lu_every_newton=impl == "bare LU")
             res.update(impl=impl, load=load)
             print("RESULT " + json.dumps(res), flush=True)
@@ -211,10 +216,6 @@ def ms(x: float) -> str:
 
 
 # ============================================================================ when each scheme pays
-MATERIALS = {"aluminium": (70e9, 0.33, 2700.0), "silicone": (0.68e6, 0.45, 1100.0)}
-EVENTS = {"impact 1 ms": 1e-3, "swing 1 s": 1.0}
-
-
 def pays_worker(cells) -> None:
     """The package's explicit stable-step estimate on this mesh for a stiff and a soft part."""
     import logging
@@ -229,37 +230,6 @@ def pays_worker(cells) -> None:
         d["material"] = {"model": "neo-hookean", "E": e, "nu": nu, "rho": rho}
         dt = stable_step(build_system(ff.Scene.from_dict(d)))[0]
         print("RESULT " + json.dumps({"material": name, "dt_stable": dt}), flush=True)
-
-
-def first_period(e: float, rho: float) -> float:
-    """Euler-Bernoulli: f1 = 1.8751^2 / (2 pi L^2) sqrt(E I / (rho A)) of the square cantilever."""
-    import math
-    return 1.0 / (1.8751 ** 2 / (2 * math.pi * LENGTH ** 2) * math.sqrt(e * WIDTH ** 2 / 12 / rho))
-
-
-def pays_table(dofs: int, stable: dict, implicit: dict, explicit: dict) -> str:
-    """Steps and cost of each event: both schemes at the accuracy step min(event / 100, T1 / 20), the
-    explicit one also at most its stable step (the estimate, 0.9 x 2 / omega_max)."""
-    lines = ["| part (E, nu, rho) | explicit dt_stable | T1 | event | explicit steps | implicit steps | "
-             "explicit cost | implicit cost | cheaper |", "|---|---:|---:|---|---:|---:|---:|---:|---|"]
-    for name, (e, nu, rho) in MATERIALS.items():
-        dts, t1 = stable[name], first_period(e, rho)
-        for ev, T in EVENTS.items():
-            accurate = min(T / 100, t1 / 20)
-            n_exp = int(-(-T // min(dts, accurate)))
-            n_imp = int(-(-T // accurate))
-            c_exp = n_exp * explicit["later_full"]
-            c_imp = implicit["first"] + (n_imp - 1) * implicit["later_full"]
-            lines.append(f"| {name} ({e:.3g} Pa, {nu}, {rho:g}) | {dts:.3g} s | {t1:.3g} s | {ev} | {n_exp:,} | "
-                         f"{n_imp:,} | {_dur(c_exp)} | {_dur(c_imp)} | "
-                         f"{'explicit' if c_exp < c_imp else 'implicit'} ({max(c_exp, c_imp) / min(c_exp, c_imp):.0f}x) |")
-    return f"At {dofs:,} dofs:\n\n" + "\n".join(lines) + "\n"
-
-
-def _dur(x: float) -> str:
-    if x < 120:
-        return f"{x:.2g} s" if x < 10 else f"{x:.0f} s"
-    return f"{x / 60:.0f} min" if x < 7200 else f"{x / 3600:.0f} h"
 
 
 # ============================================================================ report
@@ -320,6 +290,7 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=None, help="repeats per configuration (default 3, quick 2)")
     ap.add_argument("--out", default=str(ROOT / "benchmarks" / "dynamic_steps.md"), help="markdown ('' for none)")
     ap.add_argument("--timeout", type=float, default=900.0, help="seconds allowed per subprocess")
+    ap.add_argument("--linear", action="store_true", help="also MUMPS against CG + GAMG (ours) at 95k and 266k dofs")
     args = ap.parse_args()
     sizes = SIZES[:2] if args.quick else SIZES
     runs = args.runs or (2 if args.quick else 3)
@@ -335,6 +306,8 @@ def main() -> None:
                 print(f"  {r['dofs']:>7,} dofs {scheme:18s} {r['impl']:7s}: setup {r['setup']:.2f} s, first "
                       f"{ms(r['first'])} ms, later {ms(r['later'])} ms, {r['newton']} Newton, {r['lu']} LU, "
                       f"load {r['load']:.1f}", file=sys.stderr, flush=True)
+    linear_results = {(cells, scheme): run_worker(args.timeout, "--worker", scheme, min(runs, 2), 2, *cells)
+                      for cells in (LINEAR_SIZES if args.linear else []) for scheme in SCHEMES[:2]}
     stable = {r["material"]: r["dt_stable"] for r in run_worker(args.timeout, "--pays", *sizes[-1])}
     loads.append(os.getloadavg())
     wall = time.perf_counter() - t_start
@@ -344,7 +317,7 @@ def main() -> None:
     cd = [r for r in results[(sizes[-1], "central-difference")]]
     sps = {k: 1.0 / med([r for r in cd if r["impl"] == k], "later_cpu") for k in ("ours", "bare")}
     sps_full = 1.0 / med([r for r in cd if r["impl"] == "ours"], "later_full_cpu")
-    all_loads = [r["load"] for rs in results.values() for r in rs]
+    all_loads = [r["load"] for rs in (*results.values(), *linear_results.values()) for r in rs]
     md = ["# Dynamics: cost per time step, fem_forms (ours) against bare dolfinx/PETSc (bare)", "",
           f"1 x 0.1 x 0.1 m neo-Hookean cantilever (E {E:g} Pa, nu {NU}, rho {RHO:g} kg/m^3) clamped at x = 0, "
           f"released from rest under gravity; P{DEGREE} tetrahedra, quadrature degree {QUADRATURE}. Implicit "
@@ -360,9 +333,9 @@ def main() -> None:
           "estimate, probe location and the energy account's mass matrix); first step: includes the LU "
           "factorisation for the implicit schemes; later steps: median wall time per step after the first, "
           "ours without its energy accounting and probes (the same work as bare: the step, commit and loop), "
-          "which are listed separately; checks: the implicit step's acceptance checks inside the same work (the "
-          "residual re-assembled after SNES converged and det F > 0 at every quadrature point), which bare does "
-          "not do; Newton and Krylov iterations and LU factorisations: totals of one run.", "",
+          "which are listed separately; checks: the implicit step's acceptance check inside the same work that "
+          "bare does not do (det F > 0 at every quadrature point; the residual test reads SNES's own last norm, "
+          "taken at the accepted state); Newton and Krylov iterations and LU factorisations: totals of one run.", "",
           f"**Explicit steps per second at {last['central-difference']['dofs']:,} dofs** (P1, lumped mass): "
           f"CPU time per step: ours {sps['ours']:.0f} (same work), {sps_full:.0f} with energy accounting and probes every step; "
           f"bare {sps['bare']:.0f}.", "",
@@ -376,6 +349,15 @@ def main() -> None:
           f"steps, Newmark), for this mesh and the benchmark's {last['newmark']['newton'] / last['newmark']['steps']:.1f} "
           "Newton iterations per step (a soft part in large motion needs more).", "",
           pays_table(last["newmark"]["dofs"], stable, agg["newmark"], agg["central-difference"]),
+          *([] if not linear_results else [
+              "## Direct (MUMPS) or iterative (CG + GAMG)", "",
+              "Ours only, `[solver] linear = \"direct\"` (the tangent and its LU kept across steps, GMRES on the "
+              "kept tangent) against `\"iterative\"` (CG + GAMG with the rigid-body near-nullspace, a fresh tangent "
+              "at every Newton iteration, the multigrid hierarchy kept across Newton iterations and time steps by the "
+              "driver's cost rule), interleaved, median of 2 runs; each cell is direct / iterative; 'iterative "
+              "cheaper for': the run lengths (steps, first step + later steps) for which the iterative path costs "
+              "less CPU time in all; max |u| relative difference: the two answers after the last step.", "",
+              linear_table(linear_results)]),
           *[f"- {n}" for n in checks(results)], "",
           f"Machine: {platform.node()}, {os.cpu_count()} cores, Python {platform.python_version()}; load average "
           f"(1, 5, 15 min) {tuple(round(x, 2) for x in loads[0])} at the start and "
@@ -391,8 +373,8 @@ def main() -> None:
 if __name__ == "__main__":
     if "--worker" in sys.argv:
         i = sys.argv.index("--worker")
-        scheme, runs, with_lu, *cells = sys.argv[i + 1: i + 7]
-        worker(tuple(int(c) for c in cells), scheme, int(runs), bool(int(with_lu)))
+        scheme, runs, mode, *cells = sys.argv[i + 1: i + 7]
+        worker(tuple(int(c) for c in cells), scheme, int(runs), int(mode))
     elif "--pays" in sys.argv:
         i = sys.argv.index("--pays")
         pays_worker(tuple(int(c) for c in sys.argv[i + 1: i + 4]))

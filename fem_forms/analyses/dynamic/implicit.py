@@ -3,12 +3,14 @@ time-discrete balance through the one driver, accepted only after the driver's i
 lumped mass enters the assembled system through the driver's `extra` hook (HRZ is not a UFL form)."""
 from __future__ import annotations
 
+import math
+
 from mpi4py import MPI
 import numpy as np
 from petsc4py import PETSc
 
 from fem_forms.analyses.dynamic.system import DynamicSystem
-from fem_forms.solvers import snes
+from fem_forms.solvers import linear, snes
 from fem_forms.solvers.time_stepping import StepOutcome
 
 
@@ -74,18 +76,37 @@ class ImplicitStepper:
         # the answer its change drowns in round-off, the energy line search stalls and the polish has to
         # finish (measured on the benchmark beam: 2-5 Newton iterations per step, 2 with full Newton and
         # the same answer). The energy line search retries a failed step before dt is cut.
-        # The tangent is kept with its factor (modified Newton: the residual is fresh, so the answer is the
-        # same): one more Newton iteration per step but no tangent assembly, 1.4-1.6x less per step on
-        # the benchmark beam (benchmarks/dynamic_steps.md); refreshed by the rule in step().
-        opts = {"snes_lag_preconditioner": 100, "snes_lag_preconditioner_persists": True,
-                "snes_lag_jacobian": 100, "snes_lag_jacobian_persists": True, "snes_linesearch_type": "basic"}
-        opts.update(options or {})
-        self.driver = snes.SNESDriver(self.problem, opts, "direct", reuse_factor=True)
-        self.line_search_retry = self.driver.E is not None and "snes_linesearch_type" not in (options or {})
-        self.may_unlag = "snes_lag_jacobian" not in (options or {})
+        self.linear_kind = linear_kind = system.scene.solver.linear \
+            if system.scene.discretization.formulation != "mixed" else "direct"
+        self.iterative = linear.choose(linear_kind, m.dofs) == "iterative"
+        self.user_options = dict(options or {})
+        self.driver = snes.SNESDriver(self.problem, self._options(), linear_kind,
+                                      near_nullspace=lambda: linear.rigid_body_modes(m.V),
+                                      reuse_factor=not self.iterative, keep_preconditioner=True)
+        self.line_search_retry = self.driver.E is not None and "snes_linesearch_type" not in self.user_options
+        self.may_unlag = "snes_lag_jacobian" not in self.user_options
         self.fresh = True                          # the next step starts from a freshly built tangent
         self.dt_factored = None
         self.last_why = ""
+        self.krylov_iterations = self.preconditioner_builds = 0
+
+    def _options(self) -> dict:
+        """Direct: the tangent is kept with its factor (modified Newton: the residual is fresh, so the
+        answer is the same): one more Newton iteration per step but no tangent assembly, 1.4-1.6x less per
+        step on the benchmark beam (benchmarks/dynamic_steps.md); refreshed by the rule in _refresh().
+        Iterative (CG + GAMG; GMRES where damping leaves no energy): a fresh tangent at every Newton
+        iteration, the multigrid hierarchy kept across iterations and steps by the driver's cost rule."""
+        opts = {"snes_linesearch_type": "basic"}
+        if not self.iterative:
+            opts.update({"snes_lag_preconditioner": 100, "snes_lag_preconditioner_persists": True,
+                         "snes_lag_jacobian": 100, "snes_lag_jacobian_persists": True})
+        opts.update(self.user_options)
+        return opts
+
+    def summary(self) -> dict:
+        """The linear solver used and its totals over the run (results.json)."""
+        return {"linear_solver": self.driver.linear_kind, "krylov_iterations": self.krylov_iterations,
+                "preconditioner_builds": self.preconditioner_builds}
 
     def step(self, t: float, dt: float) -> StepOutcome:
         s, drv = self.s, self.driver
@@ -98,17 +119,18 @@ class ImplicitStepper:
         s.td.time.value = t + dt
         s.set_load_time(t + dt, t, self.released)
         rec, why = self._solve(dt)
+        if why is not None and self._fall_back(rec):        # CG failed on a fresh hierarchy: MUMPS, same dt
+            rec, why = self._again(rec, dt)
         if why is not None and self.line_search_retry:
             drv.user_options["snes_linesearch_type"] = "bt"     # the energy line search, same dt
             drv._build_snes()
-            rec2, why = self._solve(dt)
-            rec.iterations += rec2.iterations
-            rec.krylov_iterations += rec2.krylov_iterations
+            rec, why = self._again(rec, dt)
             drv.user_options["snes_linesearch_type"] = "basic"
             drv._build_snes()
         if why is not None:
             self.last_why = why
             self.fresh = True
+            self._fall_back(rec)                             # the cut step's retry then runs on MUMPS
             return StepOutcome(False, rec.iterations, why)
         self._refresh(rec)
         old = s.state.old
@@ -116,7 +138,30 @@ class ImplicitStepper:
                            old["acceleration"].x.array)
         s.v.x.array[:] = v
         s.a.x.array[:] = a
-        return StepOutcome(True, rec.iterations, error=self.error_estimate(dt))
+        # the error estimate (two reductions over ranks) only where the march uses it
+        return StepOutcome(True, rec.iterations,
+                           error=self.error_estimate(dt) if s.scene.dynamic.adaptive else math.nan)
+
+    def _again(self, rec, dt: float):
+        """Solve the step once more (after a change of solver); the record counts both attempts."""
+        rec2, why = self._solve(dt)
+        rec2.iterations += rec.iterations
+        rec2.krylov_iterations += rec.krylov_iterations
+        return rec2, why
+
+    def _fall_back(self, rec) -> bool:
+        """CG failed on a fresh hierarchy (an indefinite tangent): MUMPS from now on, when the scene's
+        choice allows it (as the static continuation does); a kept hierarchy's failure is retried fresh.
+        Returns whether it switched."""
+        drv = self.driver
+        if not (self.iterative and rec.reason == "DIVERGED_LINEAR_SOLVE" and not self.stale_failed
+                and self.linear_kind in linear.FALLBACK_TO_DIRECT):
+            return False
+        self.iterative = False
+        drv.linear_kind, drv.reuse_factor = "direct", True
+        drv.user_options = self._options()
+        drv._build_snes()
+        return True
 
     def _refresh(self, rec) -> None:
         """A fresh tangent and factor for the next step when the kept ones cost too many iterations. If
@@ -124,6 +169,8 @@ class ImplicitStepper:
         dt 1e-2 on a silicone beam), assemble the tangent at every Newton iteration from then on and keep
         only the factor (60 instead of 136 Newton iterations there, 2 factorisations instead of 20)."""
         drv = self.driver
+        if self.iterative:
+            return                                 # the driver keeps or rebuilds the hierarchy by cost
         kept_tangent = drv.user_options.get("snes_lag_jacobian") != 1
         slow = kept_tangent and rec.iterations > self.NEWTON_PER_STEP
         if slow or rec.krylov_iterations > self.KRYLOV_PER_NEWTON * max(rec.iterations, 1):
@@ -148,17 +195,23 @@ class ImplicitStepper:
         # supports hold still in dynamics (the scene refuses moving ones): no start check needed, and the
         # residual at the predictor is SNES's first residual (no separate assembly)
         rec = drv.solve_step(check_start=False)
+        self.krylov_iterations += rec.krylov_iterations
+        self.preconditioner_builds += rec.preconditioner_builds
         why = None if rec.accepted else f"SNES {rec.reason}"
         if why is None:
-            if not np.all(np.isfinite(u.x.array)):
+            if not s.model.mesh.comm.allreduce(bool(np.all(np.isfinite(u.x.array))), op=MPI.LAND):
                 why = "NaN or Inf in the solution"
             elif (bad := self.problem.inadmissible()):
                 why = bad
             else:
-                rn = drv.residual_norm()
+                # u is exactly SNES's last iterate, and SNES's last residual norm was assembled there by the
+                # driver's callback: the re-assembly this check used to do gave the same number (1-2 ms per
+                # step at 5k dofs). It still catches a stop on step length with a large residual.
+                rn = rec.residuals[-1] if rec.residuals else drv.residual_norm()
                 if rn > 1e-6 * (rec.residuals[0] if rec.residuals else 0.0) and rn > drv.roundoff_floor():
                     why = f"residual {rn:.3e} after SNES reported convergence"
         if why is not None:
+            self.stale_failed = drv.stale_preconditioner_failed()
             s.state.rollback()
             drv._build_snes()
         return rec, why

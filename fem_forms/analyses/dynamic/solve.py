@@ -34,6 +34,7 @@ class DynamicResult:
     probe_rows: list = field(default_factory=list)     # [t, (ux, uy, uz, vx, vy, vz) per probe..., T per probe...]
     dt_stable: float | None = None
     wall_time_s: float = 0.0
+    solver: dict = field(default_factory=dict)        # the implicit step's linear solver and its totals
 
     def summary(self) -> dict:
         s, r = self.system, self.report
@@ -47,7 +48,7 @@ class DynamicResult:
             "rejected_steps": r.rejected, "newton_iterations": r.newton_iterations,
             "energy_balance_error": self.energy.balance_error(),
             "energy_final": {c: getattr(self.energy.now, c) for c in self.energy.columns()},
-            "dt_stable": self.dt_stable,
+            "dt_stable": self.dt_stable, **self.solver,
             "physics": s.model.physics + ["inertia"] + _damping_names(s.scene) + _heat_names(s.scene),
             "mpi_ranks": s.model.mesh.comm.size, "wall_time_s": self.wall_time_s,
             "probes": {n: {"point": s.scene.output.probes[n], "displacement": list(last[1 + 6 * i: 4 + 6 * i]),
@@ -194,5 +195,8 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
     march(stepper, t_start, dyn.duration, dt, on_accept, adaptive=dyn.adaptive and dyn.scheme != "central-difference",
           tolerance=dyn.tolerance, max_cutbacks=scene.solver.max_cutbacks, step0=step0, report=result.report,
           dt_max=10 * dyn.dt if dyn.adaptive else dyn.dt)
+    motion = getattr(stepper, "motion", stepper)              # the staggered heat step wraps the motion
+    if isinstance(motion, ImplicitStepper):
+        result.solver = motion.summary()
     result.wall_time_s = time.perf_counter() - t0
     return result
