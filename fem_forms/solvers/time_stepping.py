@@ -46,19 +46,21 @@ class MarchReport:
 
 def march(stepper: Stepper, t0: float, t_end: float, dt: float, on_accept: Callable[[float, float, int], None],
           *, adaptive: bool = False, tolerance: float = 1e-3, max_cutbacks: int = 10, step0: int = 0,
-          report: MarchReport | None = None, dt_max: float | None = None) -> MarchReport:
+          report: MarchReport | None = None, dt_max: float | None = None, stops: tuple = ()) -> MarchReport:
     """Advance from t0 to t_end. After a rejected step dt is halved (at most `max_cutbacks` times in a
     row: then SolveError); with `adaptive`, a step whose error estimate exceeds 2 x tolerance is redone
     smaller and dt follows 0.9 (tolerance / error)^(1/3) (third-order local error), within [dt/2, 2 dt]
-    and below dt_max. on_accept(t, dt, step) runs after each accepted step."""
+    and below dt_max. Every time in `stops` (the corners of load and temperature histories) is a step end,
+    so that no step, cut back or not, steps over a peak. on_accept(t, dt, step) runs after each accepted step."""
     rep = report or MarchReport()
     t, cuts, step = t0, 0, step0
     dt_max = dt_max or dt
     eps = 1e-12 * max(t_end, 1.0)
     while t < t_end - eps:
-        h = min(dt, t_end - t)
-        if t_end - (t + h) < 1e-3 * h:          # no sliver step at the end
-            h = t_end - t
+        end = min([t_end] + [s for s in stops if s > t + 1e-9 * dt])
+        h = min(dt, end - t)
+        if end - (t + h) < 1e-3 * h:            # no sliver step before a stop or the end
+            h = end - t
         out = stepper.step(t, h)
         if out.accepted and adaptive and out.error > 2 * tolerance:
             stepper.undo()
@@ -86,6 +88,11 @@ def march(stepper: Stepper, t0: float, t_end: float, dt: float, on_accept: Calla
         else:
             dt = min(dt_max, max(dt, 2 * h))        # back towards the asked-for step after a cut
     return rep
+
+
+def history_corners(*histories: list | None) -> tuple:
+    """The inner corner times of [[t, f], ...] histories, sorted (the steps must end there)."""
+    return tuple(sorted({p[0] for h in histories if h for p in h[1:-1]} | {h[-1][0] for h in histories if h}))
 
 
 def piecewise_linear(history: list | None, t: float) -> float:

@@ -23,7 +23,7 @@ from fem_forms.output import probes
 from fem_forms.physics.inertia import Inertia
 from fem_forms.scene import Scene
 from fem_forms.solvers import continuation, snes
-from fem_forms.solvers.time_stepping import MarchReport, march, piecewise_linear
+from fem_forms.solvers.time_stepping import MarchReport, history_corners, march, piecewise_linear
 
 
 @dataclass
@@ -194,9 +194,15 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
 
     march(stepper, t_start, dyn.duration, dt, on_accept, adaptive=dyn.adaptive and dyn.scheme != "central-difference",
           tolerance=dyn.tolerance, max_cutbacks=scene.solver.max_cutbacks, step0=step0, report=result.report,
-          dt_max=10 * dyn.dt if dyn.adaptive else dyn.dt)
+          dt_max=10 * dyn.dt if dyn.adaptive else dyn.dt, stops=history_corners(*_histories(scene)))
     motion = getattr(stepper, "motion", stepper)              # the staggered heat step wraps the motion
     if isinstance(motion, ImplicitStepper):
         result.solver = motion.summary()
     result.wall_time_s = time.perf_counter() - t0
     return result
+
+
+def _histories(scene: Scene) -> list:
+    """Every time history of the scene: loads' and prescribed temperatures'."""
+    thermal = getattr(scene, "thermal", None)
+    return [ld.history for ld in scene.load] + ([b.history for b in thermal.boundary] if thermal else [])

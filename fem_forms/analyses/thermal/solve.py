@@ -16,7 +16,7 @@ from fem_forms.output import probes
 from fem_forms.physics.heat import HeatForms, temperature_space
 from fem_forms.scene import Scene
 from fem_forms.solvers.heat_step import HeatSolver, max_value, min_value
-from fem_forms.solvers.time_stepping import march
+from fem_forms.solvers.time_stepping import history_corners, march
 from fem_forms.state import State
 
 
@@ -96,7 +96,8 @@ def solve_thermal(scene: Scene, on_frame: Callable | None = None, comm: MPI.Comm
             if on_frame and (step % dyn.output_every == 0 or t >= dyn.duration * (1 - 1e-12)):
                 on_frame(T, t)
 
-        rep = march(solver, 0.0, dyn.duration, dyn.dt, accepted, max_cutbacks=scene.solver.max_cutbacks)
+        rep = march(solver, 0.0, dyn.duration, dyn.dt, accepted, max_cutbacks=scene.solver.max_cutbacks,
+                    stops=history_corners(*(b.history for b in scene.thermal.boundary)))
         result.steps, result.time_reached = rep.steps, rep.time_reached
     result.iterations = solver.iterations
     result.wall_time_s = time.perf_counter() - t0
