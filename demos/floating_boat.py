@@ -14,7 +14,7 @@ import sys
 
 import fem_forms as ff
 from fem_forms.analyses import run_analysis
-from fem_forms.occ_parts import mesh_part
+from fem_forms.occ_parts import write_part
 
 
 def boat(occ) -> list:
@@ -24,15 +24,10 @@ def boat(occ) -> list:
     return occ.fuse([(3, hull)], [(3, cabin)])[0]
 
 
-def _meshed(path: Path, build, h: float) -> Path:
-    mesh_part(path, build, h)
-    return path
-
-
 def main(out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
     scene = {"title": "floating boat", "analysis": "balance",
-             "mesh": {"generator": "file", "file": str(_meshed(out / "boat.msh", boat, 0.008))},
+             "mesh": {"generator": "file", "file": str(write_part(out / "boat.msh", boat, 0.008))},
              "material": {"model": "neo-hookean", "E": 1e10, "nu": 0.3, "rho": 600.0},
              "balance": {"goal": "swim", "waterline": 0.03, "water_density": 1000.0, "shell": 0.008}}
     d = run_analysis(ff.Scene.from_dict(scene), out / "swim")

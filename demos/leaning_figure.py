@@ -11,7 +11,7 @@ import sys
 
 import fem_forms as ff
 from fem_forms.analyses import run_analysis
-from fem_forms.occ_parts import mesh_part
+from fem_forms.occ_parts import write_part
 
 
 def figure(occ, lean: float = 0.085) -> list:
@@ -22,14 +22,9 @@ def figure(occ, lean: float = 0.085) -> list:
     return occ.fuse([(3, foot)], [(3, col)])[0]
 
 
-def _meshed(path: Path, build, h: float) -> Path:
-    mesh_part(path, build, h)
-    return path
-
-
 def main(out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
-    mesh = _meshed(out / "figure.msh", figure, 0.006)
+    mesh = write_part(out / "figure.msh", figure, 0.006)
     scene = {"title": "leaning figure", "analysis": "balance", "mesh": {"generator": "file", "file": str(mesh)},
              "material": {"model": "neo-hookean", "E": 1e6, "nu": 0.3, "rho": 1000.0},
              "balance": {"goal": "stand", "margin_angle": 2.0, "shell": 0.003}}

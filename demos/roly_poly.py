@@ -14,7 +14,7 @@ import sys
 
 import fem_forms as ff
 from fem_forms.analyses import run_analysis
-from fem_forms.occ_parts import mesh_part
+from fem_forms.occ_parts import write_part
 
 
 def toy(occ, R: float = 0.05, H: float = 0.04) -> list:
@@ -25,15 +25,10 @@ def toy(occ, R: float = 0.05, H: float = 0.04) -> list:
     return occ.fuse(dome, [(3, occ.addCylinder(0, 0, 0, 0, 0, H, R))])[0]
 
 
-def _meshed(path: Path, build, h: float) -> Path:
-    mesh_part(path, build, h)
-    return path
-
-
 def main(out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
     scene = {"title": "roly-poly toy", "analysis": "balance",
-             "mesh": {"generator": "file", "file": str(_meshed(out / "toy.msh", toy, 0.006))},
+             "mesh": {"generator": "file", "file": str(write_part(out / "toy.msh", toy, 0.006))},
              "material": {"model": "neo-hookean", "E": 2e9, "nu": 0.35, "rho": 1200.0},
              "balance": {"goal": "swing", "margin_angle": 5.0, "shell": 0.003, "contact_tolerance": 0.01}}
     d = run_analysis(ff.Scene.from_dict(scene), out / "swing")

@@ -15,7 +15,7 @@ import sys
 
 import fem_forms as ff
 from fem_forms.analyses import run_analysis
-from fem_forms.occ_parts import mesh_part
+from fem_forms.occ_parts import write_part
 from leaning_figure import figure
 
 LEAN = 0.06
@@ -23,8 +23,7 @@ LEAN = 0.06
 
 def main(out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
-    mesh = out / "figure.msh"
-    mesh_part(mesh, lambda occ: figure(occ, lean=LEAN), 0.008)
+    mesh = write_part(out / "figure.msh", lambda occ: figure(occ, lean=LEAN), 0.008)
     scene = {"title": "soft figure", "analysis": "balance", "mesh": {"generator": "file", "file": str(mesh)},
              "material": {"model": "neo-hookean", "E": 1.5e5, "nu": 0.4, "rho": 1100.0},
              "discretization": {"degree": 2}, "fix": [{"where": {"axis": "z", "at": 0.0}}],

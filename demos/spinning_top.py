@@ -13,7 +13,7 @@ import sys
 
 import fem_forms as ff
 from fem_forms.analyses import run_analysis
-from fem_forms.occ_parts import mesh_part
+from fem_forms.occ_parts import write_part
 
 
 def top(occ) -> list:
@@ -24,15 +24,10 @@ def top(occ) -> list:
     return occ.fuse([(3, cone)], [(3, disc), (3, lump)])[0]
 
 
-def _meshed(path: Path, build, h: float) -> Path:
-    mesh_part(path, build, h)
-    return path
-
-
 def main(out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
     scene = {"title": "spinning top", "analysis": "balance",
-             "mesh": {"generator": "file", "file": str(_meshed(out / "top.msh", top, 0.005))},
+             "mesh": {"generator": "file", "file": str(write_part(out / "top.msh", top, 0.005))},
              "material": {"model": "neo-hookean", "E": 2e9, "nu": 0.35, "rho": 1200.0},
              "balance": {"goal": "spin", "kind": "top", "axis": [0.0, 0.0, 1.0], "shell": 0.003}}
     d = run_analysis(ff.Scene.from_dict(scene), out / "spin")

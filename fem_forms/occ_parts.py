@@ -25,3 +25,9 @@ def mesh_part(path: Path | None, build: Callable, h: float) -> int:
         return sum(len(t) for t in gmsh.model.mesh.getElements(3)[1])
     finally:
         gmsh.finalize()
+
+
+def write_part(path: Path, build: Callable, h: float) -> Path:
+    """mesh_part written to `path`; the path (for a scene's mesh.file)."""
+    mesh_part(path, build, h)
+    return path

@@ -2,13 +2,12 @@
 properties and a leaning figure."""
 from pathlib import Path
 
-from fem_forms.occ_parts import mesh_part
+from fem_forms.occ_parts import write_part
 
 
 def _mesh(path: Path, build, h: float) -> Path:
     """Mesh the volumes build(occ) returns (their tags) into path."""
-    mesh_part(path, lambda occ: [(3, t) for t in build(occ)], h)
-    return path
+    return write_part(path, lambda occ: [(3, t) for t in build(occ)], h)
 
 
 def cone(path, R, H, h):

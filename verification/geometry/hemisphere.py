@@ -7,7 +7,7 @@ mesh of size h, written as hemisphere.msh (straight-sided tetrahedra inscribed i
 import argparse
 from pathlib import Path
 
-from fem_forms.occ_parts import mesh_part
+from fem_forms.occ_parts import write_part
 
 
 def _half_ball(occ, radius: float) -> list:
@@ -22,8 +22,7 @@ def build(out: Path, radius: float = 0.05, h: float = 0.005, inner: float = 0.0)
     def solid(occ):
         dome = _half_ball(occ, radius)
         return occ.cut(dome, _half_ball(occ, inner))[0] if inner > 0 else dome
-    mesh_part(out, solid, h)
-    return Path(out)
+    return write_part(Path(out), solid, h)
 
 
 if __name__ == "__main__":
