@@ -351,6 +351,12 @@ def load_mesh(spec: MeshSpec, comm: MPI.Comm = MPI.COMM_WORLD, degree: int = 1) 
         check_cells(arrays, key)
         return arrays
 
+    return from_arrays(comm, build)
+
+
+def from_arrays(comm: MPI.Comm, build) -> LoadedMesh:
+    """The distributed mesh of the arrays build() makes on rank 0 (its errors: one InputError on every
+    rank). Also how a mesh the package wrote itself (a designed rest shape) is loaded again."""
     loaded = distribute(comm, _on_root(comm, build))
     settle_coordinate_element(loaded.mesh)
     return loaded

@@ -113,9 +113,11 @@ class Model:
 NEARLY_INCOMPRESSIBLE_NU = 0.49
 
 
-def build_model(scene: Scene, material=None, comm: MPI.Comm = MPI.COMM_WORLD) -> Model:
-    """Mesh, spaces, supports and the forms of the scene's terms (displacement or mixed u-p)."""
-    loaded = load_mesh(scene.mesh, comm, degree=scene.discretization.degree)
+def build_model(scene: Scene, material=None, comm: MPI.Comm = MPI.COMM_WORLD,
+                loaded: LoadedMesh | None = None) -> Model:
+    """Mesh (the scene's, or `loaded`), spaces, supports and the forms of the scene's terms
+    (displacement or mixed u-p)."""
+    loaded = loaded or load_mesh(scene.mesh, comm, degree=scene.discretization.degree)
     mesh = loaded.mesh
     disc = scene.discretization
     load = LoadFactor(mesh)

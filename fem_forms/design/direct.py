@@ -53,7 +53,7 @@ def solve_direct(scene: Scene, material=None, loaded: LoadedMesh | None = None) 
     res = InverseResult("direct", v, loaded, report.converged, report.newton_iterations, report.message,
                         history=[{"load": s.load, "iterations": s.iterations, "accepted": s.accepted,
                                   "reason": s.reason, "note": s.note} for s in report.steps],
-                        physics=[t.name for t in terms])
+                        physics=[t.name for t in terms], residual_scale=report.load_scale)
     res.solve_time = time.perf_counter() - t0
     return res
 

@@ -26,6 +26,9 @@ class InverseResult:
     # for the direct method); the adjoint method's partial or regularised goals leave a mismatch
     deformed_offset: fem.Function | None = None
     physics: list = field(default_factory=list)     # names of the terms in the design's forms
+    # direct method: the inverse residual at the target under the full load (rest = target); its Newton
+    # stopped at snes_rtol of it, which is what the forward check's equilibrium test holds it to
+    residual_scale: float = 0.0
 
 
 def target_scene(scene: Scene) -> MeshSpec:

@@ -50,7 +50,7 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
     drv._load_scale = None                           # a reused driver's loads or rest shape may have changed
     r_full = drv.load_scale()
 
-    report = SolveReport(False, 0.0, 0, math.nan, linear_solver=drv.linear_kind)
+    report = SolveReport(False, 0.0, 0, math.nan, linear_solver=drv.linear_kind, load_scale=r_full)
     lam, dlam, cuts = 0.0, 1.0 / steps, 0
     if problem.set_load is None:                     # nothing to continue in: one attempt
         lam, dlam, max_cutbacks = 0.0, 1.0, 0

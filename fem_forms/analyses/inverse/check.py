@@ -1,4 +1,4 @@
-"""Every designed rest shape is checked before it is handed out: written, read back, solved forward."""
+"""Every designed rest shape is checked before it is handed out: written, loaded as a mesh, solved forward."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -12,7 +12,7 @@ from fem_forms.analyses.inverse import forward
 from fem_forms.design import rest_shape
 from fem_forms.design.parameters import InverseResult
 from fem_forms.errors import InputError
-from fem_forms.meshes import mesh_size
+from fem_forms.meshes import MeshArrays, check_cells, from_arrays, mesh_size
 from fem_forms.output import fields, pictures
 from fem_forms.scene import Scene
 
@@ -55,7 +55,7 @@ def _matched_vertices(spec, pts_target: np.ndarray, size: float) -> np.ndarray |
 
 def check_rest_shape(scene: Scene, res: InverseResult, out: Path) -> ForwardCheck:
     """Write the rest shape (volume .msh + STL), check it crosses no support plane and does not
-    intersect itself, then read it back as a file mesh, solve the forward problem on it (from the
+    intersect itself, then load the written arrays as a mesh, solve the forward problem on it (from the
     target, or along the load path: scene.inverse.check), check the equilibrium is stable and measure
     the largest distance of the deformed shape from the target."""
     mesh = res.loaded.mesh
@@ -96,12 +96,19 @@ def check_rest_shape(scene: Scene, res: InverseResult, out: Path) -> ForwardChec
     pts_design = comm.bcast(designed[0] if comm.rank == 0 else None, root=0)
     if problems and any("cannot write" in p for p in problems):
         return ForwardCheck(np.inf, None, problems)
-    # independent forward check: read the written mesh back and solve the forward problem on it
+    # independent forward check: the mesh just written (its very arrays, loaded as any file mesh is:
+    # checked, distributed) and the forward problem's forms on it
     vmap = res.v.function_space.dofmap
     fscene = forward.forward_scene(scene, out / "rest_shape.msh", vmap.index_map.size_global * vmap.index_map_bs)
+
+    def written():
+        arrays = MeshArrays(points, cells, ctype, groups or {}, info={"source": "rest_shape.msh"})
+        check_cells(arrays, "rest_shape.msh")
+        return arrays
     try:
-        solve = (forward.solve_at_target(fscene, pts_rest, pts_design) if scene.inverse.check == "equilibrium"
-                 else forward.solve_along_path(fscene))
+        loaded = from_arrays(comm, written)
+        solve = (forward.solve_at_target(fscene, loaded, pts_rest, pts_design, res.residual_scale)
+                 if scene.inverse.check == "equilibrium" else forward.solve_along_path(fscene, loaded))
     except InputError as e:
         return ForwardCheck(np.inf, None, problems + [f"the rest shape is not a valid mesh: {e}"])
     static = solve.static

@@ -1,11 +1,12 @@
-"""The forward check's solve on the read-back rest mesh, with the forward forms (not the inverse ones).
+"""The forward check's solve on the written rest mesh, with the forward forms (not the inverse ones).
 
 check = "equilibrium" (default): the design claims that the target is an equilibrium of the rest shape
 under the loads. So start Newton from that claim, u = target - rest at every node, at full load: if the
 forward residual there is at tolerance within EQUILIBRIUM_NEWTON_STEPS Newton steps, the claim holds
 (degree 2: see CURVED_NEWTON_STEPS).
 The tolerance is where a static solve of the rest shape from zero would stop: snes_rtol (1e-9) times
-the residual at the rest shape under the full load.
+the residual at the rest shape under the full load (or, if larger, times the same loads' residual on the
+target shape: where the direct design's own Newton stopped).
 check = "path": ramp the loads from the rest shape with Newton (load continuation), as a user's static
 run of the rest mesh would; it costs about as much as the design itself.
 Either way the tangent's inertia at the equilibrium found tells whether it is stable."""
@@ -21,6 +22,7 @@ import numpy as np
 
 from fem_forms.analyses.inverse.stability import Inertia, tangent_inertia
 from fem_forms.equilibrium import StaticResult, solve_static
+from fem_forms.meshes import LoadedMesh
 from fem_forms.model import build_model
 from fem_forms.scene import MeshSpec, Scene
 from fem_forms.solvers import continuation, snes
@@ -61,7 +63,7 @@ class ForwardSolve:
 
 
 def forward_scene(scene: Scene, rest_mesh: Path, dofs: int) -> Scene:
-    """The static scene of the rest shape read back from its file, with the check's linear solver."""
+    """The static scene of the rest shape written to `rest_mesh`, with the check's linear solver."""
     fscene = copy.deepcopy(scene)
     fscene.analysis = "static"
     fscene.mesh = MeshSpec(generator="file", file=rest_mesh)
@@ -76,7 +78,7 @@ def forward_scene(scene: Scene, rest_mesh: Path, dofs: int) -> Scene:
 
 
 def predicted_displacement(u: fem.Function, pts_rest: np.ndarray, pts_target: np.ndarray) -> None:
-    """u = target - rest position at every node of the read-back rest mesh (its points matched to the
+    """u = target - rest position at every node of the written rest mesh (its points matched to the
     written ones by position); P2 spaces take the P1 interpolant."""
     V = u.function_space
     nodal = u if V.ufl_element().degree() == 1 else fem.Function(fem.VectorFunctionSpace(V.mesh, ("Lagrange", 1)))
@@ -88,10 +90,12 @@ def predicted_displacement(u: fem.Function, pts_rest: np.ndarray, pts_target: np
     u.x.scatter_forward()
 
 
-def solve_at_target(fscene: Scene, pts_rest: np.ndarray, pts_target: np.ndarray) -> ForwardSolve:
+def solve_at_target(fscene: Scene, loaded: LoadedMesh, pts_rest: np.ndarray, pts_target: np.ndarray,
+                    design_scale: float = 0.0) -> ForwardSolve:
     """Newton from the predicted equilibrium at full load, at most EQUILIBRIUM_NEWTON_STEPS steps
-    (CURVED_NEWTON_STEPS for degree 2)."""
-    model = build_model(fscene)
+    (CURVED_NEWTON_STEPS for degree 2). `design_scale`: the design's own residual scale (the loads on the
+    target shape), whose snes_rtol its Newton stopped at; the check accepts that too."""
+    model = build_model(fscene, loaded=loaded)
     steps = EQUILIBRIUM_NEWTON_STEPS if fscene.discretization.degree == 1 else CURVED_NEWTON_STEPS
     predicted_displacement(model.u, pts_rest, pts_target)
     model.load.set(1.0)
@@ -103,27 +107,35 @@ def solve_at_target(fscene: Scene, pts_rest: np.ndarray, pts_target: np.ndarray)
     options = {"snes_linesearch_type": "basic", **fscene.solver.petsc, "snes_max_it": steps}
     driver = snes.SNESDriver(problem, options, fscene.solver.linear, "fem_forms_check_",
                              near_nullspace=lambda: rigid_body_modes(model.V))
+    # the tangent at the target: its inertia (stable?) and its norm (the round-off floor there)
+    inertia = tangent_inertia(model.jacobian, model.bcs)
     try:
         scale = driver.load_scale()              # the residual at the rest shape (u = 0) under full load
         start = driver.residual_norm() / max(scale, 1e-300)
-        # at tolerance: where a static solve of the rest shape would stop (snes_rtol of that residual)
-        driver.user_options.setdefault("snes_atol", driver.options["snes_rtol"] * scale)
+        # at tolerance: where a static solve of the rest shape would stop (snes_rtol of that residual), or
+        # of the same loads on the target shape, where the design stopped, or at the round-off floor at
+        # the target (the design's Newton stops there too: on the Chen arm 1.05e-9 of the load's, and
+        # without the floor this check took one more Newton step, 0.35 s, to move 2e-15 m)
+        tolerance = max(driver.options["snes_rtol"] * max(scale, design_scale),
+                        snes.roundoff_floor(inertia.norm_inf, model.unknown.vector))
+        driver.user_options.setdefault("snes_atol", tolerance)
         report = continuation.solve(problem, driver=driver, max_cutbacks=0)
     finally:
         driver.snes.destroy()
     if not report.converged:
         step = report.steps[-1] if report.steps else None
         last = step.residuals[-1] / max(scale, 1e-300) if step and step.residuals else float("nan")
+        tol = float(driver.user_options["snes_atol"]) / max(scale, 1e-300)
         report.message = (f"its residual there is {start:.2e} of the load's (tolerance "
-                          f"{driver.options['snes_rtol']:.0e}), {last:.2e} after {steps} "
+                          f"{tol:.2g}), {last:.2e} after {steps} "
                           f"Newton steps ({step.note if step else report.message})")
-    # at the equilibrium found, or (failed solve, rolled back) at the target itself
-    inertia = tangent_inertia(model.jacobian, model.bcs)
+    if report.converged and report.newton_iterations:   # Newton moved: the inertia where it ended
+        inertia = tangent_inertia(model.jacobian, model.bcs)  # (a failed solve is rolled back to the target)
     return ForwardSolve("equilibrium", StaticResult(model, report), inertia, start)
 
 
-def solve_along_path(fscene: Scene) -> ForwardSolve:
+def solve_along_path(fscene: Scene, loaded: LoadedMesh) -> ForwardSolve:
     """Load continuation from the rest shape (the scene's steps and cut-backs), as `fem-forms run` would."""
-    static = solve_static(fscene)
+    static = solve_static(fscene, model=build_model(fscene, loaded=loaded))
     inertia = tangent_inertia(static.model.jacobian, static.model.bcs) if static.report.converged else None
     return ForwardSolve("path", static, inertia)

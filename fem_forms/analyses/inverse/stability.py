@@ -20,6 +20,7 @@ class Inertia:
     null: int                   # pivots MUMPS found to be zero (a singular tangent)
     dofs: int
     error: str = ""             # why the tangent could not be factored ("" if it was)
+    norm_inf: float = 0.0       # |K|_inf of the tangent factored (its round-off scale)
 
     @property
     def stable(self) -> bool:
@@ -49,11 +50,12 @@ def tangent_inertia(jacobian: ufl.Form, bcs: list) -> Inertia:
     F.setMumpsIcntl(13, 1)      # no ScaLAPACK at the root node: every pivot's sign is counted (INFOG(12))
     F.setMumpsIcntl(24, 1)      # detect null pivots (INFOG(28)) instead of failing on them
     dofs = A.getSize()[0]
+    norm = A.norm(PETSc.NormType.INFINITY)
     try:
         pc.setUp()
-        inertia = Inertia(int(F.getMumpsInfog(12)), int(F.getMumpsInfog(28)), dofs)
+        inertia = Inertia(int(F.getMumpsInfog(12)), int(F.getMumpsInfog(28)), dofs, norm_inf=norm)
     except PETSc.Error as e:
-        inertia = Inertia(-1, -1, dofs, f"MUMPS could not factor the tangent (PETSc error {e.ierr})")
+        inertia = Inertia(-1, -1, dofs, f"MUMPS could not factor the tangent (PETSc error {e.ierr})", norm)
     finally:
         ksp.destroy()
         A.destroy()

@@ -13,7 +13,7 @@ METHOD = Key("method", "string", "how the rest shape is found", default="direct"
              choices=("direct", "adjoint", "fixed-point"))
 COMMON_KEYS = (
     Key("target", "file", "another mesh file as the target shape (default: the scene's mesh)"),
-    Key("check", "string", "how the design is checked on its read-back rest mesh: equilibrium (the forward "
+    Key("check", "string", "how the design is checked on its written rest mesh: equilibrium (the forward "
         "residual at the target, a few Newton steps at most, and the tangent's inertia there) or path (a "
         "forward solve ramping the loads from the rest shape)", default="equilibrium",
         choices=("equilibrium", "path")),
