@@ -158,8 +158,8 @@ def solve_static(scene: Scene, material=None, model: Model | None = None) -> Sta
         solve_temperature(model)
     set_load, stops = load_path(model)
     problem = snes.NonlinearProblem(
-        model.unknown, model.residual, model.jacobian, model.bcs,
-        energy=model.energy if model.conservative else None,
+        model.unknown, model.compiled("residual"), model.compiled("jacobian"), model.bcs,
+        energy=model.compiled("energy") if model.conservative else None,
         set_load=set_load, inadmissible=model.inadmissible, state=model.state)
     linear_kind = "direct" if scene.discretization.formulation == "mixed" else scene.solver.linear
     r0 = rigid_motion.rest_residual(model)
@@ -178,7 +178,7 @@ def solve_static(scene: Scene, material=None, model: Model | None = None) -> Sta
     if report.converged:
         model.sync_displacement()
         if model.energy is not None and model.terms[0].energy(model.context) is not None:   # von Mises: none
-            result.energy = model.mesh.comm.allreduce(fem.assemble_scalar(fem.form(model.energy)), op=MPI.SUM)
+            result.energy = model.mesh.comm.allreduce(fem.assemble_scalar(model.compiled("energy")), op=MPI.SUM)
         result.max_displacement = max_norm(model.u)
         result.probes = probes.evaluate(model.u, scene.output.probes)
         result.quantities = Quantities(model)

@@ -53,6 +53,15 @@ class Model:
 
     def __post_init__(self):
         self._det_F: SmallestValue | None = None
+        self._compiled: dict = {}
+
+    def compiled(self, which: str) -> fem.Form | None:
+        """The compiled "residual", "jacobian" or "energy" (None if the model has none), compiled once and
+        shared by the solver and the checks and outputs (each fem.form call re-hashes the UFL form: ~5 ms)."""
+        if which not in self._compiled:
+            expr = getattr(self, which)
+            self._compiled[which] = fem.form(expr) if expr is not None else None
+        return self._compiled[which]
 
     @property
     def mesh(self):

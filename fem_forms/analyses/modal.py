@@ -118,7 +118,7 @@ def assemble_operators(model: Model, kind: str = "direct", lumped: bool = False)
     """K (tangent at model.u, supported rows/columns -> diagonal 1) and M (-> diagonal 0)."""
     mesh, V = model.mesh, model.V
     mat_type = "baij" if kind == "direct" else "aij"     # GAMG rejects BAIJ
-    a = fem.form(model.jacobian)
+    a = model.compiled("jacobian")
     K = fpetsc.create_matrix(a, mat_type)
     fpetsc.assemble_matrix(K, a, bcs=model.bcs, diagonal=1.0)
     K.assemble()

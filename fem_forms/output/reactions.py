@@ -27,7 +27,7 @@ from fem_forms.scene.spec import fix_names
 
 def support_forces(model) -> np.ndarray:
     """(number of fixes, 3): the force each support exerts on the body, summed over all ranks."""
-    b = fpetsc.assemble_vector(fem.form(model.residual))
+    b = fpetsc.assemble_vector(model.compiled("residual"))
     b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
     residual = b.array                                   # owned entries only
     held = np.zeros(len(residual), dtype=bool)

@@ -30,7 +30,7 @@ def rest_residual(model) -> PETSc.Vec:
     unknown.x.array[:] = 0.0
     model.load.set(1.0)
     try:
-        b = fpetsc.assemble_vector(fem.form(model.residual))
+        b = fpetsc.assemble_vector(model.compiled("residual"))
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
     finally:
         unknown.x.array[:] = saved

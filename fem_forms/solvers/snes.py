@@ -10,6 +10,7 @@ from typing import Callable
 
 from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
+from dolfinx.fem.forms import FormMetaClass
 from mpi4py import MPI
 import numpy as np
 from petsc4py import PETSc
@@ -29,10 +30,10 @@ _REASONS = {getattr(PETSc.SNES.ConvergedReason, n): n for n in dir(PETSc.SNES.Co
 class NonlinearProblem:
     """Residual R(u) = 0 (and tangent dR/du) with optional energy whose gradient R is."""
     u: fem.Function
-    residual: ufl.Form
-    jacobian: ufl.Form
+    residual: ufl.Form | fem.Form      # UFL, or compiled already (Model.compiled)
+    jacobian: ufl.Form | fem.Form
     bcs: list
-    energy: ufl.Form | None = None
+    energy: ufl.Form | fem.Form | None = None
     set_load: Callable[[float], None] | None = None     # continuation parameter setter
     inadmissible: Callable[[], str | None] | None = None  # why a state is unphysical, or None
     state: State | None = None         # fields and history committed/rolled back with the steps (default: u)
@@ -50,6 +51,11 @@ class StepRecord:
     note: str = ""            # why an SNES-converged step was still rejected
     krylov_iterations: int = 0
     preconditioner_builds: int = 0   # multigrid hierarchies built (kept across Newton steps when cheaper)
+
+
+def as_compiled(form) -> fem.Form:
+    """A UFL form compiled, or a form compiled already (a Model's, shared with its checks) as it is."""
+    return form if isinstance(form, FormMetaClass) else fem.form(form)
 
 
 def roundoff_floor(tangent_norm: float, x: PETSc.Vec, safety: float = 1.0) -> float:
@@ -108,9 +114,8 @@ class SNESDriver:
         self.user_options = dict(options or {})
         self.prefix = f"{prefix}{next(_DRIVER_IDS)}_"   # one per driver: options of two drivers never mix
         self.near_nullspace = near_nullspace
-        self.L = fem.form(problem.residual)
-        self.a = fem.form(problem.jacobian)
-        self.E = fem.form(problem.energy) if problem.energy is not None else None
+        self.L, self.a = as_compiled(problem.residual), as_compiled(problem.jacobian)
+        self.E = as_compiled(problem.energy) if problem.energy is not None else None
         self.b = fpetsc.create_vector(self.L)
         self.x = self.b.copy()
         self.assembly_time = 0.0

@@ -99,8 +99,9 @@ def solve_at_target(fscene: Scene, loaded: LoadedMesh, pts_rest: np.ndarray, pts
     steps = EQUILIBRIUM_NEWTON_STEPS if fscene.discretization.degree == 1 else CURVED_NEWTON_STEPS
     predicted_displacement(model.u, pts_rest, pts_target)
     model.load.set(1.0)
-    problem = snes.NonlinearProblem(model.unknown, model.residual, model.jacobian, model.bcs,
-                                    energy=model.energy if model.conservative else None, set_load=None,
+    problem = snes.NonlinearProblem(model.unknown, model.compiled("residual"), model.compiled("jacobian"),
+                                    model.bcs, energy=model.compiled("energy") if model.conservative else None,
+                                    set_load=None,
                                     inadmissible=model.inadmissible, state=model.state)
     # full Newton steps: at an equilibrium the energy's changes are round-off, an energy line search sees
     # no decrease and wastes a step (measured on the soft beam: 2 steps with it, 1 without)
@@ -108,7 +109,7 @@ def solve_at_target(fscene: Scene, loaded: LoadedMesh, pts_rest: np.ndarray, pts
     driver = snes.SNESDriver(problem, options, fscene.solver.linear, "fem_forms_check_",
                              near_nullspace=lambda: rigid_body_modes(model.V))
     # the tangent at the target: its inertia (stable?) and its norm (the round-off floor there)
-    inertia = tangent_inertia(model.jacobian, model.bcs)
+    inertia = tangent_inertia(model.compiled("jacobian"), model.bcs)
     try:
         scale = driver.load_scale()              # the residual at the rest shape (u = 0) under full load
         start = driver.residual_norm() / max(scale, 1e-300)
@@ -130,12 +131,12 @@ def solve_at_target(fscene: Scene, loaded: LoadedMesh, pts_rest: np.ndarray, pts
                           f"{tol:.2g}), {last:.2e} after {steps} "
                           f"Newton steps ({step.note if step else report.message})")
     if report.converged and report.newton_iterations:   # Newton moved: the inertia where it ended
-        inertia = tangent_inertia(model.jacobian, model.bcs)  # (a failed solve is rolled back to the target)
+        inertia = tangent_inertia(model.compiled("jacobian"), model.bcs)  # (a failed solve is rolled back to the target)
     return ForwardSolve("equilibrium", StaticResult(model, report), inertia, start)
 
 
 def solve_along_path(fscene: Scene, loaded: LoadedMesh) -> ForwardSolve:
     """Load continuation from the rest shape (the scene's steps and cut-backs), as `fem-forms run` would."""
     static = solve_static(fscene, model=build_model(fscene, loaded=loaded))
-    inertia = tangent_inertia(static.model.jacobian, static.model.bcs) if static.report.converged else None
+    inertia = tangent_inertia(static.model.compiled("jacobian"), static.model.bcs) if static.report.converged else None
     return ForwardSolve("path", static, inertia)

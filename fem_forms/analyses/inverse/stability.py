@@ -12,6 +12,8 @@ from dolfinx.fem import petsc as fpetsc
 from petsc4py import PETSc
 import ufl
 
+from fem_forms.solvers.snes import as_compiled
+
 
 @dataclass
 class Inertia:
@@ -31,10 +33,10 @@ class Inertia:
                 **({"error": self.error} if self.error else {})}
 
 
-def tangent_inertia(jacobian: ufl.Form, bcs: list) -> Inertia:
+def tangent_inertia(jacobian: ufl.Form | fem.Form, bcs: list) -> Inertia:
     """Assemble the tangent at the current state (supported rows: 1 on the diagonal), factor it as
     L D L^T with MUMPS and count the negative and null pivots (the same on every rank)."""
-    a = fem.form(jacobian)
+    a = as_compiled(jacobian)
     A = fpetsc.assemble_matrix(a, bcs=bcs)      # AIJ: MUMPS's Cholesky/LDL^T takes AIJ, not BAIJ
     A.assemble()
     A.setOption(PETSc.Mat.Option.SYMMETRIC, True)
