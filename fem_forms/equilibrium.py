@@ -15,7 +15,6 @@ from fem_forms.physics.heat import HeatForms
 from fem_forms.physics.thermoelastic import young_modulus
 from fem_forms.solvers.heat_step import HeatSolver, max_value, min_value
 from fem_forms.state import State
-from fem_forms.output import probes
 from fem_forms.output.quantities import Quantities
 from fem_forms.output.reactions import reaction_report
 from fem_forms.physics import rigid_motion
@@ -153,7 +152,7 @@ def solve_static(scene: Scene, material=None, model: Model | None = None) -> Sta
     Raises InputError for bad input; a failed solve is returned with report.converged False."""
     t0 = time.perf_counter()
     model = model or build_model(scene, material)
-    probes.evaluate(model.u, scene.output.probes)          # a probe outside the mesh is bad input
+    model.probes                                           # located now: a probe outside the mesh is bad input
     if model.temperature is not None:
         solve_temperature(model)
     set_load, stops = load_path(model)
@@ -180,12 +179,12 @@ def solve_static(scene: Scene, material=None, model: Model | None = None) -> Sta
         if model.energy is not None and model.terms[0].energy(model.context) is not None:   # von Mises: none
             result.energy = model.mesh.comm.allreduce(fem.assemble_scalar(model.compiled("energy")), op=MPI.SUM)
         result.max_displacement = max_norm(model.u)
-        result.probes = probes.evaluate(model.u, scene.output.probes)
+        result.probes = model.probes.evaluate(model.u)
         result.quantities = Quantities(model)
-        result.probe_stresses = result.quantities.at_probes(scene.output.probes)
+        result.probe_stresses = result.quantities.at_probes(model.probes)
         result.reactions = reaction_report(model)
         if model.temperature is not None:
-            for name, value in probes.evaluate(model.temperature, scene.output.probes).items():
+            for name, value in model.probes.evaluate(model.temperature).items():
                 result.probe_stresses.setdefault(name, {})["temperature"] = value[0]
     result.wall_time_s = time.perf_counter() - t0
     return result

@@ -11,6 +11,7 @@ import ufl
 from fem_forms.materials import Material
 from fem_forms.materials.constants import set_parameters
 from fem_forms.meshes import LoadedMesh, load_mesh
+from fem_forms.output.probes import ProbeSet
 from fem_forms.physics.admissibility import SmallestValue
 from fem_forms.physics.assemble import build_material, equilibrium_forms, scene_physics
 from fem_forms.physics.parameters import Parameters
@@ -54,6 +55,14 @@ class Model:
     def __post_init__(self):
         self._det_F: SmallestValue | None = None
         self._compiled: dict = {}
+        self._probes: ProbeSet | None = None
+
+    @property
+    def probes(self) -> ProbeSet:
+        """The scene's output probes located in the mesh once (a point outside it: InputError)."""
+        if self._probes is None:
+            self._probes = ProbeSet(self.mesh, self.scene.output.probes)
+        return self._probes
 
     def compiled(self, which: str) -> fem.Form | None:
         """The compiled "residual", "jacobian" or "energy" (None if the model has none), compiled once and
@@ -117,6 +126,7 @@ class Model:
             for c in fix.components:
                 self.load.rescale((i, c), fix.value[c])
         self.scene = scene
+        self._probes = None
 
 
 NEARLY_INCOMPRESSIBLE_NU = 0.49

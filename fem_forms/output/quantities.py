@@ -59,15 +59,15 @@ class Quantities:
             self._recovered[name] = self.recovery.project(self._expressions[name], name)
         return self._recovered[name]
 
-    def at_probes(self, points: dict[str, list]) -> dict[str, dict]:
+    def at_probes(self, points: probes.ProbeSet) -> dict[str, dict]:
         """{probe: {"stress": Cauchy 3x3 [Pa], "von_mises": [Pa], "strain": Green-Lagrange 3x3}} from the
-        recovered fields at each point (probes.evaluate: MPI-correct, same answer on any rank count)."""
-        if not points:
+        recovered fields at each located point (MPI-correct, same answer on any rank count)."""
+        if not points.names:
             return {}
-        sigma = probes.evaluate(self.recovered("cauchy_stress"), points)
-        strain = probes.evaluate(self.recovered("green_strain"), points)
+        sigma = points.evaluate(self.recovered("cauchy_stress"))
+        strain = points.evaluate(self.recovered("green_strain"))
         out = {}
-        for name in points:
+        for name in points.names:
             s = np.reshape(sigma[name], (3, 3))
             out[name] = {"stress": s.tolist(), "von_mises": float(measures.von_mises(s)),
                          "strain": np.reshape(strain[name], (3, 3)).tolist()}

@@ -44,7 +44,7 @@ def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> d
     write_csvs(out, result, comm)
     summary = result.summary()
     # final probes: recovered stress and strain of the last state, as the static analysis reports them
-    for name, values in Quantities(result.system.model).at_probes(scene.output.probes).items():
+    for name, values in Quantities(result.system.model).at_probes(result.system.model.probes).items():
         summary["probes"].setdefault(name, {}).update(values)
     T = result.system.model.temperature
     if T is not None:                              # [thermal]: the temperature at the end

@@ -155,7 +155,7 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
     if system.model.temperature is not None:
         system.model.temperature.x.array[:] = scene.thermal.initial_temperature
     released = set(dyn.initial_loads) if dyn.initial == "static" else set()
-    points = probes.ProbeSet(system.model.mesh, scene.output.probes)   # outside the mesh: bad input
+    points = system.model.probes                      # located now: a point outside the mesh is bad input
     if dyn.initial == "static":
         initial_static(system)
     initial_velocity(system)
