@@ -14,7 +14,7 @@ from fem_forms.materials import Material, as_material
 from fem_forms.materials.constants import bind_constants
 from fem_forms.meshes import LoadedMesh
 from fem_forms.physics.elastic import ElasticEnergy
-import fem_forms.physics.loads
+import fem_forms.physics.loads  # noqa: F401 (registers the load terms)
 from fem_forms.physics.parameters import Parameters
 from fem_forms.physics.plastic import plastic_term
 from fem_forms.physics.supports import LoadFactor, body_regions, load_regions
