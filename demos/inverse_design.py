@@ -2,7 +2,8 @@
 
 Two scenes, each solved by inverse elastostatics (equilibrium written on the known target shape
 with the rest positions as unknowns) and then checked independently: the rest shape is written as a
-mesh file, loaded as a mesh from what was written, and solved forward under the same loads; it must land on the target.
+mesh file, those arrays are loaded as a mesh and solved forward under the same loads with the forward
+forms; it must land on the target.
 
 1. A soft silicone beam that must hang straight: its rest shape curls up by most of a metre.
 2. A soft goblet (revolved gmsh profile) standing on its base that must keep its designed form.
