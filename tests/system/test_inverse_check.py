@@ -66,6 +66,20 @@ def test_right_design_is_an_equilibrium_and_a_perturbed_one_is_not(tmp_path):
     assert any("lands" in p and "from the target" in p for p in path.problems), path.problems
 
 
+def test_a_design_is_accepted_where_it_stopped_and_no_looser(tmp_path):
+    """One load step, P1: the design's Newton stops at snes_rtol of its residual scale or at its round-off
+    floor; the check accepts the target there without a Newton step (mismatch round-off). The same rest
+    shape scaled by 1 - 1e-6 is off by far more than that tolerance: Newton steps are taken."""
+    d = inverse_beam(E=1e7, cells=(20, 2, 2))
+    d["solver"] = {"steps": 1}
+    _, right = designed_and_checked(d, tmp_path / "right")
+    assert right.problems == [] and right.solve.static.report.newton_iterations == 0
+    assert right.mismatch_max <= 1e-14 and right.solve.start_residual < 1e-8      # the target, to round-off
+    _, near = designed_and_checked(d, tmp_path / "near", perturb=1 - 1e-6)
+    assert near.problems == [] and near.solve.static.report.newton_iterations >= 1
+    assert near.solve.start_residual > 100 * right.solve.start_residual
+
+
 def test_path_check_lands_on_the_target(tmp_path):
     """check = "path": the forward solve ramped from the rest shape reproduces the target to 1e-8 relative,
     as the equilibrium check (default) says it must; results.json names the check that ran."""

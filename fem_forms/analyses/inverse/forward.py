@@ -108,8 +108,11 @@ def solve_at_target(fscene: Scene, loaded: LoadedMesh, pts_rest: np.ndarray, pts
     options = {"snes_linesearch_type": "basic", **fscene.solver.petsc, "snes_max_it": steps}
     driver = snes.SNESDriver(problem, options, fscene.solver.linear, "fem_forms_check_",
                              near_nullspace=lambda: rigid_body_modes(model.V))
-    # the tangent at the target: its inertia (stable?) and its norm (the round-off floor there)
-    inertia = tangent_inertia(model.compiled("jacobian"), model.bcs)
+    # degree 1: the target is expected to be the equilibrium (0 Newton steps), so the tangent is factored
+    # there first: its inertia (stable?) and its norm (the round-off floor there). Degree 2 starts off
+    # equilibrium: its tangent is factored where Newton ends.
+    inertia = tangent_inertia(model.compiled("jacobian"), model.bcs) if fscene.discretization.degree == 1 \
+        else None
     try:
         scale = driver.load_scale()              # the residual at the rest shape (u = 0) under full load
         start = driver.residual_norm() / max(scale, 1e-300)
@@ -118,7 +121,7 @@ def solve_at_target(fscene: Scene, loaded: LoadedMesh, pts_rest: np.ndarray, pts
         # the target (the design's Newton stops there too: on the Chen arm 1.05e-9 of the load's, and
         # without the floor this check took one more Newton step, 0.35 s, to move 2e-15 m)
         tolerance = max(driver.options["snes_rtol"] * max(scale, design_scale),
-                        snes.roundoff_floor(inertia.norm_inf, model.unknown.vector))
+                        snes.roundoff_floor(inertia.norm_inf, model.unknown.vector) if inertia else 0.0)
         driver.user_options.setdefault("snes_atol", tolerance)
         report = continuation.solve(problem, driver=driver, max_cutbacks=0)
     finally:
@@ -130,8 +133,8 @@ def solve_at_target(fscene: Scene, loaded: LoadedMesh, pts_rest: np.ndarray, pts
         report.message = (f"its residual there is {start:.2e} of the load's (tolerance "
                           f"{tol:.2g}), {last:.2e} after {steps} "
                           f"Newton steps ({step.note if step else report.message})")
-    if report.converged and report.newton_iterations:   # Newton moved: the inertia where it ended
-        inertia = tangent_inertia(model.compiled("jacobian"), model.bcs)  # (a failed solve is rolled back to the target)
+    if inertia is None or (report.converged and report.newton_iterations):   # where Newton ended (a failed
+        inertia = tangent_inertia(model.compiled("jacobian"), model.bcs)      # solve: back at the target)
     return ForwardSolve("equilibrium", StaticResult(model, report), inertia, start)
 
 
