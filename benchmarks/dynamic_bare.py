@@ -70,6 +70,8 @@ def bare_run(cells, scheme: str, dt: float, steps: int, lu_every_newton: bool = 
     from mpi4py import MPI
     from petsc4py import PETSc
 
+    from bare_snes import BareSNES
+
     lu0 = lu_count()
     t0 = now()
     comm = MPI.COMM_WORLD
@@ -144,63 +146,24 @@ def bare_run(cells, scheme: str, dt: float, steps: int, lu_every_newton: bool = 
         Pi = (1 / (1 - af)) * potential((1 - af) * u + af * u0) + inertia
         R = ufl.derivative(Pi, u, test)
         L, a, energy = fem.form(R), fem.form(ufl.derivative(R, u, trial)), fem.form(Pi)
-        b = fpetsc.create_vector(L)
-        x = b.copy()
-        A = fpetsc.create_matrix(a, "baij")
-
-        def set_state(xv):
-            xv.copy(u.vector)
-            u.vector.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-
-        def residual(snes, xv, bv):
-            set_state(xv)
-            with bv.localForm() as bl:
-                bl.set(0.0)
-            fpetsc.assemble_vector(bv, L)
-            fpetsc.apply_lifting(bv, [a], bcs=[bcs], x0=[xv], scale=-1.0)
-            bv.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-            fpetsc.set_bc(bv, bcs, xv, -1.0)
-
-        def jacobian(snes, xv, Am, Pm):
-            Am.zeroEntries()
-            fpetsc.assemble_matrix(Am, a, bcs=bcs)
-            Am.assemble()
-
-        def objective(snes, xv):
-            set_state(xv)
-            value = comm.allreduce(fem.assemble_scalar(energy), op=MPI.SUM)
-            return value if np.isfinite(value) else 1e300
-
-        opts, prefix = PETSc.Options(), "bare_"
-        chosen = BARE_LU if lu_every_newton else BARE_SNES
-        for k, v in chosen.items():
-            opts[prefix + k] = v
-        snes = PETSc.SNES().create(comm)
-        snes.setOptionsPrefix(prefix)
-        snes.setFunction(residual, b)
-        snes.setJacobian(jacobian, A)
-        snes.setObjective(objective)
-        snes.setFromOptions()
-        for k in chosen:
-            opts.delValue(prefix + k)
+        solver = BareSNES(u, L, a, energy, bcs, BARE_LU if lu_every_newton else BARE_SNES)
+        snes = solver.snes
         p_am, p_af, p_beta, p_gamma = params(scheme)
         t_setup = now()
         stamps, newton, krylov = [], 0, 0
         for _ in range(steps):
             uo, vo, ao = u0.x.array, v0.x.array, a0.x.array
             u.x.array[:] = uo + dt * vo            # the same (constant-velocity) predictor as ours
-            u.vector.copy(x)
-            snes.solve(None, x)
-            assert snes.getConvergedReason() > 0, snes.getConvergedReason()
+            reason = solver.solve()
+            assert reason > 0, reason
             newton += snes.getIterationNumber()
             krylov += snes.getLinearSolveIterations()
-            set_state(x)
             anew = (u.x.array - uo - dt * vo - dt * dt * (0.5 - p_beta) * ao) / (p_beta * dt * dt)
             v0.x.array[:] = vo + dt * ((1 - p_gamma) * ao + p_gamma * anew)
             a0.x.array[:] = anew
             u0.x.array[:] = u.x.array
             stamps.append(now())
-        snes.destroy()
+        solver.destroy()
     d = np.diff(np.array([t_setup] + stamps), axis=0)
     lu = lu_count()
     vals = u.x.array.reshape(-1, 3)

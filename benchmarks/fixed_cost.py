@@ -46,6 +46,8 @@ if __name__ == "__main__" and "--bare-worker" in sys.argv:
     from mpi4py import MPI
     from petsc4py import PETSc
 
+    from bare_snes import BareSNES
+
     logging.disable(logging.INFO)
     LENGTH, WIDTH, E, NU, RHO = 1.0, 0.1, 1e8, 0.3, 1000.0
     comm = MPI.COMM_WORLD
@@ -65,46 +67,12 @@ if __name__ == "__main__" and "--bare-worker" in sys.argv:
     Pi = psi * dx - RHO * ufl.dot(g, u) * dx
     R = ufl.derivative(Pi, u, ufl.TestFunction(V))
     L, a, energy = fem.form(R), fem.form(ufl.derivative(R, u, ufl.TrialFunction(V))), fem.form(Pi)
-    b = fpetsc.create_vector(L)
-    x = b.copy()
-    A = fpetsc.create_matrix(a, "baij")
-
-    def set_state(xv):
-        xv.copy(u.vector)
-        u.vector.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-
-    def residual(snes, xv, bv):
-        set_state(xv)
-        with bv.localForm() as bl:
-            bl.set(0.0)
-        fpetsc.assemble_vector(bv, L)
-        fpetsc.apply_lifting(bv, [a], bcs=[bcs], x0=[xv], scale=-1.0)
-        bv.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        fpetsc.set_bc(bv, bcs, xv, -1.0)
-
-    def jacobian(snes, xv, Am, Pm):
-        Am.zeroEntries()
-        fpetsc.assemble_matrix(Am, a, bcs=bcs)
-        Am.assemble()
-
-    def objective(snes, xv):
-        set_state(xv)
-        v = comm.allreduce(fem.assemble_scalar(energy), op=MPI.SUM)
-        return v if np.isfinite(v) else 1e300
-
-    opts = PETSc.Options()
-    for k, v in {"snes_type": "newtonls", "snes_max_it": 50, "snes_rtol": 1e-9, "snes_atol": 0.0,
-                 "snes_stol": 1e-11, "snes_linesearch_max_it": 40, "snes_linesearch_type": "bt",
-                 "ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}.items():
-        opts["bare_" + k] = v
-    snes = PETSc.SNES().create(comm)
-    snes.setOptionsPrefix("bare_")
-    snes.setFunction(residual, b)
-    snes.setJacobian(jacobian, A)
-    snes.setObjective(objective)
-    snes.setFromOptions()
-    snes.solve(None, x)
-    set_state(x)
+    solver = BareSNES(u, L, a, energy, bcs, {
+        "snes_type": "newtonls", "snes_max_it": 50, "snes_rtol": 1e-9, "snes_atol": 0.0, "snes_stol": 1e-11,
+        "snes_linesearch_max_it": 40, "snes_linesearch_type": "bt", "ksp_type": "preonly", "pc_type": "lu",
+        "pc_factor_mat_solver_type": "mumps"})
+    solver.solve()
+    snes = solver.snes
     assert snes.getConvergedReason() > 0
     if "--fields" in sys.argv:
         out = sys.argv[sys.argv.index("--fields") + 1]

@@ -7,7 +7,7 @@ GAMG with the rigid-body near-nullspace on an AIJ matrix) linear path.
 
 "ours" is ``fem_forms.solve_static(scene)`` (mesh, space, forms, SNES with continuation and the
 acceptance checks, final energy). "bare" builds the same mesh, space and energy inline and drives
-``PETSc.SNES`` with the same options directly; it imports nothing from fem_forms.
+``PETSc.SNES`` with the same options directly (benchmarks/bare_snes.py); it imports nothing from fem_forms.
 
 Every (size, linear path, implementation, repeat) runs in its own subprocess, so the peak resident
 memory (``ru_maxrss``) belongs to that one run. Each subprocess first does a tiny solve of the same
@@ -139,9 +139,10 @@ def bare_solve(cells, kind: str) -> dict:
     import numpy as np
     import ufl
     from dolfinx import fem, mesh as dmesh
-    from dolfinx.fem import petsc as fpetsc
     from mpi4py import MPI
     from petsc4py import PETSc
+
+    from bare_snes import BareSNES
 
     t0, c0 = time.perf_counter(), time.process_time()
     comm = MPI.COMM_WORLD
@@ -168,73 +169,22 @@ def bare_solve(cells, kind: str) -> dict:
 
     t_solve = time.perf_counter()
     L, a, energy = fem.form(R), fem.form(dR), fem.form(Pi)
-    b = fpetsc.create_vector(L)
-    x = b.copy()
-    A = fpetsc.create_matrix(a, BARE_MAT_TYPE[kind])
-    if kind == "iterative":
-        A.setNearNullSpace(bare_rigid_modes(V))
-    assembly = [0.0]
-    calls = {"R": 0, "J": 0, "E": 0}
-
-    def set_state(xv):
-        xv.copy(u.vector)
-        u.vector.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-
-    def residual(snes, xv, bv):
-        t = time.perf_counter()
-        set_state(xv)
-        with bv.localForm() as bl:
-            bl.set(0.0)
-        fpetsc.assemble_vector(bv, L)
-        fpetsc.apply_lifting(bv, [a], bcs=[bcs], x0=[xv], scale=-1.0)
-        bv.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        fpetsc.set_bc(bv, bcs, xv, -1.0)
-        assembly[0] += time.perf_counter() - t
-        calls["R"] += 1
-
-    def jacobian(snes, xv, Am, Pm):
-        t = time.perf_counter()
-        Am.zeroEntries()
-        fpetsc.assemble_matrix(Am, a, bcs=bcs)
-        Am.assemble()
-        assembly[0] += time.perf_counter() - t
-        calls["J"] += 1
-
-    def objective(snes, xv):
-        t = time.perf_counter()
-        set_state(xv)
-        value = comm.allreduce(fem.assemble_scalar(energy), op=MPI.SUM)
-        assembly[0] += time.perf_counter() - t
-        calls["E"] += 1
-        return value if np.isfinite(value) else 1e300
-
-    prefix = "bare_"
-    opts = PETSc.Options()
-    for k, v in {**BARE_SNES, **BARE_LINEAR[kind]}.items():
-        opts[prefix + k] = v
-    snes = PETSc.SNES().create(comm)
-    snes.setOptionsPrefix(prefix)
-    snes.setFunction(residual, b)
-    snes.setJacobian(jacobian, A)
-    snes.setObjective(objective)
-    snes.setFromOptions()
-    snes.solve(None, x)
-    set_state(x)
+    solver = BareSNES(u, L, a, energy, bcs, {**BARE_SNES, **BARE_LINEAR[kind]}, mat_type=BARE_MAT_TYPE[kind],
+                      near_nullspace=bare_rigid_modes(V) if kind == "iterative" else None)
+    snes = solver.snes
+    solver.solve()
     t_end, c_end = time.perf_counter(), time.process_time()
 
     out = {"dofs": V.dofmap.index_map.size_global * V.dofmap.index_map_bs,
            "converged": snes.getConvergedReason() > 0, "newton": snes.getIterationNumber(),
            "krylov": snes.getLinearSolveIterations(),
-           "linear_solver": kind, "assembly": assembly[0], "solve": t_end - t_solve - assembly[0],
-           "total": t_end - t0, "cpu": c_end - c0, "calls": calls, "mat_type": A.getType()}
+           "linear_solver": kind, "assembly": solver.assembly, "solve": t_end - t_solve - solver.assembly,
+           "total": t_end - t0, "cpu": c_end - c0, "calls": solver.calls, "mat_type": solver.A.getType()}
     # checks outside the timed region
     vals = u.x.array.reshape(-1, 3)
     out["max_u"] = comm.allreduce(float(np.linalg.norm(vals, axis=1).max()), op=MPI.MAX)
     out["energy"] = comm.allreduce(fem.assemble_scalar(energy), op=MPI.SUM)
-    for k in list(BARE_SNES) + list(BARE_LINEAR[kind]):
-        opts.delValue(prefix + k)
-    snes.destroy()
-    A.destroy()
+    solver.destroy()
     return out
 
 
