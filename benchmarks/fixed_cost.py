@@ -252,8 +252,9 @@ def static_rows(med, mcpu, times, tag="") -> list:
     return rows + ["", f"- same outputs computed the same way (recovered stresses, probe, reaction, fields, no "
                        f"picture): {onp} / bare+same = **{med[onp] / med['bare+same']:.2f}x** wall, "
                        f"{mcpu[onp] / mcpu['bare+same']:.2f}x CPU (target 1.1x)",
-                   f"- against bare writing the cheaper DG0 von Mises field and no probe stresses: {onp} / bare+fields = "
-                   f"{med[onp] / med['bare+fields']:.2f}x wall, {mcpu[onp] / mcpu['bare+fields']:.2f}x CPU",
+                   f"- against bare writing the cheaper DG0 von Mises field and no probe stresses: {onp} / "
+                   f"bare+fields = {med[onp] / med['bare+fields']:.2f}x wall, "
+                   f"{mcpu[onp] / mcpu['bare+fields']:.2f}x CPU",
                    f"- default CLI (fields and PNG) against bare solve only: {o} / bare = "
                    f"**{med[o] / med['bare']:.2f}x** wall, {mcpu[o] / mcpu['bare']:.2f}x CPU; against bare+fields "
                    f"{med[o] / med['bare+fields']:.2f}x wall; the picture costs about {med[o] - med[onp]:.2f} s", ""]

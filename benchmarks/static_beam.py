@@ -102,7 +102,7 @@ def run_ours(cells, kind: str) -> dict:
     # record what the driver really used (options, matrix type) and count its assembly callbacks;
     # the wrappers cost a Python call each (microseconds)
     seen = {"options": None, "mat_type": None, "calls": {"R": 0, "J": 0, "E": 0}}
-    build, cbs = snes.SNESDriver._build_snes, {}
+    build = snes.SNESDriver._build_snes
 
     def recording_build(self):
         build(self)
