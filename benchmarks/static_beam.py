@@ -271,7 +271,10 @@ def check(results: dict) -> list:
         tag = f"{p2_dofs(cells):,} dofs {kind}"
         if o["options"] != b["options"]:
             notes.append(f"WARNING {tag}: PETSc options differ: ours {o['options']} bare {b['options']}")
-        if o["quadrature"] != b["quadrature"] or o["mat_type"] != b["mat_type"]:
+        if kind == "iterative" and (o["mat_type"], b["mat_type"]) == ("seqbaij", "seqaij"):
+            notes.append(f"{tag}: ours assembles the tangent as BAIJ (2.5-3x faster) and gives GAMG an AIJ copy "
+                         f"(fem_forms/solvers/snes.py); bare assembles AIJ, as a dolfinx script would")
+        elif o["quadrature"] != b["quadrature"] or o["mat_type"] != b["mat_type"]:
             notes.append(f"WARNING {tag}: quadrature/matrix type differ: {o['quadrature']}/{o['mat_type']} "
                          f"vs {b['quadrature']}/{b['mat_type']}")
         if not all(r["converged"] for r in by["ours"] + by["bare"]):
