@@ -12,7 +12,7 @@ import fem_forms as ff
 from fem_forms.analyses import inverse
 from fem_forms.design.adjoint import AdjointDesign
 from fem_forms.design.forward_on_rest import ForwardOnRest
-from helpers import beam_scene, inverse_beam, mpirun, run_scene, toml_dumps
+from helpers import inverse_beam, mpirun, run_scene, toml_dumps
 
 comm = MPI.COMM_WORLD
 

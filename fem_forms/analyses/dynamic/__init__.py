@@ -11,7 +11,7 @@ from mpi4py import MPI
 
 from fem_forms.analyses.dynamic.output import MotionWriter, write_csvs, write_gif, write_history_png
 from fem_forms.analyses.dynamic.solve import DynamicResult, solve_dynamic
-from fem_forms.output import probes, results
+from fem_forms.output import results
 from fem_forms.output.plastic import plastic_summary
 from fem_forms.output.quantities import Quantities
 from fem_forms.scene import Scene
@@ -49,7 +49,7 @@ def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> d
     T = result.system.model.temperature
     if T is not None:                              # [thermal]: the temperature at the end
         summary["max_temperature"] = max_value(T)
-        for name, value in probes.evaluate(T, scene.output.probes).items():
+        for name, value in result.system.model.probes.evaluate(T).items():
             summary["probes"][name]["temperature"] = value[0]
     summary.update(plastic_summary(result.system.model))
     if "max_plastic_strain" in summary and result.energy.plastic is None:

@@ -29,7 +29,7 @@ def stable_step(system: DynamicSystem) -> tuple[float, float]:
     """(dt_stable, omega_max): 0.9 x 2 / omega_max (sqrt(1 + zeta^2) - zeta), omega_max^2 the largest
     eigenvalue of M^-1 K at the current state by power iteration, zeta the Rayleigh damping ratio there."""
     m = system.model
-    a = fem.form(m.jacobian)
+    a = m.compiled("jacobian")
     K = fpetsc.assemble_matrix(a, bcs=m.bcs)
     K.assemble()
     inv = inverse_mass(system)

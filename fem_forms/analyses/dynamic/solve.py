@@ -86,9 +86,9 @@ def initial_static(system: DynamicSystem) -> None:
         term.factor.value = 1.0 if term.index in held else \
             piecewise_linear(system.scene.load[term.index].history, 0.0)
     m = system.model
-    problem = snes.NonlinearProblem(m.u, m.residual, m.jacobian, m.bcs, energy=m.energy if m.conservative else None,
-                                    set_load=m.load.set, inadmissible=m.inadmissible,
-                                    state=system.state)
+    problem = snes.NonlinearProblem(m.u, m.compiled("residual"), m.compiled("jacobian"), m.bcs,
+                                    energy=m.compiled("energy") if m.conservative else None,
+                                    set_load=m.load.set, inadmissible=m.inadmissible, state=system.state)
     rep = continuation.solve(problem, system.scene.solver.petsc, steps=system.scene.solver.steps,
                              max_cutbacks=system.scene.solver.max_cutbacks, linear_kind="direct")
     if not rep.converged:

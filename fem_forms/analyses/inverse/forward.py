@@ -5,8 +5,9 @@ under the loads. So start Newton from that claim, u = target - rest at every nod
 forward residual there is at tolerance within EQUILIBRIUM_NEWTON_STEPS Newton steps, the claim holds
 (degree 2: see CURVED_NEWTON_STEPS).
 The tolerance is where a static solve of the rest shape from zero would stop: snes_rtol (1e-9) times
-the residual at the rest shape under the full load (or, if larger, times the same loads' residual on the
-target shape: where the direct design's own Newton stopped).
+the residual at the rest shape under the full load, or the larger of where the direct design's own Newton
+stops: snes_rtol times the same loads' residual on the target shape, or the round-off floor at the target
+(eps |K|_inf |u|_inf sqrt(n), at most 1e-6 of the load's). results.json forward_check says which one.
 check = "path": ramp the loads from the rest shape with Newton (load continuation), as a user's static
 run of the rest mesh would; it costs about as much as the design itself.
 Either way the tangent's inertia at the equilibrium found tells whether it is stable."""
@@ -17,10 +18,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from dolfinx import fem
-from scipy.spatial import cKDTree
 import numpy as np
+from petsc4py import PETSc
+from scipy.spatial import cKDTree
 
-from fem_forms.analyses.inverse.stability import Inertia, tangent_inertia
+from fem_forms.analyses.inverse.stability import Inertia, assemble_tangent, inertia_of, tangent_inertia
 from fem_forms.equilibrium import StaticResult, solve_static
 from fem_forms.meshes import LoadedMesh
 from fem_forms.model import build_model
@@ -50,6 +52,8 @@ class ForwardSolve:
     static: StaticResult        # the forward model (mesh, u) and its solve report
     inertia: Inertia | None     # of the tangent at the equilibrium found (None: the path solve failed)
     start_residual: float | None = None   # equilibrium check: |R(target)| / |R(rest shape)| at full load
+    tolerance: float | None = None        # ... and what it was held to (same scale), set by:
+    tolerance_from: str = ""              # "rest shape" | "design" | "round-off" | "snes_atol" (the user's)
 
     def summary(self) -> dict:
         r = self.static.report
@@ -57,6 +61,8 @@ class ForwardSolve:
                "krylov_iterations": r.krylov_iterations, "load_steps": r.load_steps}
         if self.start_residual is not None:
             out["start_residual_relative"] = self.start_residual
+            out["tolerance_relative"] = self.tolerance
+            out["tolerance_from"] = self.tolerance_from
         if self.inertia is not None:
             out["tangent"] = self.inertia.summary()
         return out
@@ -108,34 +114,39 @@ def solve_at_target(fscene: Scene, loaded: LoadedMesh, pts_rest: np.ndarray, pts
     options = {"snes_linesearch_type": "basic", **fscene.solver.petsc, "snes_max_it": steps}
     driver = snes.SNESDriver(problem, options, fscene.solver.linear, "fem_forms_check_",
                              near_nullspace=lambda: rigid_body_modes(model.V))
-    # degree 1: the target is expected to be the equilibrium (0 Newton steps), so the tangent is factored
-    # there first: its inertia (stable?) and its norm (the round-off floor there). Degree 2 starts off
-    # equilibrium: its tangent is factored where Newton ends.
-    inertia = tangent_inertia(model.compiled("jacobian"), model.bcs) if fscene.discretization.degree == 1 \
-        else None
+    K = assemble_tangent(model.compiled("jacobian"), model.bcs)      # at the target
     try:
         scale = driver.load_scale()              # the residual at the rest shape (u = 0) under full load
         start = driver.residual_norm() / max(scale, 1e-300)
         # at tolerance: where a static solve of the rest shape would stop (snes_rtol of that residual), or
         # of the same loads on the target shape, where the design stopped, or at the round-off floor at
-        # the target (the design's Newton stops there too: on the Chen arm 1.05e-9 of the load's, and
-        # without the floor this check took one more Newton step, 0.35 s, to move 2e-15 m)
-        tolerance = max(driver.options["snes_rtol"] * max(scale, design_scale),
-                        snes.roundoff_floor(inertia.norm_inf, model.unknown.vector) if inertia else 0.0)
-        driver.user_options.setdefault("snes_atol", tolerance)
+        # the target (the design's Newton stops there too; on the Chen arm 1.05e-9 of the load's: without
+        # the floor this check took one more Newton step, 0.35 s, to move 2e-15 m), the floor capped at
+        # the 1e-6 of the load a load step's acceptance allows
+        rtol = driver.options["snes_rtol"]
+        bounds = {"rest shape": rtol * scale, "design": rtol * design_scale,
+                  "round-off": min(snes.roundoff_floor(K.norm(PETSc.NormType.INFINITY), model.unknown.vector),
+                                   continuation.ACCEPTED * scale)}
+        driver.user_options.setdefault("snes_atol", max(bounds.values()))
+        tolerance = float(driver.user_options["snes_atol"])
+        set_by = max(bounds, key=bounds.get) if tolerance == max(bounds.values()) else "snes_atol"
         report = continuation.solve(problem, driver=driver, max_cutbacks=0)
     finally:
         driver.snes.destroy()
     if not report.converged:
         step = report.steps[-1] if report.steps else None
         last = step.residuals[-1] / max(scale, 1e-300) if step and step.residuals else float("nan")
-        tol = float(driver.user_options["snes_atol"]) / max(scale, 1e-300)
         report.message = (f"its residual there is {start:.2e} of the load's (tolerance "
-                          f"{tol:.2g}), {last:.2e} after {steps} "
+                          f"{tolerance / max(scale, 1e-300):.2g}), {last:.2e} after {steps} "
                           f"Newton steps ({step.note if step else report.message})")
-    if inertia is None or (report.converged and report.newton_iterations):   # where Newton ended (a failed
-        inertia = tangent_inertia(model.compiled("jacobian"), model.bcs)      # solve: back at the target)
-    return ForwardSolve("equilibrium", StaticResult(model, report), inertia, start)
+    if report.converged and report.newton_iterations:      # the tangent where Newton ended (a failed solve
+        K.destroy()                                         # is rolled back to the target)
+        K = assemble_tangent(model.compiled("jacobian"), model.bcs)
+    inertia = inertia_of(K)
+    K.destroy()
+    check = ForwardSolve("equilibrium", StaticResult(model, report), inertia, start)
+    check.tolerance, check.tolerance_from = tolerance / max(scale, 1e-300), set_by
+    return check
 
 
 def solve_along_path(fscene: Scene, loaded: LoadedMesh) -> ForwardSolve:

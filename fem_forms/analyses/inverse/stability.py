@@ -22,7 +22,6 @@ class Inertia:
     null: int                   # pivots MUMPS found to be zero (a singular tangent)
     dofs: int
     error: str = ""             # why the tangent could not be factored ("" if it was)
-    norm_inf: float = 0.0       # |K|_inf of the tangent factored (its round-off scale)
 
     @property
     def stable(self) -> bool:
@@ -33,15 +32,19 @@ class Inertia:
                 **({"error": self.error} if self.error else {})}
 
 
-def tangent_inertia(jacobian: ufl.Form | fem.Form, bcs: list) -> Inertia:
-    """Assemble the tangent at the current state (supported rows: 1 on the diagonal), factor it as
-    L D L^T with MUMPS and count the negative and null pivots (the same on every rank)."""
-    a = as_compiled(jacobian)
-    A = fpetsc.assemble_matrix(a, bcs=bcs)      # AIJ: MUMPS's Cholesky/LDL^T takes AIJ, not BAIJ
+def assemble_tangent(jacobian: ufl.Form | fem.Form, bcs: list) -> PETSc.Mat:
+    """The tangent at the current state as a symmetric AIJ matrix (supported rows: 1 on the diagonal);
+    AIJ because MUMPS's Cholesky/LDL^T takes AIJ, not BAIJ. The caller destroys it."""
+    A = fpetsc.assemble_matrix(as_compiled(jacobian), bcs=bcs)
     A.assemble()
     A.setOption(PETSc.Mat.Option.SYMMETRIC, True)
-    comm = A.getComm()
-    ksp = PETSc.KSP().create(comm)
+    return A
+
+
+def inertia_of(A: PETSc.Mat) -> Inertia:
+    """Factor the symmetric A as L D L^T with MUMPS and count its negative and null pivots (the same on
+    every rank)."""
+    ksp = PETSc.KSP().create(A.getComm())
     ksp.setOperators(A)
     ksp.setType("preonly")
     pc = ksp.getPC()
@@ -52,13 +55,19 @@ def tangent_inertia(jacobian: ufl.Form | fem.Form, bcs: list) -> Inertia:
     F.setMumpsIcntl(13, 1)      # no ScaLAPACK at the root node: every pivot's sign is counted (INFOG(12))
     F.setMumpsIcntl(24, 1)      # detect null pivots (INFOG(28)) instead of failing on them
     dofs = A.getSize()[0]
-    norm = A.norm(PETSc.NormType.INFINITY)
     try:
         pc.setUp()
-        inertia = Inertia(int(F.getMumpsInfog(12)), int(F.getMumpsInfog(28)), dofs, norm_inf=norm)
+        return Inertia(int(F.getMumpsInfog(12)), int(F.getMumpsInfog(28)), dofs)
     except PETSc.Error as e:
-        inertia = Inertia(-1, -1, dofs, f"MUMPS could not factor the tangent (PETSc error {e.ierr})", norm)
+        return Inertia(-1, -1, dofs, f"MUMPS could not factor the tangent (PETSc error {e.ierr})")
     finally:
         ksp.destroy()
+
+
+def tangent_inertia(jacobian: ufl.Form | fem.Form, bcs: list) -> Inertia:
+    """The inertia of the tangent at the current state."""
+    A = assemble_tangent(jacobian, bcs)
+    try:
+        return inertia_of(A)
+    finally:
         A.destroy()
-    return inertia
