@@ -343,7 +343,7 @@ def load_mesh(spec: MeshSpec, comm: MPI.Comm = MPI.COMM_WORLD, degree: int = 1) 
             arrays = read_mesh_file(spec.file)
             arrays.info = {"source": spec.file.name, "cells": len(arrays.cells)}
         else:
-            resources.check_fits(*resources.tetrahedra_counts(_solid_volume(spec), spec.h, degree),
+            resources.check_fits(*resources.tetrahedra_counts(resources.solid_volume(spec), spec.h, degree),
                                  "tetrahedron", degree, f"mesh.h = {spec.h}", limit)
             arrays = _generate(spec)
             arrays.info = {"source": f"{spec.generator} meshed by gmsh at h = {spec.h:.4g}",
@@ -374,19 +374,6 @@ def settle_coordinate_element(mesh: dmesh.Mesh) -> None:
         sub = ufl.FiniteElement(element.family(), element.cell(), element.degree(),
                                 element.quadrature_scheme(), variant="equispaced")
         domain._ufl_coordinate_element = ufl.VectorElement(sub)
-
-
-def _solid_volume(spec: MeshSpec) -> float:
-    """Volume of a generated solid (revolve: Pappus, outline area times the path of its centroid)."""
-    if spec.generator == "cylinder":
-        return math.pi * spec.radius**2 * spec.height
-    if spec.generator == "sphere":
-        return 4.0 / 3.0 * math.pi * spec.radius**3
-    r, z = np.array(spec.profile, dtype=float).T
-    cross = r * np.roll(z, -1) - np.roll(r, -1) * z
-    area = cross.sum() / 2.0
-    centroid = ((r + np.roll(r, -1)) * cross).sum() / (6.0 * area) if area else 0.0
-    return abs(2.0 * math.pi * centroid * area)
 
 
 def mesh_size(mesh: dmesh.Mesh) -> float:

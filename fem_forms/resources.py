@@ -8,12 +8,15 @@ naming the number, instead of a MemoryError traceback or a machine brought to a 
 """
 from __future__ import annotations
 
+import math
 import os
 import socket
 
 from mpi4py import MPI
+import numpy as np
 
 from fem_forms.errors import InputError
+from fem_forms.scene import MeshSpec
 
 BYTES_PER_CELL = 500
 BYTES_PER_ENTRY = 12            # a double and a column index
@@ -74,3 +77,16 @@ def check_fits(cells: int, dofs: int, cell_type: str, degree: int, key: str, lim
         raise InputError(f"{key}: {cells:.3g} cells, {dofs:.3g} dofs (P{degree}) need at least "
                          f"{need / 2**30:.3g} GiB, more than this machine's {limit / 2**30:.3g} GiB; "
                          "use fewer cells or a coarser h")
+
+
+def solid_volume(spec: MeshSpec) -> float:
+    """Volume of a generated solid (revolve: Pappus, outline area times the path of its centroid)."""
+    if spec.generator == "cylinder":
+        return math.pi * spec.radius**2 * spec.height
+    if spec.generator == "sphere":
+        return 4.0 / 3.0 * math.pi * spec.radius**3
+    r, z = np.array(spec.profile, dtype=float).T
+    cross = r * np.roll(z, -1) - np.roll(r, -1) * z
+    area = cross.sum() / 2.0
+    centroid = ((r + np.roll(r, -1)) * cross).sum() / (6.0 * area) if area else 0.0
+    return abs(2.0 * math.pi * centroid * area)
