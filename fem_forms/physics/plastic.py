@@ -218,11 +218,28 @@ class FiniteVonMisesSolid(PlasticSolid):
         return 0.5 * (lmbda + 2 * mu / 3) * ufl.ln(J) ** 2 + 0.5 * mu * (ufl.tr(bbar) - 3)
 
     def stored_energy(self, ctx: Context) -> ufl.Form:
-        """int psi at the committed C_p^-1 (energy accounting; the plastic work is not in it)."""
-        return ctx.volume(self._psi(ctx, self.mechanical_F(ctx), self.eps_p))
+        """int psi dX at the C_p^-1 the return mapping leads to (energy accounting), its isochoric bbar_e taken
+        at unit determinant: the closed-form return keeps tr bbar_e (so psi's mu/2 (tr bbar_e - 3) would not
+        see the energy the flow releases) and lets det bbar_e drift from 1 (Simo & Hughes, Box 9.1, correct
+        it with a cubic)."""
+        mu, lmbda = self.moduli(ctx)
+        F = self.mechanical_F(ctx)
+        J = ufl.det(F)
+        bbar = J ** (-2.0 / 3.0) * F * self._map(ctx)[1] * F.T
+        iso = ufl.tr(bbar) * ufl.det(bbar) ** (-1.0 / 3.0)
+        return ctx.volume(0.5 * (lmbda + 2 * mu / 3) * ufl.ln(J) ** 2 + 0.5 * mu * (iso - 3))
 
     def elastic_law_energy(self, ctx: Context) -> ufl.Form:
         return ctx.volume(self._psi(ctx, self.mechanical_F(ctx), ufl.Identity(3)))
+
+    def plastic_dissipation(self, start: Context, end: Context) -> ufl.Form:
+        """The work done on the solid in a step that it did not store: int (P_n + P_n+1) / 2 : (F_n+1 - F_n) dX,
+        the trapezoidal rule by which Newmark's identity counts the internal forces' work, minus the change
+        of the stored energy (mechanical only: with a thermal strain the run warns instead). For the
+        small-strain solid this is its own formula's number; the return mapping is implicit, so the stress
+        at a step's start from the committed history is the one the step before ended with."""
+        work = end.volume(ufl.inner(0.5 * (self.pk1(start) + self.pk1(end)), end.F - start.F))
+        return work - self.stored_energy(end) + self.stored_energy(start)
 
     @property
     def plastic_strain(self):
