@@ -164,6 +164,13 @@ class VonMisesSolid(PlasticSolid):
 class OBrienSolid(PlasticSolid):
     """O'Brien-Bargteil-Hodgins: energy of the elastic strain E - eps_p (committed); explicit update."""
 
+    explicit_update = True      # the plastic strain moves at commit, after the step that led to it
+
+    def stored_energy(self, ctx: Context) -> ufl.Form:
+        """int psi(E - eps_p) dX with the plastic strain the commit sets (the update releases energy)."""
+        E = self.strain(ctx)
+        return ctx.volume(self.elastic_energy(ctx, self.plastic.elastic_strain(E, self.plastic.update(E, self.eps_p))))
+
     def energy(self, ctx: Context) -> ufl.Form:
         return ctx.volume(self.elastic_energy(ctx, self.plastic.elastic_strain(self.strain(ctx), self.eps_p)))
 

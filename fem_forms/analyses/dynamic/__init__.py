@@ -52,7 +52,7 @@ def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> d
         for name, value in result.system.model.probes.evaluate(T).items():
             summary["probes"][name]["temperature"] = value[0]
     summary.update(plastic_summary(result.system.model))
-    if "max_plastic_strain" in summary and result.energy.plastic is None:
+    if "max_plastic_strain" in summary and not result.energy.plastic_accounted:
         summary["warnings"] = summary.get("warnings", []) + [
             "plasticity: the plastic work is not in the energy account; energy_balance_error includes it"]
     files = {"probes": "probes.csv", "energy": "energy.csv"}
