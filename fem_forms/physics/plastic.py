@@ -164,12 +164,19 @@ class VonMisesSolid(PlasticSolid):
 class OBrienSolid(PlasticSolid):
     """O'Brien-Bargteil-Hodgins: energy of the elastic strain E - eps_p (committed); explicit update."""
 
-    explicit_update = True      # the plastic strain moves at commit, after the step that led to it
-
     def stored_energy(self, ctx: Context) -> ufl.Form:
         """int psi(E - eps_p) dX with the plastic strain the commit sets (the update releases energy)."""
         E = self.strain(ctx)
         return ctx.volume(self.elastic_energy(ctx, self.plastic.elastic_strain(E, self.plastic.update(E, self.eps_p))))
+
+    def committed_energy(self, ctx: Context) -> ufl.Form:
+        """int psi(E - eps_p) dX at the committed plastic strain: the energy the step's forces derive from."""
+        return self.energy(ctx)
+
+    def plastic_dissipation(self, start: Context, end: Context) -> ufl.Form:
+        """int psi(E - eps_p,n) - psi(E - eps_p,n+1) dX at the step's end strain E: the stored energy the
+        plastic update releases (it happens at commit, at fixed total strain)."""
+        return self.committed_energy(end) - self.stored_energy(end)
 
     def energy(self, ctx: Context) -> ufl.Form:
         return ctx.volume(self.elastic_energy(ctx, self.plastic.elastic_strain(self.strain(ctx), self.eps_p)))
@@ -240,13 +247,15 @@ class FiniteVonMisesSolid(PlasticSolid):
         return ctx.volume(self._psi(ctx, self.mechanical_F(ctx), ufl.Identity(3)))
 
     def plastic_dissipation(self, start: Context, end: Context) -> ufl.Form:
-        """The work done on the solid in a step that it did not store: int (P_n + P_n+1) / 2 : (F_n+1 - F_n) dX,
-        the trapezoidal rule by which Newmark's identity counts the internal forces' work, minus the change
-        of the stored energy (mechanical only: with a thermal strain the run warns instead). For the
-        small-strain solid this is its own formula's number; the return mapping is implicit, so the stress
-        at a step's start from the committed history is the one the step before ended with."""
-        work = end.volume(ufl.inner(0.5 * (self.pk1(start) + self.pk1(end)), end.F - start.F))
-        return work - self.stored_energy(end) + self.stored_energy(start)
+        """int sigma_y (a_n+1 - a_n) + H/2 (a_n+1^2 - a_n^2) dX: on the yield surface, where Simo's return
+        lands, tau : d_p = (sigma_y + H a) da, integrated exactly over the step (a_n committed, a_n+1 the
+        return mapping's at end's state)."""
+        a0, a1 = self.alpha, self._map(end)[2]
+        return end.volume(self.plastic.yield_stress * (a1 - a0) + 0.5 * self.plastic.hardening * (a1**2 - a0**2))
+
+    def committed_energy(self, ctx: Context) -> ufl.Form:
+        """int psi at the committed C_p^-1 (the energy account of a run that cannot count the plastic work)."""
+        return ctx.volume(self._psi(ctx, self.mechanical_F(ctx), self.eps_p))
 
     @property
     def plastic_strain(self):

