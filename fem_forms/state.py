@@ -43,6 +43,14 @@ class State:
             self.old[name].x.array[:] = f.x.array
         self.commits += 1
 
+    def restore(self, values: dict[str, np.ndarray]) -> None:
+        """Set every field and history variable to saved local values and make them the committed state, as
+        they were when saved (no history update: the saved history is already the committed one)."""
+        for name, f in {**self.fields, **self.history}.items():
+            f.x.array[:] = values[name]
+            f.x.scatter_forward()
+            self.old[name].x.array[:] = f.x.array
+
     def adopt_history(self, other: "State") -> None:
         """Take over the history variables of another State (a driver that builds its own fields)."""
         for name, function in other.history.items():

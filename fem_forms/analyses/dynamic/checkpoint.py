@@ -1,5 +1,6 @@
-"""Checkpoints of a dynamic run and --restart: each rank saves its local (u, v, a and, with [thermal], T) arrays, and rank 0
-the time, step, dt, counters, energies and probe rows so far. A restart needs the same number of ranks
+"""Checkpoints of a dynamic run and --restart: each rank saves its local arrays (u, v, a, with [thermal] T, and a
+plastic solid's history at its quadrature points), and rank 0 the time, step, dt, counters, energies and
+probe rows so far. A restart needs the same number of ranks
 (the same partitioning) and continues to the same answer as an uninterrupted run."""
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ import json
 import os
 from pathlib import Path
 
+from mpi4py import MPI
 import numpy as np
 
 from fem_forms.analyses.dynamic.energy import Energies
@@ -19,7 +21,7 @@ def save(folder: Path, result, t: float, step: int, dt: float) -> None:
     if comm.rank == 0:
         folder.mkdir(parents=True, exist_ok=True)
     comm.barrier()
-    arrays = {k: f.x.array for k, f in system.state.fields.items()}
+    arrays = {k: f.x.array for k, f in {**system.state.fields, **system.state.history}.items()}
     tmp = folder / f".rank{comm.rank}.npz"
     np.savez(tmp, **arrays)
     os.replace(tmp, folder / f"rank{comm.rank}.npz")
@@ -49,11 +51,12 @@ def load(out: Path, result) -> tuple[float, int, float]:
         raise InputError(f"--restart {out}: the checkpoint was written by {meta['ranks']} ranks; "
                          f"run with the same number (this run has {comm.size})")
     data = np.load(folder / f"rank{comm.rank}.npz")
-    for k, f in system.state.fields.items():
-        if k not in data or data[k].shape != f.x.array.shape:
-            raise InputError(f"--restart {out}: the checkpoint is of another mesh or discretization")
-        f.x.array[:] = data[k]
-    system.state.commit()
+    state = system.state
+    fits = all(k in data and data[k].shape == f.x.array.shape for k, f in {**state.fields, **state.history}.items())
+    if not comm.allreduce(fits, op=MPI.LAND):
+        raise InputError(f"--restart {out}: the checkpoint is of another mesh, discretization or material "
+                         "(its fields or plastic history do not match this scene's)")
+    state.restore({k: data[k] for k in {**state.fields, **state.history}})
     for name, value in meta["report"].items():
         setattr(result.report, name, value)
     result.energy.history = [(t, Energies(*row)) for t, row in meta["energies"]]
