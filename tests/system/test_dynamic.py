@@ -210,6 +210,14 @@ def test_explicit_agrees_with_implicit_and_refuses_large_steps():
         solve_dynamic(ff.Scene.from_dict(beam({"dt": 5e-3, "scheme": "central-difference", "mass": "lumped"})))
 
 
+def test_lumped_mass_damping_is_counted_as_the_scheme_damps():
+    """Lumped mass: Rayleigh's alpha damping acts through the HRZ diagonal, and the account counts it so:
+    balance 1.9e-14 (3.9e-2 when it counted alpha M v with the consistent M, measured)."""
+    r = solve_dynamic(ff.Scene.from_dict(beam({"mass": "lumped", "duration": 0.05},
+                                              damping={"rayleigh": {"alpha": 20.0, "beta": 0.0}})))
+    assert r.energy.now.dissipated > 0 and r.energy.balance_error() < 1e-10
+
+
 def test_lumped_implicit_close_to_consistent():
     c = solve_dynamic(ff.Scene.from_dict(beam({"duration": 0.05, "dt": 1e-3})))
     m = solve_dynamic(ff.Scene.from_dict(beam({"duration": 0.05, "dt": 1e-3, "mass": "lumped"})))
