@@ -113,6 +113,21 @@ def incompressible_beam(nu, formulation, degree, cells=(20, 2, 2)):
     return ff.Scene.from_dict(d)
 
 
+def tension_block(model="linear", history=((0, 0), (0.02, 1)), duration=0.03, output=None, **dynamic) -> dict:
+    """A 2 x 1 x 0.5 m steel block on rollers on three faces, pulled by 300 MPa on the fourth over a load
+    history (a uniform uniaxial state): von Mises, sigma_y 250 MPa, hardening 20 GPa, Rayleigh alpha 2000."""
+    return {"analysis": "dynamic", "mesh": {"generator": "box", "size": [2.0, 1.0, 0.5], "cells": [2, 2, 2]},
+            "material": {"model": model, "E": 200e9, "nu": 0.3, "rho": 7800.0,
+                         "plasticity": {"model": "von-mises", "yield_stress": 250e6, "hardening": 20e9}},
+            "discretization": {"degree": 1},
+            "fix": [{"where": {"axis": a, "at": 0.0}, "components": [a]} for a in "xyz"],
+            "load": [{"type": "traction", "where": {"axis": "x", "at": 2.0}, "value": [300e6, 0, 0],
+                      "history": [list(p) for p in history]}],
+            "dynamic": {"duration": duration, "dt": 5e-4, **dynamic},
+            "damping": {"rayleigh": {"alpha": 2000.0, "beta": 0.0}},
+            "output": output or {"picture": False, "fields": []}}
+
+
 def mesh_volume(mesh) -> float:
     one = fem.Constant(mesh, 1.0)
     return mesh.comm.allreduce(fem.assemble_scalar(fem.form(one * ufl.dx(domain=mesh))), op=MPI.SUM)

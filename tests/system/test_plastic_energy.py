@@ -19,21 +19,13 @@ import fem_forms as ff
 from fem_forms.analyses.dynamic import solve_dynamic
 from fem_forms.output.plastic import plastic_summary
 from fem_forms.output.quantities import Quantities
-from helpers import mpirun, toml_dumps
+from helpers import mpirun, tension_block, toml_dumps
 
 T, H, SY, E = 300e6, 20e9, 250e6, 200e9
 
 
 def test_plastic_work_closes_the_balance_of_a_bar_loaded_past_yield():
-    d = {"analysis": "dynamic", "mesh": {"generator": "box", "size": [2.0, 1.0, 0.5], "cells": [2, 2, 2]},
-         "material": {"model": "linear", "E": E, "nu": 0.3, "rho": 7800.0,
-                      "plasticity": {"model": "von-mises", "yield_stress": SY, "hardening": H}},
-         "discretization": {"degree": 1},
-         "fix": [{"where": {"axis": a, "at": 0.0}, "components": [a]} for a in "xyz"],
-         "load": [{"type": "traction", "where": {"axis": "x", "at": 2.0}, "value": [T, 0, 0],
-                   "history": [[0, 0], [0.02, 1]]}],
-         "dynamic": {"duration": 0.03, "dt": 5e-4}, "damping": {"rayleigh": {"alpha": 2000.0, "beta": 0.0}},
-         "output": {"picture": False, "fields": []}}
+    d = tension_block()
     r = solve_dynamic(ff.Scene.from_dict(d))
     m, e = r.system.model, r.energy
     assert plastic_summary(m)["max_plastic_strain"] == pytest.approx((T - SY) / H, rel=0.05)   # dynamic overshoot
@@ -53,15 +45,7 @@ def test_finite_strain_plastic_work_and_balance():
     0.9e-3 at 0.1 ms, the closed-form return's own inconsistency (it lets det bbar_e drift from 1); it
     was 0.82 with psi at the committed C_p^-1 and -113 % plastic work against J2 theory's with psi at
     the returned bbar_e without unit determinant."""
-    d = {"analysis": "dynamic", "mesh": {"generator": "box", "size": [2.0, 1.0, 0.5], "cells": [2, 2, 2]},
-         "material": {"model": "neo-hookean", "E": E, "nu": 0.3, "rho": 7800.0,
-                      "plasticity": {"model": "von-mises", "yield_stress": SY, "hardening": H}},
-         "discretization": {"degree": 1},
-         "fix": [{"where": {"axis": a, "at": 0.0}, "components": [a]} for a in "xyz"],
-         "load": [{"type": "traction", "where": {"axis": "x", "at": 2.0}, "value": [T, 0, 0],
-                   "history": [[0, 0], [0.02, 1]]}],
-         "dynamic": {"duration": 0.03, "dt": 5e-4}, "damping": {"rayleigh": {"alpha": 2000.0, "beta": 0.0}},
-         "output": {"picture": False, "fields": []}}
+    d = tension_block("neo-hookean")
     r = solve_dynamic(ff.Scene.from_dict(d))
     e = r.energy
     a = (T - SY) / H
@@ -110,16 +94,8 @@ def test_a_restart_keeps_the_plastic_history(tmp_path):
     checkpoint) and continued with --restart, ends where the uninterrupted run ends: the checkpoint holds the
     plastic history (before it did not, and the restart rebuilt it by one return from zero at the saved
     displacement: the largest plastic strain came out 1.11e-3 instead of 1.63e-3, measured)."""
-    d = {"analysis": "dynamic", "mesh": {"generator": "box", "size": [2.0, 1.0, 0.5], "cells": [2, 2, 2]},
-         "material": {"model": "linear", "E": E, "nu": 0.3, "rho": 7800.0,
-                      "plasticity": {"model": "von-mises", "yield_stress": SY, "hardening": H}},
-         "discretization": {"degree": 1},
-         "fix": [{"where": {"axis": a, "at": 0.0}, "components": [a]} for a in "xyz"],
-         "load": [{"type": "traction", "where": {"axis": "x", "at": 2.0}, "value": [T, 0, 0],
-                   "history": [[0, 0], [0.01, 1], [0.02, 0]]}],
-         "dynamic": {"duration": 0.025, "dt": 5e-4, "checkpoint_every": 10},
-         "damping": {"rayleigh": {"alpha": 2000.0, "beta": 0.0}},
-         "output": {"picture": False, "fields": [], "probes": {"c": [2.0, 1.0, 0.5]}}}
+    d = tension_block(history=((0, 0), (0.01, 1), (0.02, 0)), duration=0.025, checkpoint_every=10,
+                      output={"picture": False, "fields": [], "probes": {"c": [2.0, 1.0, 0.5]}})
     results = {}
     for name, duration in (("full", 0.025), ("half", 0.015)):
         path = tmp_path / f"{name}.toml"

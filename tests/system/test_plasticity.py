@@ -12,7 +12,7 @@ from scipy.optimize import brentq
 
 import fem_forms as ff
 from fem_forms.output.plastic import plastic_summary
-from helpers import ROOT, mpirun, toml_dumps
+from helpers import ROOT, mpirun, tension_block, toml_dumps
 
 E, NU, SY, A, B = 210e9, 0.3, 240e6, 1.0, 2.0
 _geo = importlib.util.spec_from_file_location("thick_sphere", ROOT / "verification" / "geometry" / "thick_sphere.py")
@@ -216,15 +216,7 @@ def test_dynamic_slow_loading_reaches_the_static_plastic_answer(tmp_path):
     its history is committed with each accepted time step, and the end state is the static closed form
     T/E + (T - sigma_y)/H to 1 %, the equivalent plastic strain (T - sigma_y)/H to 5 % (dynamic overshoot)."""
     T, H, sy, E = 300e6, 20e9, 250e6, 200e9
-    d = {"analysis": "dynamic", "mesh": {"generator": "box", "size": [2.0, 1.0, 0.5], "cells": [2, 2, 2]},
-         "material": {"model": "linear", "E": E, "nu": 0.3, "rho": 7800.0,
-                      "plasticity": {"model": "von-mises", "yield_stress": sy, "hardening": H}},
-         "discretization": {"degree": 1},
-         "fix": [{"where": {"axis": a, "at": 0.0}, "components": [a]} for a in "xyz"],
-         "load": [{"type": "traction", "where": {"axis": "x", "at": 2.0}, "value": [T, 0, 0],
-                   "history": [[0, 0], [0.02, 1]]}],
-         "dynamic": {"duration": 0.03, "dt": 5e-4}, "damping": {"rayleigh": {"alpha": 2000.0, "beta": 0.0}},
-         "output": {"picture": False, "fields": ["displacement"], "probes": {"c": [2.0, 1.0, 0.5]}}}
+    d = tension_block(output={"picture": False, "fields": ["displacement"], "probes": {"c": [2.0, 1.0, 0.5]}})
     path = tmp_path / "scene.toml"
     path.write_text(toml_dumps(d))
     p = subprocess.run([sys.executable, "-m", "fem_forms", "run", str(path), "--out", str(tmp_path / "out"), "-q"],
