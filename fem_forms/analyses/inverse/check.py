@@ -25,6 +25,8 @@ class ForwardCheck:
     design_gap_max: float = np.inf  # ... from the deformed shape the design predicted
     matched_mismatch_max: float | None = None   # ... from the target on the matched points/region
     solve: forward.ForwardSolve | None = None   # how the forward check solved, and its tangent's inertia
+    # rank 0: (target points, rest points, boundary faces of both: the same cells) for the picture
+    drawn: tuple | None = None
 
 
 def _stability_problems(solve: forward.ForwardSolve, predicted: str) -> list:
@@ -67,13 +69,14 @@ def check_rest_shape(scene: Scene, res: InverseResult, out: Path) -> ForwardChec
     designed = fields.gather_mesh(mesh, fields.node_values(res.deformed_offset)) \
         if res.deformed_offset is not None else target
     groups = fields.gather_facet_groups(res.loaded)
-    problems = []
+    problems, drawn = [], None
     if comm.rank == 0:
         points, cells, ctype = gathered
+        faces = rest_shape.boundary_faces(cells, ctype)
+        drawn = (target[0], points, faces)
         write_ok = True
         try:
             rest_shape.write_volume_mesh(out / "rest_shape.msh", points, cells, ctype, groups)
-            faces = rest_shape.boundary_faces(cells, ctype)
             tris = rest_shape.triangles(faces)
             rest_shape.write_stl(out / "rest_shape.stl", points, tris)
         except OSError as e:
@@ -95,7 +98,7 @@ def check_rest_shape(scene: Scene, res: InverseResult, out: Path) -> ForwardChec
     pts_target = comm.bcast(target[0] if comm.rank == 0 else None, root=0)
     pts_design = comm.bcast(designed[0] if comm.rank == 0 else None, root=0)
     if problems and any("cannot write" in p for p in problems):
-        return ForwardCheck(np.inf, None, problems)
+        return ForwardCheck(np.inf, None, problems, drawn=drawn)
     # independent forward check: the mesh just written (its very arrays, loaded as any file mesh is:
     # checked, distributed) and the forward problem's forms on it
     vmap = res.v.function_space.dofmap
@@ -110,14 +113,15 @@ def check_rest_shape(scene: Scene, res: InverseResult, out: Path) -> ForwardChec
         solve = (forward.solve_at_target(fscene, loaded, pts_rest, pts_design, res.residual_scale)
                  if scene.inverse.check == "equilibrium" else forward.solve_along_path(fscene, loaded))
     except InputError as e:
-        return ForwardCheck(np.inf, None, problems + [f"the rest shape is not a valid mesh: {e}"])
+        return ForwardCheck(np.inf, None, problems + [f"the rest shape is not a valid mesh: {e}"], drawn=drawn)
     static = solve.static
     predicted = "the target" if res.deformed_offset is None else "the shape the design predicted"
     problems += _stability_problems(solve, predicted)
     if not static.report.converged:
         what = (f"{predicted} is not an equilibrium of the rest shape" if solve.kind == "equilibrium"
                 else "the forward solve from the rest shape failed")
-        return ForwardCheck(np.inf, static, problems + [f"{what}: {static.report.message}"], solve=solve)
+        return ForwardCheck(np.inf, static, problems + [f"{what}: {static.report.message}"], solve=solve,
+                            drawn=drawn)
     fmesh = static.model.mesh
     X = fmesh.geometry.x
     dist, idx = cKDTree(pts_rest).query(X)
@@ -135,24 +139,21 @@ def check_rest_shape(scene: Scene, res: InverseResult, out: Path) -> ForwardChec
     if gap > tol:
         problems.append(f"the forward solve on the rest shape lands {gap:.3g} m from {predicted} "
                         f"(tolerance {tol:.3g} m): another equilibrium, the design is not usable")
-    return ForwardCheck(mismatch, static, problems, gap, matched_max, solve)
+    return ForwardCheck(mismatch, static, problems, gap, matched_max, solve, drawn)
 
 
 def picture(path: Path, res: InverseResult, check: ForwardCheck, title: str) -> None:
-    """Three panels: the target, the designed rest shape, the forward check (rest shape under load)."""
-    mesh = res.loaded.mesh
-    target = fields.gather_mesh(mesh)
-    rest = fields.gather_mesh(mesh, fields.node_values(res.v))
+    """Three panels: the target, the designed rest shape, the forward check (rest shape under load), the
+    first two from the arrays the check gathered (the rest shape has the target's cells and faces)."""
     fwd = None
     if check.static is not None:
         fm = check.static.model.mesh
         fwd = fields.gather_mesh(fm, fields.node_values(check.static.u))
-    if mesh.comm.rank != 0:
+    if res.loaded.mesh.comm.rank != 0:
         return
-    # the rest shape has the target's cells: its boundary faces are the target's (computed once)
-    target_faces = rest_shape.boundary_faces(target[1], target[2])
-    panels = [("target", target[0], target_faces, (0.12, 0.47, 0.71, 0.75)),
-              ("rest shape to fabricate", rest[0], target_faces, (1.0, 0.5, 0.05, 0.75))]
+    target_points, rest_points, target_faces = check.drawn
+    panels = [("target", target_points, target_faces, (0.12, 0.47, 0.71, 0.75)),
+              ("rest shape to fabricate", rest_points, target_faces, (1.0, 0.5, 0.05, 0.75))]
     if fwd is not None:
         kind = check.solve.kind if check.solve is not None else ""
         panels.append((f"forward check, {kind} (mismatch {check.mismatch_max:.2g} m)", fwd[0],
@@ -164,7 +165,7 @@ def picture(path: Path, res: InverseResult, check: ForwardCheck, title: str) -> 
         box = (500 * k + 10, 50, 500 * k + 490, 310)
         to_px = canvas.fit(box, everything)
         if k > 0:                                    # the target as a faint ghost behind the other panels
-            canvas.surface(to_px, target[0], target_faces, (0.5, 0.5, 0.5, 0.08), view=view, outward=True)
+            canvas.surface(to_px, target_points, target_faces, (0.5, 0.5, 0.5, 0.08), view=view, outward=True)
         canvas.surface(to_px, pts, faces, pictures.shade(pts, faces, colour, view[1]), (0, 0, 0, 0.2), view=view,
                        outward=True)
         canvas.text((500 * k + 250, 45), name, 13)
