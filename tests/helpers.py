@@ -113,19 +113,30 @@ def incompressible_beam(nu, formulation, degree, cells=(20, 2, 2)):
     return ff.Scene.from_dict(d)
 
 
+def rollered_block(model="linear", traction=300e6, history=None, E=200e9, yield_stress=250e6, hardening=20e9,
+                   plasticity=None, rho=7800.0, **over) -> dict:
+    """A 2 x 1 x 0.5 m block on rollers on three faces, pulled along x on the fourth (a uniform uniaxial
+    stress): steel, von Mises with linear hardening unless `plasticity` says otherwise; `history` makes the
+    traction follow one."""
+    load = {"type": "traction", "where": {"axis": "x", "at": 2.0}, "value": [traction, 0, 0]}
+    if history is not None:
+        load["history"] = [list(p) for p in history]
+    plasticity = plasticity or {"model": "von-mises", "yield_stress": yield_stress, "hardening": hardening}
+    d = {"mesh": {"generator": "box", "size": [2.0, 1.0, 0.5], "cells": [2, 2, 2]},
+         "material": {"model": model, "E": E, "nu": 0.3, "rho": rho, "plasticity": plasticity},
+         "discretization": {"degree": 1},
+         "fix": [{"where": {"axis": a, "at": 0.0}, "components": [a]} for a in "xyz"],
+         "load": [load]}
+    d.update(over)
+    return d
+
+
 def tension_block(model="linear", history=((0, 0), (0.02, 1)), duration=0.03, output=None, **dynamic) -> dict:
-    """A 2 x 1 x 0.5 m steel block on rollers on three faces, pulled by 300 MPa on the fourth over a load
-    history (a uniform uniaxial state): von Mises, sigma_y 250 MPa, hardening 20 GPa, Rayleigh alpha 2000."""
-    return {"analysis": "dynamic", "mesh": {"generator": "box", "size": [2.0, 1.0, 0.5], "cells": [2, 2, 2]},
-            "material": {"model": model, "E": 200e9, "nu": 0.3, "rho": 7800.0,
-                         "plasticity": {"model": "von-mises", "yield_stress": 250e6, "hardening": 20e9}},
-            "discretization": {"degree": 1},
-            "fix": [{"where": {"axis": a, "at": 0.0}, "components": [a]} for a in "xyz"],
-            "load": [{"type": "traction", "where": {"axis": "x", "at": 2.0}, "value": [300e6, 0, 0],
-                      "history": [list(p) for p in history]}],
-            "dynamic": {"duration": duration, "dt": 5e-4, **dynamic},
-            "damping": {"rayleigh": {"alpha": 2000.0, "beta": 0.0}},
-            "output": output or {"picture": False, "fields": []}}
+    """The rollered block pulled by 300 MPa over a load history in a dynamic run (Rayleigh alpha 2000)."""
+    return rollered_block(model, history=history, analysis="dynamic",
+                          dynamic={"duration": duration, "dt": 5e-4, **dynamic},
+                          damping={"rayleigh": {"alpha": 2000.0, "beta": 0.0}},
+                          output=output or {"picture": False, "fields": []})
 
 
 def mesh_volume(mesh) -> float:

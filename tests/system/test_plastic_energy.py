@@ -19,7 +19,7 @@ import fem_forms as ff
 from fem_forms.analyses.dynamic import solve_dynamic
 from fem_forms.output.plastic import plastic_summary
 from fem_forms.output.quantities import Quantities
-from helpers import mpirun, tension_block, toml_dumps
+from helpers import mpirun, rollered_block, tension_block, toml_dumps
 
 T, H, SY, E = 300e6, 20e9, 250e6, 200e9
 
@@ -59,15 +59,10 @@ def obrien_block(dt: float):
     strain reaches gamma1 = 1e-3: it flows until the plastic limit gamma2 = 0.02 caps |eps_p|."""
     e, nu, g1, g2 = 1e7, 0.3, 1e-3, 0.02
     flow = 2 * e / (2 * (1 + nu)) * g1 / np.sqrt(2 / 3)          # uniaxial S_xx with |dev S| = 2 mu gamma1
-    d = {"analysis": "dynamic", "mesh": {"generator": "box", "size": [2.0, 1.0, 0.5], "cells": [2, 2, 2]},
-         "material": {"model": "stvk", "E": e, "nu": nu, "rho": 1000.0,
-                      "plasticity": {"model": "obrien", "elastic_limit": g1, "plastic_limit": g2}},
-         "discretization": {"degree": 1},
-         "fix": [{"where": {"axis": a, "at": 0.0}, "components": [a]} for a in "xyz"],
-         "load": [{"type": "traction", "where": {"axis": "x", "at": 2.0}, "value": [1.5 * flow, 0, 0],
-                   "history": [[0, 0], [2.0, 1]]}],
-         "dynamic": {"duration": 3.0, "dt": dt}, "damping": {"rayleigh": {"alpha": 20.0, "beta": 0.0}},
-         "output": {"picture": False, "fields": []}}
+    d = rollered_block("stvk", 1.5 * flow, history=((0, 0), (2.0, 1)), E=e, rho=1000.0,
+                       plasticity={"model": "obrien", "elastic_limit": g1, "plastic_limit": g2},
+                       analysis="dynamic", dynamic={"duration": 3.0, "dt": dt},
+                       damping={"rayleigh": {"alpha": 20.0, "beta": 0.0}}, output={"picture": False, "fields": []})
     return solve_dynamic(ff.Scene.from_dict(d)), 2 * e / (2 * (1 + nu)) * g1 * g2 * 1.0   # 2 mu g1 g2 V
 
 

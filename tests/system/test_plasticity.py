@@ -12,7 +12,7 @@ from scipy.optimize import brentq
 
 import fem_forms as ff
 from fem_forms.output.plastic import plastic_summary
-from helpers import ROOT, mpirun, tension_block, toml_dumps
+from helpers import ROOT, mpirun, rollered_block, tension_block, toml_dumps
 
 E, NU, SY, A, B = 210e9, 0.3, 240e6, 1.0, 2.0
 _geo = importlib.util.spec_from_file_location("thick_sphere", ROOT / "verification" / "geometry" / "thick_sphere.py")
@@ -56,13 +56,8 @@ def solve(d):
 def test_von_mises_bar_with_linear_hardening_matches_closed_form():
     """Uniaxial stress past yield: strain T/E + (T - sigma_y)/H (isotropic hardening, alpha = eps_p axial)."""
     T, H = 300e6, 20e9
-    d = {"analysis": "static", "mesh": {"generator": "box", "size": [2.0, 1.0, 0.5], "cells": [2, 2, 2]},
-         "material": {"model": "linear", "E": 200e9, "nu": 0.3,
-                      "plasticity": {"model": "von-mises", "yield_stress": 250e6, "hardening": H}},
-         "discretization": {"degree": 1},
-         "fix": [{"where": {"axis": a, "at": 0.0}, "components": [a]} for a in "xyz"],
-         "load": [{"type": "traction", "where": {"axis": "x", "at": 2.0}, "value": [T, 0, 0]}],
-         "solver": {"steps": 3}, "output": {"picture": False, "fields": False, "probes": {"c": [2.0, 1.0, 0.5]}}}
+    d = rollered_block("linear", T, hardening=H, analysis="static", solver={"steps": 3},
+                       output={"picture": False, "fields": False, "probes": {"c": [2.0, 1.0, 0.5]}})
     r = solve(d)
     assert r.report.converged
     expect = T / 200e9 + (T - 250e6) / H
@@ -79,13 +74,8 @@ def test_finite_strain_von_mises_bar_meets_its_closed_form_and_the_small_strain_
     strains; the elastic part to O(elastic strain^2)); and it tends to the small-strain answer T/E + (T -
     sigma_y)/H as the strain goes to zero."""
     H, sy, Em = 20e9, 250e6, 200e9
-    d = {"analysis": "static", "mesh": {"generator": "box", "size": [2.0, 1.0, 0.5], "cells": [2, 2, 2]},
-         "material": {"model": "neo-hookean", "E": Em, "nu": 0.3,
-                      "plasticity": {"model": "von-mises", "yield_stress": sy, "hardening": H}},
-         "discretization": {"degree": 1},
-         "fix": [{"where": {"axis": a, "at": 0.0}, "components": [a]} for a in "xyz"],
-         "load": [{"type": "traction", "where": {"axis": "x", "at": 2.0}, "value": [T, 0, 0]}],
-         "solver": {"steps": 3}, "output": {"picture": False, "fields": False, "probes": {"c": [2.0, 1.0, 0.5]}}}
+    d = rollered_block("neo-hookean", T, E=Em, yield_stress=sy, hardening=H, analysis="static",
+                       solver={"steps": 3}, output={"picture": False, "fields": False, "probes": {"c": [2.0, 1.0, 0.5]}})
     r = solve(d)
     assert r.report.converged
     stretch = 1.0
@@ -265,13 +255,8 @@ def test_bar_past_its_collapse_load_stops_at_sigma_y_over_t_with_default_solver_
     """Perfectly plastic bar under T = 1.1 sigma_y: the continuation brackets the collapse load factor
     sigma_y / T from below and stops (a smallest increment), in seconds, instead of creeping towards it."""
     T, sy = 275e6, 250e6
-    d = {"analysis": "static", "mesh": {"generator": "box", "size": [2.0, 1.0, 0.5], "cells": [2, 2, 2]},
-         "material": {"model": "linear", "E": 200e9, "nu": 0.3,
-                      "plasticity": {"model": "von-mises", "yield_stress": sy}},
-         "discretization": {"degree": 1},
-         "fix": [{"where": {"axis": a, "at": 0.0}, "components": [a]} for a in "xyz"],
-         "load": [{"type": "traction", "where": {"axis": "x", "at": 2.0}, "value": [T, 0, 0]}],
-         "solver": {"steps": 4}, "output": {"picture": False, "fields": False}}
+    d = rollered_block("linear", T, plasticity={"model": "von-mises", "yield_stress": sy}, analysis="static",
+                       solver={"steps": 4}, output={"picture": False, "fields": False})
     r = solve(d)
     assert not r.report.converged
     assert sy / T * (1 - 1e-3) < r.report.load_reached <= sy / T
