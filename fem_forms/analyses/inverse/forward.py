@@ -144,13 +144,13 @@ def solve_at_target(fscene: Scene, loaded: LoadedMesh, pts_rest: np.ndarray, pts
         K = assemble_tangent(model.compiled("jacobian"), model.bcs)
     inertia = inertia_of(K)
     K.destroy()
-    check = ForwardSolve("equilibrium", StaticResult(model, report), inertia, start)
-    check.tolerance, check.tolerance_from = tolerance / max(scale, 1e-300), set_by
-    return check
+    return ForwardSolve("equilibrium", StaticResult(model, report), inertia, start,
+                        tolerance / max(scale, 1e-300), set_by)
 
 
 def solve_along_path(fscene: Scene, loaded: LoadedMesh) -> ForwardSolve:
     """Load continuation from the rest shape (the scene's steps and cut-backs), as `fem-forms run` would."""
     static = solve_static(fscene, model=build_model(fscene, loaded=loaded))
-    inertia = tangent_inertia(static.model.compiled("jacobian"), static.model.bcs) if static.report.converged else None
+    converged = static.report.converged
+    inertia = tangent_inertia(static.model.compiled("jacobian"), static.model.bcs) if converged else None
     return ForwardSolve("path", static, inertia)
