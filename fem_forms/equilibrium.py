@@ -21,7 +21,6 @@ from fem_forms.physics import rigid_motion
 from fem_forms.scene import Scene
 from fem_forms.solvers import continuation, snes
 from fem_forms.solvers.linear import rigid_body_modes
-from fem_forms.solvers.time_stepping import piecewise_linear
 
 
 @dataclass
@@ -123,25 +122,23 @@ def load_path(model: Model) -> tuple:
     histories' span, each load follows its own history (a load without one is held at 1, as in the
     dynamic analysis), prescribed displacements still scale with lambda, and every history corner is a
     step end."""
-    loads = [t for t in model.terms[1:] if model.scene.load[t.index].history]
-    if not loads:
+    timed = [t for t in model.loads if t.history]
+    if not timed:
         return model.load.set, ()
-    hist = {t.index: model.scene.load[t.index].history for t in model.terms[1:]}
-    t_end = max(h[-1][0] for h in hist.values() if h)
+    t_end = max(t.history[-1][0] for t in timed)
 
     def set_load(lam: float) -> None:
         model.load.set(lam)
         model.load.constant.value = 1.0
-        for t in model.terms[1:]:
-            t.factor.value = piecewise_linear(hist[t.index], lam * t_end)
-    stops = tuple(sorted({p[0] / t_end for h in hist.values() if h for p in h if 0 < p[0] < t_end}))
+        model.terms.update(lam * t_end)
+    stops = tuple(sorted({p[0] / t_end for t in timed for p in t.history if 0 < p[0] < t_end}))
     return set_load, stops
 
 
 def plastic_min_step(model: Model) -> float:
     """A plastic solid's smallest load increment: max_cutbacks halvings of the first (past the collapse load
     the steps would otherwise shrink for ever); 0 (no limit) for an elastic one."""
-    if not hasattr(model.terms[0], "plastic"):
+    if not model.solid.is_plastic:
         return 0.0
     solver = model.scene.solver
     return 1.0 / solver.steps / 2**solver.max_cutbacks
@@ -176,7 +173,7 @@ def solve_static(scene: Scene, material=None, model: Model | None = None) -> Sta
     result = StaticResult(model, report)
     if report.converged:
         model.sync_displacement()
-        if model.energy is not None and model.terms[0].energy(model.context) is not None:   # von Mises: none
+        if model.energy is not None and model.solid.energy(model.context) is not None:   # von Mises: none
             result.energy = model.mesh.comm.allreduce(fem.assemble_scalar(model.compiled("energy")), op=MPI.SUM)
         result.max_displacement = max_norm(model.u)
         result.probes = model.probes.evaluate(model.u)

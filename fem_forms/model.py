@@ -9,14 +9,13 @@ from mpi4py import MPI
 import ufl
 
 from fem_forms.materials import Material
-from fem_forms.materials.constants import set_parameters
 from fem_forms.meshes import LoadedMesh, load_mesh
 from fem_forms.output.probes import ProbeSet
 from fem_forms.physics.admissibility import SmallestValue
-from fem_forms.physics.assemble import build_material, equilibrium_forms, scene_physics
+from fem_forms.physics.assemble import equilibrium_forms, scene_physics
 from fem_forms.physics.parameters import Parameters
-from fem_forms.physics.supports import LoadFactor, supports
-from fem_forms.physics.terms import Context, Term
+from fem_forms.physics.supports import LoadFactor
+from fem_forms.physics.terms import Context, Load, Solid, TermList
 from fem_forms.physics.thermoelastic import couple_temperature
 from fem_forms.scene import Scene
 from fem_forms.state import State
@@ -45,7 +44,7 @@ class Model:
     unknown: fem.Function          # what the solver solves for (u, or the mixed (u, p))
     u_form: object                 # displacement as it appears in forms (u, or split(unknown)[0])
     context: Context
-    terms: list[Term]
+    terms: TermList                # every term, declared once (find them by role: solid, loads)
     parameters: Parameters
     state: State
     warnings: list = field(default_factory=list)
@@ -77,6 +76,16 @@ class Model:
         return self.loaded.mesh
 
     @property
+    def solid(self) -> Solid:
+        """The solid's stored-energy term (elastic or plastic)."""
+        return self.terms.solid
+
+    @property
+    def loads(self) -> list[Load]:
+        """The [[load]] terms, in scene order."""
+        return self.terms.loads
+
+    @property
     def physics(self) -> list[str]:
         """Names of the terms assembled into this model's forms (results.json "physics")."""
         names = [t.name for t in self.terms]
@@ -104,7 +113,7 @@ class Model:
     def inadmissible(self) -> str | None:
         """Why the current state is not physical (inverted elements, a small-strain plastic state with
         large strains), or None."""
-        if hasattr(self.terms[0], "outside_theory") and (why := self.terms[0].outside_theory(self.context)):
+        if why := self.solid.outside_theory(self.context):
             return why
         if self.scene.material.model == "linear" and self.scene.analysis == "static":
             return None                                  # small-strain theory: J has no meaning
@@ -116,12 +125,8 @@ class Model:
     def set_values(self, scene: Scene) -> None:
         """Take the material constants, density, load and support values of `scene` (same mesh, same
         kinds of terms): only Constants and Functions change, no form is compiled."""
-        set_parameters(self.material, build_material(scene))
-        if hasattr(self.terms[0], "plastic"):
-            set_parameters(self.terms[0].plastic, scene.material.plasticity)
+        self.terms.set_values(scene)
         self.parameters.set_density(scene.material.rho)
-        for term in self.terms[1:]:
-            term.set_values(scene.load[term.index])
         for i, fix in enumerate(scene.fix):
             for c in fix.components:
                 self.load.rescale((i, c), fix.value[c])
@@ -139,8 +144,7 @@ def build_model(scene: Scene, material=None, comm: MPI.Comm = MPI.COMM_WORLD,
     loaded = loaded or load_mesh(scene.mesh, comm, degree=scene.discretization.degree)
     mesh = loaded.mesh
     disc = scene.discretization
-    load = LoadFactor(mesh)
-    warnings, owners = [], []
+    warnings = []
     if disc.formulation == "mixed":
         cell = mesh.ufl_cell()
         Wspace = fem.FunctionSpace(mesh, ufl.MixedElement([ufl.VectorElement("Lagrange", cell, 2),
@@ -149,29 +153,27 @@ def build_model(scene: Scene, material=None, comm: MPI.Comm = MPI.COMM_WORLD,
         u_form, pressure = ufl.split(unknown)
         V, _ = Wspace.sub(0).collapse()
         u = fem.Function(V, name="displacement")
-        bcs = supports(Wspace.sub(0), loaded, scene.fix, load, owners=owners)
+        bc_space = Wspace.sub(0)
         v = ufl.split(ufl.TestFunction(Wspace))[0]
     else:
         V = fem.VectorFunctionSpace(mesh, ("Lagrange", disc.degree))
         u = unknown = u_form = fem.Function(V, name="displacement")
-        pressure = None
-        bcs = supports(V, loaded, scene.fix, load, owners=owners)
+        pressure, bc_space = None, V
         v = ufl.TestFunction(V)
         nu = scene.material.nu
         if material is None and nu is not None and nu >= NEARLY_INCOMPRESSIBLE_NU:
             warnings.append(f"material.nu = {nu}: nearly incompressible in the displacement formulation "
                             "locks (too stiff); set [discretization] formulation = \"mixed\"")
-    context, terms = scene_physics(scene, loaded, u_form, material, pressure=pressure, load=load)
+    physics = scene_physics(scene, loaded, u_form, bc_space, material, pressure=pressure)
+    context, terms = physics.context, physics.terms
     fields = {"unknown": unknown}
     if getattr(scene, "thermal", None) is not None:
-        fields["temperature"] = couple_temperature(scene, context, terms[0].material, disc.degree)
+        fields["temperature"] = couple_temperature(scene, context, terms.solid.material, disc.degree)
     forms = equilibrium_forms(terms, context, unknown, v)
     # the mixed energy is a saddle in (u, p): no line-search objective there
     conservative = forms.conservative and disc.formulation != "mixed"
-    mat = terms[0].material
     state = State(fields)
-    if hasattr(terms[0], "attach"):                  # history variables (plasticity)
-        terms[0].attach(state, context)
-    return Model(scene, loaded, V, u, mat, context.dx, load, bcs, forms.energy, forms.residual, forms.jacobian,
-                 conservative, unknown, u_form, context, terms, context.parameters,
-                 state, warnings, owners, fields.get("temperature"))
+    terms.solid.attach(state, context)               # history variables (plasticity)
+    return Model(scene, loaded, V, u, terms.solid.material, context.dx, physics.load, physics.bcs, forms.energy,
+                 forms.residual, forms.jacobian, conservative, unknown, u_form, context, terms,
+                 context.parameters, state, warnings, physics.support_owners, fields.get("temperature"))

@@ -10,7 +10,6 @@ from fem_forms.design.parameters import InverseResult, cellwise_exact, one_point
 from fem_forms.meshes import LoadedMesh, load_mesh
 from fem_forms.physics.admissibility import SmallestValue
 from fem_forms.physics.assemble import inverse_forms, scene_physics
-from fem_forms.physics.supports import LoadFactor, supports
 from fem_forms.scene import Scene
 from fem_forms.solvers import continuation, snes
 from fem_forms.solvers.linear import rigid_body_modes
@@ -23,20 +22,19 @@ def solve_direct(scene: Scene, material=None, loaded: LoadedMesh | None = None) 
     mesh = loaded.mesh
     V = fem.VectorFunctionSpace(mesh, ("Lagrange", scene.discretization.degree))
     v = fem.Function(V, name="rest_minus_target")
-    load = LoadFactor(mesh)
-    bcs = supports(V, loaded, scene.fix, load, sign=-1.0)
     G = ufl.Identity(3) + ufl.grad(v)                   # dX/dx: the target mesh mapped to the rest shape
     w = fem.Function(V)                                  # the variation: d/dw, then w = 0 (u = -v)
 
     def build(sc: Scene):
-        ctx, terms = scene_physics(sc, loaded, w - v, material, rest_map=G, load=load)
-        ctx.deformation = ufl.inv(G) + ufl.grad(w) * ufl.inv(G)
-        return inverse_forms(terms, ctx, v, w), terms, sc.discretization.quadrature
+        physics = scene_physics(sc, loaded, w - v, V, material, rest_map=G, bc_sign=-1.0)
+        physics.context.deformation = ufl.inv(G) + ufl.grad(w) * ufl.inv(G)
+        return inverse_forms(physics.terms, physics.context, v, w), physics, sc.discretization.quadrature
 
     one = one_point_scene(scene, mesh)
-    forms, terms, degree = build(one or scene)
+    forms, physics, degree = build(one or scene)
     if one is not None and not cellwise_exact(forms.residual, v):   # a field that varies inside cells
-        forms, terms, degree = build(scene)
+        forms, physics, degree = build(scene)
+    load, bcs, terms = physics.load, physics.bcs, physics.terms
     residual, jacobian = forms.residual, forms.jacobian
     rest_volume = SmallestValue(ufl.det(G), mesh, degree)
 

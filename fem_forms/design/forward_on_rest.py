@@ -8,7 +8,6 @@ from fem_forms.errors import InputError
 from fem_forms.meshes import LoadedMesh
 from fem_forms.physics.admissibility import SmallestValue
 from fem_forms.physics.assemble import equilibrium_forms, scene_physics
-from fem_forms.physics.supports import LoadFactor, supports
 from fem_forms.scene import Scene
 from fem_forms.solvers import continuation, snes
 
@@ -24,10 +23,10 @@ class ForwardOnRest:
         self.mesh = mesh
         self.d = fem.Function(V, name="rest_minus_target")
         self.u = fem.Function(V, name="displacement")
-        self.load = LoadFactor(mesh)
-        self.bcs = supports(V, loaded, scene.fix, self.load)
         G = ufl.Identity(3) + ufl.grad(self.d)
-        ctx, terms = scene_physics(scene, loaded, self.u, material, rest_map=G, load=self.load)
+        physics = scene_physics(scene, loaded, self.u, V, material, rest_map=G)
+        self.load, self.bcs = physics.load, physics.bcs
+        ctx, terms = physics.context, physics.terms
         if not all(t.conservative for t in terms):
             raise InputError(f"inverse.method = {scene.inverse.method!r}: follower pressure is supported "
                              "by the direct method only")

@@ -11,8 +11,8 @@ import ufl
 
 
 def plastic_term(model):
-    """The model's plastic solid (terms[0]) or None."""
-    return model.terms[0] if hasattr(model.terms[0], "plastic") else None
+    """The model's plastic solid, or None."""
+    return model.solid if model.solid.is_plastic else None
 
 
 def _cell_values(expr, space, dx) -> np.ndarray:

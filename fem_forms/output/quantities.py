@@ -29,11 +29,8 @@ PROJECTED = ("cauchy_stress", "pk1_stress", "pk2_stress", "green_strain", "infin
 def tensor_expressions(model) -> dict:
     """UFL expressions of the model's deformation gradient, strains and stresses, by name."""
     ctx = model.context
-    F = ufl.variable(ctx.F)
-    if hasattr(model.terms[0], "pk1"):               # a plastic solid: its stress at the committed history
-        P = model.terms[0].pk1(ctx)
-    else:                                            # the elastic term: pressure and thermal strain included
-        P = ufl.diff(model.terms[0].density_at(ctx, F), F)
+    F = ctx.F
+    P = model.solid.pk1(ctx)    # elastic: pressure and thermal strain included; plastic: at the committed history
     sigma = P if isinstance(model.material, LinearElastic) else P * F.T / ufl.det(F)
     I = ufl.Identity(3)
     return {"deformation_gradient": F, "pk1_stress": P, "pk2_stress": ufl.inv(F) * P,

@@ -47,7 +47,7 @@ def support_forces(model) -> np.ndarray:
 def applied_load(model) -> np.ndarray:
     """Resultant [Fx, Fy, Fz] of all load terms at the current state and load factor (all ranks)."""
     ctx = model.context
-    loads = model.terms[1:]                                  # terms[0] is the solid (elastic or plastic)
+    loads = model.loads
     if not loads:
         return np.zeros(3)
     shape = model.unknown.ufl_shape

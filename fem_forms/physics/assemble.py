@@ -17,8 +17,8 @@ from fem_forms.physics.elastic import ElasticEnergy
 import fem_forms.physics.loads  # noqa: F401 (registers the load terms)
 from fem_forms.physics.parameters import Parameters
 from fem_forms.physics.plastic import plastic_term
-from fem_forms.physics.supports import LoadFactor, body_regions, load_regions
-from fem_forms.physics.terms import Context, LOAD_TERMS, Term
+from fem_forms.physics.supports import LoadFactor, body_regions, load_regions, supports
+from fem_forms.physics.terms import Context, LOAD_TERMS, SCENE_TERMS, Term, TermList
 from fem_forms.scene import Scene
 
 
@@ -29,23 +29,39 @@ def build_material(scene: Scene, override=None) -> Material:
     return scene.material.material
 
 
-def scene_physics(scene: Scene, loaded: LoadedMesh, u, material=None, rest_map=None, pressure=None,
-                  load: LoadFactor | None = None) -> tuple[Context, list[Term]]:
-    """The Context (measures, density field, load factor, kinematics of `u` and the rest map) and the
-    terms of a scene, the material's parameters as Constants."""
+@dataclass
+class Physics:
+    """What every model is built from: the Context, the declared terms, the load factor and the supports."""
+    context: Context
+    terms: TermList
+    load: LoadFactor
+    bcs: list
+    support_owners: list                  # (fix index, component) of each of bcs
+
+
+def scene_physics(scene: Scene, loaded: LoadedMesh, u, bc_space: fem.FunctionSpace, material=None,
+                  rest_map=None, pressure=None, bc_sign: float = 1.0) -> Physics:
+    """The one recipe every model follows (forward, on a designed rest shape, inverse): the Context
+    (measures, density field, load factor, kinematics of `u` and the rest map), the scene's terms with the
+    material's parameters as Constants, and the supports on `bc_space` (sign -1: the inverse problem's
+    unknown is rest minus deformed position)."""
     mesh = loaded.mesh
     mat = bind_constants(build_material(scene, material), mesh)
     dx = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": scene.discretization.quadrature})
     parameters = Parameters(mesh, scene.material.rho)
-    ctx = make_context(loaded, scene, u, dx, parameters, load or LoadFactor(mesh), rest_map, pressure)
+    load = LoadFactor(mesh)
+    owners: list = []
+    bcs = supports(bc_space, loaded, scene.fix, load, sign=bc_sign, owners=owners)
+    ctx = make_context(loaded, scene, u, dx, parameters, load, rest_map, pressure)
     name = scene.material.model if material is None else getattr(as_material(material), "name",
                                                                    type(material).__name__)
-    return ctx, scene_terms(scene, mat, mesh, name)
+    return Physics(ctx, declare_terms(scene, mat, mesh, name), load, bcs, owners)
 
 
-def scene_terms(scene: Scene, material: Material, mesh, model_name: str | None = None) -> list[Term]:
-    """The elastic energy of the scene's material (its plastic solid with [material.plasticity]) and one
-    term per [[load]], in scene order."""
+def declare_terms(scene: Scene, material: Material, mesh, model_name: str | None = None) -> TermList:
+    """The one place a model's terms are declared: the solid (the scene's material, its plastic solid with
+    [material.plasticity]), one term per [[load]] in scene order, then those of each registered scene
+    section (SCENE_TERMS) the scene asks for."""
     plastic = scene.material.plasticity if model_name in (None, scene.material.model) else None
     if plastic is not None:
         solid = plastic_term(material, plastic, scene.material.model, mesh, scene.discretization.quadrature)
@@ -54,7 +70,9 @@ def scene_terms(scene: Scene, material: Material, mesh, model_name: str | None =
     terms: list[Term] = [solid]
     for i, spec in enumerate(scene.load):
         terms.append(LOAD_TERMS[spec.type](spec, i, mesh))
-    return terms
+    for build in SCENE_TERMS.values():
+        terms.extend(build(scene, mesh))
+    return TermList(terms)
 
 
 def make_context(loaded: LoadedMesh, scene: Scene, u, dx: ufl.Measure, parameters: Parameters,
@@ -118,8 +136,11 @@ def inverse_forms(terms: list[Term], ctx: Context, rest_offset: fem.Function,
     (0.142-0.148 s); a Gateaux derivative with u = -v substituted took 0.166 s."""
     V = rest_offset.function_space
     eta, trial = ufl.TestFunction(V), ufl.TrialFunction(V)
-    parts = [t.first_variation(ctx, eta) if hasattr(t, "first_variation") else ufl.derivative(t.energy(ctx),
-             variation, eta) for t in terms if t.energy(ctx) is not None]
+    parts = []
+    for t in terms:
+        if t.energy(ctx) is not None:
+            by_hand = t.first_variation(ctx, eta)
+            parts.append(by_hand if by_hand is not None else ufl.derivative(t.energy(ctx), variation, eta))
     work = sum(parts[1:], parts[0])
     extra = virtual_work(terms, ctx, eta)
     if extra is not None:

@@ -20,15 +20,16 @@ from petsc4py import PETSc
 import ufl
 from ufl.algorithms import expand_derivatives
 
-from fem_forms.physics.elastic import ElasticEnergy
-from fem_forms.physics.terms import Context, Term
+from fem_forms.physics.terms import Context, Solid, Term
 
 
 class RayleighDamping(Term):
     """alpha int rho v . w dX + beta K0(v, w) (the mass part left out when a lumped mass carries it)."""
     name = "damping (Rayleigh)"
+    role = "damping"
+    keys = ("damping",)
 
-    def __init__(self, mesh, alpha: float, beta: float, elastic: ElasticEnergy, V: fem.FunctionSpace,
+    def __init__(self, mesh, alpha: float, beta: float, elastic: Solid, V: fem.FunctionSpace,
                  velocity, with_mass: bool = True):
         self.alpha = fem.Constant(mesh, PETSc.ScalarType(alpha))
         self.beta = fem.Constant(mesh, PETSc.ScalarType(beta))
@@ -39,8 +40,8 @@ class RayleighDamping(Term):
         """K0(v, w): the second variation of the elastic energy at rest, in directions v and w."""
         rest = self._rest
         trial = ufl.TrialFunction(self.V)
-        energy = getattr(self.elastic, "elastic_law_energy", self.elastic.energy)   # a plastic solid: its elastic law
-        k0 = ufl.derivative(ufl.derivative(energy(replace(ctx, u=rest)), rest, w), rest, trial)
+        energy = self.elastic.elastic_law_energy(replace(ctx, u=rest))   # a plastic solid: its elastic law
+        k0 = ufl.derivative(ufl.derivative(energy, rest, w), rest, trial)
         return ufl.replace(expand_derivatives(k0), {trial: v})
 
     def virtual_work(self, ctx: Context, w) -> ufl.Form:
@@ -53,6 +54,8 @@ class RayleighDamping(Term):
 class ViscousDamping(Term):
     """Kelvin-Voigt stress from the strain rate with shear and bulk viscosities (Pa s)."""
     name = "damping (viscous)"
+    role = "damping"
+    keys = ("damping",)
 
     def __init__(self, mesh, shear: float, bulk: float, velocity, small_strain: bool):
         self.shear = fem.Constant(mesh, PETSc.ScalarType(shear))

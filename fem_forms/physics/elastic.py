@@ -4,16 +4,25 @@ from __future__ import annotations
 import ufl
 
 from fem_forms.materials import LinearElastic, Material, mixed_energy
-from fem_forms.physics.terms import Context, Term
+from fem_forms.materials.constants import set_parameters
+from fem_forms.physics.terms import Context, Solid
 from fem_forms.physics.thermoelastic import thermoelastic_density
 
 
-class ElasticEnergy(Term):
+class ElasticEnergy(Solid):
     """Stored energy of the solid; the material's parameters are Constants (see bind_constants)."""
 
     def __init__(self, material: Material, model_name: str = "user"):
         self.material = material
         self.name = f"elastic ({model_name})"
+
+    def set_values(self, scene) -> None:
+        set_parameters(self.material, scene.material.material)
+
+    def pk1(self, ctx: Context):
+        """P = d psi / d F (pressure field and thermal strain included) by ufl.diff."""
+        F = ufl.variable(ctx.F)
+        return ufl.diff(self.density_at(ctx, F), F)
 
     def density(self, ctx: Context):
         """psi per rest volume at the context's F (mixed energy with the context's pressure)."""

@@ -12,6 +12,8 @@ from fem_forms.physics.time_discrete import TimeDiscrete
 class Inertia(Term):
     """Mass of the solid with the context's density field (cellwise, so carving changes it)."""
     name = "inertia"
+    role = "inertia"
+    keys = ("material", "rho")
 
     def mass(self, ctx: Context, a, v) -> ufl.Form:
         """int rho a . v dX: the mass form with trial `a` and test `v` (or a load form for a fixed a)."""

@@ -12,21 +12,19 @@ from dolfinx import fem, mesh as dmesh
 from petsc4py import PETSc
 import ufl
 
-from fem_forms.physics.terms import Context, Term, register_load
+from fem_forms.physics.terms import Context, Load as LoadTerm, register_load
 from fem_forms.scene import Load
 
 
 @register_load("gravity")
-class Gravity(Term):
+class Gravity(LoadTerm):
     """Weight: -lambda int rho g . u dX (rho the density field), over the body or a gmsh volume group."""
     name = "gravity"
 
-    def __init__(self, spec: Load, index: int, mesh: dmesh.Mesh):
-        self.index = index
+    def declare(self, spec: Load, mesh: dmesh.Mesh) -> None:
         self.g = fem.Constant(mesh, PETSc.ScalarType(tuple(spec.g)))
-        self.factor = fem.Constant(mesh, PETSc.ScalarType(1.0))   # this load's time history
 
-    def set_values(self, spec: Load) -> None:
+    def set_spec(self, spec: Load) -> None:
         self.g.value = spec.g
 
     def energy(self, ctx: Context) -> ufl.Form:
@@ -39,16 +37,14 @@ class Gravity(Term):
 
 
 @register_load("traction")
-class Traction(Term):
+class Traction(LoadTerm):
     """Dead traction per rest area on the selected facets: -lambda int T . u dA."""
     name = "traction"
 
-    def __init__(self, spec: Load, index: int, mesh: dmesh.Mesh):
-        self.index = index
+    def declare(self, spec: Load, mesh: dmesh.Mesh) -> None:
         self.value = fem.Constant(mesh, PETSc.ScalarType(tuple(spec.value)))
-        self.factor = fem.Constant(mesh, PETSc.ScalarType(1.0))   # this load's time history
 
-    def set_values(self, spec: Load) -> None:
+    def set_spec(self, spec: Load) -> None:
         self.value.value = spec.value
 
     def energy(self, ctx: Context) -> ufl.Form:
@@ -57,17 +53,15 @@ class Traction(Term):
 
 
 @register_load("pressure")
-class Pressure(Term):
+class Pressure(LoadTerm):
     """Follower pressure p on the deformed surface, pushing against its outward normal:
     virtual work lambda int p J F^-T N . v dA."""
     name = "pressure"
 
-    def __init__(self, spec: Load, index: int, mesh: dmesh.Mesh):
-        self.index = index
+    def declare(self, spec: Load, mesh: dmesh.Mesh) -> None:
         self.value = fem.Constant(mesh, PETSc.ScalarType(spec.pressure))
-        self.factor = fem.Constant(mesh, PETSc.ScalarType(1.0))   # this load's time history
 
-    def set_values(self, spec: Load) -> None:
+    def set_spec(self, spec: Load) -> None:
         self.value.value = spec.pressure
 
     def virtual_work(self, ctx: Context, v) -> ufl.Form:

@@ -1,4 +1,4 @@
-"""The plastic solid as a term (it replaces the elastic energy as terms[0]) and its history variables.
+"""The plastic solid as a term (the model's solid in place of the elastic energy) and its history variables.
 
 The history (plastic strain, equivalent plastic strain) lives on quadrature spaces of the dx degree; the
 forms use its COMMITTED values, which change only in State.commit() (the return mapping evaluated at
@@ -20,10 +20,10 @@ import ufl
 
 from fem_forms.errors import InputError
 from fem_forms.kinematics import green_strain, small_strain
-from fem_forms.materials.constants import bind_constants
+from fem_forms.materials.constants import bind_constants, set_parameters
 from fem_forms.materials.plasticity import OBrien, VonMises
 from fem_forms.physics.admissibility import SmallestValue, quadrature_points
-from fem_forms.physics.terms import Context, Term
+from fem_forms.physics.terms import Context, Solid
 from fem_forms.state import State
 
 
@@ -38,8 +38,9 @@ def quadrature_rule(mesh, degree: int) -> tuple[np.ndarray, np.ndarray]:
     return points, weights
 
 
-class PlasticSolid(Term):
+class PlasticSolid(Solid):
     """Shared part: the material (Constants), the plastic model (Constants) and the history spaces."""
+    is_plastic = True
 
     def __init__(self, material, plastic, model_name: str, mesh, degree: int, green: bool):
         self.material = material
@@ -55,6 +56,15 @@ class PlasticSolid(Term):
         self._small = None
         self.eps_p = fem.Function(Qt, name="plastic_strain")          # committed plastic strain
         self.alpha = fem.Function(Qs, name="equivalent_plastic_strain")   # committed equivalent strain
+
+    def set_values(self, scene) -> None:
+        set_parameters(self.material, scene.material.material)
+        set_parameters(self.plastic, scene.material.plasticity)
+
+    def counts_plastic_work(self, thermal: bool) -> bool:
+        """Booked by the energy account; with a temperature only where the thermal work of the stresses is
+        written (small-strain von Mises overrides this)."""
+        return not thermal
 
     def strain(self, ctx: Context):
         """Total strain minus the thermal strain (small strain, or Green strain of F / (1 + eps_th))."""
@@ -153,6 +163,9 @@ class VonMisesSolid(PlasticSolid):
         e1, eps_p1, _ = self._map(end)
         mean = 0.5 * (self.stress(start) + self.elastic_stress(end, e1))
         return end.volume(ufl.inner(mean, eps_p1 - self.eps_p))
+
+    def counts_plastic_work(self, thermal: bool) -> bool:
+        return True
 
     def thermal_work(self, start: Context, end: Context) -> ufl.Form:
         """-int (sigma_n + sigma_n+1) / 2 : (eps_th,n+1 - eps_th,n) I dX: the work of the thermal expansion in

@@ -15,11 +15,13 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Callable
 
-from dolfinx import mesh as dmesh
+from dolfinx import fem, mesh as dmesh
+from petsc4py import PETSc
 import ufl
 
 from fem_forms.physics.parameters import Parameters
 from fem_forms.physics.supports import LoadFactor
+from fem_forms.physics.histories import piecewise_linear
 
 
 @dataclass
@@ -77,8 +79,17 @@ class Term:
     """One named contribution. Conservative terms give `energy(ctx)` (their residual and tangent come from
     ufl.derivative); others give `virtual_work(ctx, v)`, added to the residual as it is. A conservative term
     may also give `first_variation(ctx, v)`, its energy's derivative in the displacement direction v
-    written with ufl.diff, which the inverse problem uses (faster kernels there, same derivative)."""
+    written with ufl.diff, which the inverse problem uses (faster kernels there, same derivative).
+
+    What a term declares about itself (the model finds terms by these, never by position):
+    `role` (what it is to the analyses: "solid", "load", "damping", "inertia", ...), `keys` (the scene
+    keys that created it, e.g. ("load", 2)), `fields` (the unknown fields it acts on). `set_values(scene)`
+    takes new values of its Constants from a scene (nothing compiles); `update(t)` moves it to time (or
+    pseudo-time) t."""
     name: str = "term"
+    role: str = "term"
+    keys: tuple = ()
+    fields: tuple = ("displacement",)
 
     def energy(self, ctx: Context) -> ufl.Form | None:
         return None
@@ -86,9 +97,120 @@ class Term:
     def virtual_work(self, ctx: Context, v) -> ufl.Form | None:
         return None
 
+    def first_variation(self, ctx: Context, v) -> ufl.Form | None:
+        """The energy's derivative in direction v written by hand (None: ufl.derivative of `energy`)."""
+        return None
+
+    def set_values(self, scene) -> None:
+        """Take this term's values from `scene` (same kinds of terms): Constants change, nothing compiles."""
+
+    def update(self, t: float) -> None:
+        """Move to time (or pseudo-time) t; a term without a history has nothing to do."""
+
     @property
     def conservative(self) -> bool:
         return type(self).virtual_work is Term.virtual_work
+
+
+class Solid(Term):
+    """The solid's own stored energy (elastic or plastic): the one term every model has exactly once.
+    It says how stresses are recovered (`pk1`), whether its state carries history (`attach` registers
+    it with the State) and when a state lies outside its theory."""
+    role = "solid"
+    keys = ("material",)
+    is_plastic = False
+    material: object = None
+
+    def pk1(self, ctx: Context):
+        """First Piola-Kirchhoff stress at the context's state (UFL)."""
+        raise NotImplementedError
+
+    def attach(self, state, ctx: Context) -> None:
+        """Register history variables with the State (none for an elastic solid)."""
+
+    def outside_theory(self, ctx: Context) -> str | None:
+        """Why the state lies outside the model's theory, or None."""
+        return None
+
+    def elastic_law_energy(self, ctx: Context) -> ufl.Form:
+        """int psi dX of the elastic law alone (the stiffness at rest, for Rayleigh damping)."""
+        return self.energy(ctx)
+
+    def committed_energy(self, ctx: Context) -> ufl.Form | None:
+        """The stored energy at the committed history (the energy account's when plastic work is not counted)."""
+        return self.energy(ctx)
+
+    def counts_plastic_work(self, thermal: bool) -> bool:
+        """Whether the energy account books this solid's plastic work (`plastic_dissipation`)."""
+        return False
+
+
+class Load(Term):
+    """An external load from one [[load]] table: its values are Constants, scaled by the model's load
+    factor and by its own `factor` (its history at the current time; 1 without one)."""
+    role = "load"
+
+    def __init__(self, spec, index: int, mesh: dmesh.Mesh):
+        self.index = index
+        self.keys = ("load", index)
+        self.history = list(spec.history or [])
+        self.factor = fem.Constant(mesh, PETSc.ScalarType(1.0))
+        self.declare(spec, mesh)
+
+    def declare(self, spec, mesh: dmesh.Mesh) -> None:
+        """Create this load's Constants from its [[load]] table."""
+
+    def set_spec(self, spec) -> None:
+        """Take new values of this load's [[load]] table into its Constants."""
+
+    def set_values(self, scene) -> None:
+        self.history = list(scene.load[self.index].history or [])
+        self.set_spec(scene.load[self.index])
+
+    def factor_at(self, t: float) -> float:
+        """The load's history at time t (1 without a history)."""
+        return piecewise_linear(self.history, t)
+
+    def update(self, t: float) -> None:
+        self.factor.value = self.factor_at(t)
+
+
+class TermList:
+    """The model's terms, declared once, in scene order; found by role, never by position."""
+
+    def __init__(self, terms: list[Term]):
+        self.all = list(terms)
+        solids = [t for t in self.all if t.role == "solid"]
+        if len(solids) != 1:
+            raise ValueError(f"a model has exactly one solid term, got {len(solids)}")
+
+    def __iter__(self):
+        return iter(self.all)
+
+    def __len__(self) -> int:
+        return len(self.all)
+
+    def __add__(self, other):
+        return list(self.all) + list(other)
+
+    @property
+    def solid(self) -> Solid:
+        return next(t for t in self.all if t.role == "solid")
+
+    @property
+    def loads(self) -> list[Load]:
+        return self.with_role("load")
+
+    def with_role(self, role: str) -> list[Term]:
+        return [t for t in self.all if t.role == role]
+
+    def set_values(self, scene) -> None:
+        for t in self.all:
+            t.set_values(scene)
+
+    def update(self, t: float) -> None:
+        for term in self.all:
+            term.update(t)
 
 
 # load type (the [[load]] type key) -> builder(spec, index in scene.load, mesh) -> Term
@@ -100,4 +222,17 @@ def register_load(kind: str) -> Callable:
     def add(cls):
         LOAD_TERMS[kind] = cls
         return cls
+    return add
+
+
+# a scene section (e.g. "contact") -> builder(scene, mesh) -> the terms it asks for (none: an empty list)
+SCENE_TERMS: dict[str, Callable] = {}
+
+
+def register_terms(section: str) -> Callable:
+    """Function decorator: `builder(scene, mesh) -> list[Term]` declares the terms of a scene section
+    (a new kind of physics is one module with one such registration)."""
+    def add(builder):
+        SCENE_TERMS[section] = builder
+        return builder
     return add

@@ -95,14 +95,6 @@ def history_corners(*histories: list | None) -> tuple:
     return tuple(sorted({p[0] for h in histories if h for p in h[1:-1]} | {h[-1][0] for h in histories if h}))
 
 
-def piecewise_linear(history: list | None, t: float) -> float:
-    """The factor of a [[t, f], ...] history at time t (held constant outside; None: 1)."""
-    if not history:
-        return 1.0
-    ts, fs = zip(*history)
-    return float(np.interp(t, ts, fs))
-
-
 def largest_eigenvalue(apply_K: Callable[[PETSc.Vec, PETSc.Vec], None], inv_mass: PETSc.Vec,
                        iterations: int = 40, seed: int = 1) -> float:
     """lambda_max of M^-1 K (M diagonal, given as its inverse, zero at constrained dofs) by power

@@ -29,7 +29,7 @@ def test_plastic_work_closes_the_balance_of_a_bar_loaded_past_yield():
     r = solve_dynamic(ff.Scene.from_dict(d))
     m, e = r.system.model, r.energy
     assert plastic_summary(m)["max_plastic_strain"] == pytest.approx((T - SY) / H, rel=0.05)   # dynamic overshoot
-    a = m.terms[0].alpha                                  # committed equivalent plastic strain (quadrature points)
+    a = m.solid.alpha                                  # committed equivalent plastic strain (quadrature points)
     j2 = MPI.COMM_WORLD.allreduce(fem.assemble_scalar(fem.form((SY * a + 0.5 * H * a**2) * m.dx)), op=MPI.SUM)
     assert e.now.plastic_work == pytest.approx(j2, rel=3e-4)     # -8e-5 (dt 5e-4 s), -1.4e-6 (dt 1e-4 s)
     assert e.now.plastic_work > 3 * e.now.elastic                      # most of the work is dissipated (3.1x)

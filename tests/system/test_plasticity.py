@@ -246,7 +246,7 @@ def test_a_thermal_strain_expands_freely_without_stress_or_plastic_flow(model, p
     assert continuation.solve(problem, {"snes_rtol": 1e-12}).converged
     x = m.V.tabulate_dof_coordinates()
     np.testing.assert_allclose(m.u.x.array.reshape(-1, 3), 1e-3 * x, atol=1e-12)
-    m.terms[0].attach(m.state, m.context)             # the history update of the new forms, then commit
+    m.solid.attach(m.state, m.context)             # the history update of the new forms, then commit
     m.state.commit()
     assert plastic_summary(m)["max_plastic_strain"] < 1e-12
 

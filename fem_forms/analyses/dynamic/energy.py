@@ -36,7 +36,6 @@ from fem_forms.analyses.dynamic.system import DynamicSystem, damping_terms
 from fem_forms.physics.assemble import total_energy, virtual_work
 from fem_forms.physics.inertia import Inertia
 from fem_forms.physics.terms import Context
-from fem_forms.solvers.time_stepping import piecewise_linear
 
 
 @dataclass
@@ -85,12 +84,12 @@ class EnergyAccount:
         self.ue, self.vm, self.w = (fem.Function(V) for _ in range(3))
         self.thermal = m.temperature is not None       # the temperature changes between motion steps
         ctx = replace(m.context, u=self.ue)
-        term = m.terms[0]
+        term = m.solid
         # a plastic solid's work in the account; with a temperature only where the thermal work of its
         # stresses is written (small-strain von Mises)
-        plastic = hasattr(term, "plastic_dissipation") and (not self.thermal or hasattr(term, "thermal_work"))
+        plastic = term.counts_plastic_work(self.thermal)
         # a counted plastic solid stores psi with the history its state leads to; uncounted, the committed
-        stored = term.stored_energy if plastic else getattr(term, "committed_energy", term.energy)
+        stored = term.stored_energy if plastic else term.committed_energy
         self.elastic = fem.form(stored(ctx))
         loads = total_energy(s.loads, ctx)
         power = -ufl.derivative(loads, self.ue, self.w) if loads is not None else None
@@ -153,7 +152,7 @@ class EnergyAccount:
         return vectors
 
     def _factor(self, term, t: float) -> float:
-        return 0.0 if term.index in self.released else piecewise_linear(self.system.scene.load[term.index].history, t)
+        return 0.0 if term.index in self.released else term.factor_at(t)
 
     def _power(self, state, t: float) -> float:
         """External power at `state` with the loads' factors at t, in the direction w."""

@@ -23,7 +23,7 @@ from fem_forms.output import probes
 from fem_forms.physics.inertia import Inertia
 from fem_forms.scene import Scene
 from fem_forms.solvers import continuation, snes
-from fem_forms.solvers.time_stepping import MarchReport, history_corners, march, piecewise_linear
+from fem_forms.solvers.time_stepping import MarchReport, history_corners, march
 
 
 @dataclass
@@ -83,8 +83,7 @@ def initial_static(system: DynamicSystem) -> None:
     other loads at their t = 0 values (gravity kept on: the body starts sagged, pushed, then let go)."""
     held = set(system.scene.dynamic.initial_loads)
     for term in system.loads:
-        term.factor.value = 1.0 if term.index in held else \
-            piecewise_linear(system.scene.load[term.index].history, 0.0)
+        term.factor.value = 1.0 if term.index in held else term.factor_at(0.0)
     m = system.model
     problem = snes.NonlinearProblem(m.u, m.compiled("residual"), m.compiled("jacobian"), m.bcs,
                                     energy=m.compiled("energy") if m.conservative else None,

@@ -19,7 +19,6 @@ from fem_forms.physics.inertia import DiscreteInertia, Inertia
 from fem_forms.physics.terms import Context, Term
 from fem_forms.physics.time_discrete import NEWMARK_AVERAGE, TimeDiscrete, chung_hulbert
 from fem_forms.scene import Scene
-from fem_forms.solvers.time_stepping import piecewise_linear
 from fem_forms.state import State
 
 
@@ -34,7 +33,7 @@ def damping_terms(scene: Scene, model: Model, ctx: Context, velocity, with_mass:
     """The scene's damping terms acting on `velocity` (UFL) in the state of `ctx`."""
     d, mesh, terms = scene.damping, model.mesh, []
     if d.alpha or d.beta:
-        terms.append(RayleighDamping(mesh, d.alpha, d.beta, model.terms[0], model.V, velocity, with_mass))
+        terms.append(RayleighDamping(mesh, d.alpha, d.beta, model.solid, model.V, velocity, with_mass))
     if d.shear or d.bulk:
         terms.append(ViscousDamping(mesh, d.shear, d.bulk, velocity, scene.material.model == "linear"))
     return terms
@@ -70,7 +69,7 @@ class DynamicSystem:
     v_h: fem.Function             # the velocity the explicit step's damping sees
     lumped: PETSc.Vec | None      # HRZ diagonal (lumped mass), zero nowhere
     constrained: np.ndarray       # owned local indices of supported dofs
-    loads: list                   # the load terms (each with its factor Constant)
+    loads: list                   # the model's load terms (each with its factor Constant)
 
     @property
     def u(self) -> fem.Function:
@@ -81,9 +80,7 @@ class DynamicSystem:
         loads held only for the initial state are released (0)."""
         af = float(self.td.alpha_f.value)
         for term in self.loads:
-            hist = self.scene.load[term.index].history
-            f = 0.0 if term.index in released else \
-                (1 - af) * piecewise_linear(hist, t_new) + af * piecewise_linear(hist, t_old)
+            f = 0.0 if term.index in released else (1 - af) * term.factor_at(t_new) + af * term.factor_at(t_old)
             term.factor.value = f
 
 
@@ -125,4 +122,4 @@ def build_system(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> DynamicSystem
     constrained = constrained[constrained < nown]
     return DynamicSystem(scene, model, state, td, v, a, residual, ufl.derivative(residual, u, trial),
                          energy if extra is None else None, explicit, v_h,
-                         hrz_lumped_mass(model) if lumped else None, constrained, model.terms[1:])
+                         hrz_lumped_mass(model) if lumped else None, constrained, model.loads)
