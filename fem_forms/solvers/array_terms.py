@@ -1,0 +1,77 @@
+"""The array terms of one nonlinear problem (energies computed outside UFL: a lumped mass, a contact
+barrier) summed into the SNES callbacks beside the UFL forms, and their step cap as a line-search pre-check."""
+from __future__ import annotations
+
+from dolfinx import fem
+import numpy as np
+from petsc4py import PETSc
+
+from fem_forms.physics.terms import ArrayTerm
+
+
+def constrained_dofs(V: fem.FunctionSpace, bcs: list) -> np.ndarray:
+    """Global indices (unrolled, sorted) of every rank's Dirichlet dofs of the space V."""
+    imap, bs = V.dofmap.index_map, V.dofmap.index_map_bs
+    local = [bc.dof_indices()[0][: bc.dof_indices()[1]] for bc in bcs]
+    local = np.unique(np.concatenate(local)).astype(np.int64) if local else np.empty(0, np.int64)
+    owned = imap.local_to_global((local // bs).astype(np.int32)).astype(np.int64) * bs + local % bs
+    return np.unique(np.concatenate(V.mesh.comm.allgather(owned))).astype(PETSc.IntType)
+
+
+class ArrayTerms:
+    """The sum of a problem's array terms, as the SNES residual, Jacobian and objective callbacks add it."""
+
+    def __init__(self, terms: list[ArrayTerm], V: fem.FunctionSpace, bcs: list):
+        self.terms = list(terms)
+        self.constrained = constrained_dofs(V, bcs) if self.terms else np.empty(0, PETSc.IntType)
+        self.last_cap = 1.0                      # the fraction the last Newton direction was scaled by
+
+    def __bool__(self) -> bool:
+        return bool(self.terms)
+
+    @property
+    def caps(self) -> bool:
+        """Whether some term can cap a step (the pre-check is installed only then)."""
+        return any(t.caps for t in self.terms)
+
+    def add_gradient(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
+        """Every term's gradient into the residual b (before set_bc writes the Dirichlet rows)."""
+        for t in self.terms:
+            t.add_gradient(x, b)
+        if self.terms:
+            b.assemble()                         # entries set on other ranks' rows, if a term did
+
+    def add_hessian(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
+        """Every term's Hessian into the assembled tangent, Dirichlet rows and columns left out."""
+        for t in self.terms:
+            t.add_hessian(x, A, self.constrained)
+        if self.terms:
+            A.assemble()
+
+    def energy(self, x: PETSc.Vec) -> float:
+        return sum(t.energy(x) for t in self.terms)
+
+    def max_step(self, x: PETSc.Vec, dx: PETSc.Vec) -> float:
+        """The smallest safe fraction over the terms of the step x -> x + dx."""
+        return min((t.max_step(x, dx) for t in self.terms if t.caps), default=1.0)
+
+    def precheck(self, x: PETSc.Vec, y: PETSc.Vec) -> bool:
+        """PETSc's line-search pre-check: newtonls tries x - lambda y (lambda = 1 first), so the step is
+        dx = -y; scale y by the safe fraction of that step. Returns whether y changed."""
+        dx = y.copy()
+        dx.scale(-1.0)
+        s = self.max_step(x, dx)
+        dx.destroy()
+        if not 0.0 < s <= 1.0:                   # a term's bug: stop the solve rather than step unsafely
+            raise ValueError(f"max_step gave {s}: a safe fraction of the step lies in (0, 1]")
+        self.last_cap = s
+        if s < 1.0:
+            y.scale(s)
+            return True
+        return False
+
+    def install(self, snes: PETSc.SNES) -> None:
+        """Cap the Newton direction before the line search's first trial, if some term can cap."""
+        if self.caps:
+            snes.setLineSearchPreCheck(self.precheck)
+
