@@ -3,6 +3,7 @@ barrier) summed into the SNES callbacks beside the UFL forms, and their step cap
 from __future__ import annotations
 
 from dolfinx import fem
+from dolfinx.fem import petsc as fpetsc
 import numpy as np
 from petsc4py import PETSc
 
@@ -21,10 +22,12 @@ def constrained_dofs(V: fem.FunctionSpace, bcs: list) -> np.ndarray:
 class ArrayTerms:
     """The sum of a problem's array terms, as the SNES residual, Jacobian and objective callbacks add it."""
 
-    def __init__(self, terms: list[ArrayTerm], V: fem.FunctionSpace, bcs: list):
+    def __init__(self, terms: list[ArrayTerm], V: fem.FunctionSpace, bcs: list, tangent: fem.Form):
         self.terms = list(terms)
+        self.bcs, self.tangent = bcs, tangent   # the tangent form gives the lifting matrix its pattern
         self.constrained = constrained_dofs(V, bcs) if self.terms else np.empty(0, PETSc.IntType)
         self.last_cap = 1.0                      # the fraction the last Newton direction was scaled by
+        self._H = None                           # the terms' unfiltered Hessian, for the lifting only
 
     def __bool__(self) -> bool:
         return bool(self.terms)
@@ -35,11 +38,29 @@ class ArrayTerms:
         return any(t.caps for t in self.terms)
 
     def add_gradient(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
-        """Every term's gradient into the residual b (before set_bc writes the Dirichlet rows)."""
+        """Every term's gradient into the residual b (before set_bc writes the Dirichlet rows), with the
+        lifting the UFL part gets from apply_lifting: where x is off the Dirichlet values g (a start
+        state, never inside SNES), the free rows gain H_fc (g - x_c), H the terms' Hessian at x."""
+        if not self.terms:
+            return
         for t in self.terms:
             t.add_gradient(x, b)
-        if self.terms:
-            b.assemble()                         # entries set on other ranks' rows, if a term did
+        b.assemble()                             # entries set on other ranks' rows, if a term did
+        w = x.duplicate()
+        w.set(0.0)
+        fpetsc.set_bc(w, self.bcs, x, 1.0)       # g - x on the Dirichlet dofs, 0 elsewhere
+        if w.norm(PETSc.NormType.INFINITY) > 0.0:
+            if self._H is None:
+                self._H = fpetsc.create_matrix(self.tangent, "aij")
+            self._H.zeroEntries()
+            for t in self.terms:
+                t.add_hessian(x, self._H, np.empty(0, PETSc.IntType))
+            self._H.assemble()
+            hw = b.duplicate()
+            self._H.mult(w, hw)
+            b.axpy(1.0, hw)                      # its Dirichlet rows are set_bc's to overwrite
+            hw.destroy()
+        w.destroy()
 
     def add_hessian(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
         """Every term's Hessian into the assembled tangent, Dirichlet rows and columns left out."""

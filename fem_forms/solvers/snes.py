@@ -116,7 +116,7 @@ class SNESDriver:
         self.near_nullspace = near_nullspace
         self.L, self.a = as_compiled(problem.residual), as_compiled(problem.jacobian)
         self.E = as_compiled(problem.energy) if problem.energy is not None else None
-        self.arrays = ArrayTerms(problem.array_terms, problem.u.function_space, problem.bcs)
+        self.arrays = ArrayTerms(problem.array_terms, problem.u.function_space, problem.bcs, self.a)
         self.b = fpetsc.create_vector(self.L)
         self.x = self.b.copy()
         self.assembly_time = 0.0
