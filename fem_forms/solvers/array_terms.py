@@ -29,9 +29,6 @@ class ArrayTerms:
         self.last_cap = 1.0                      # the fraction the last Newton direction was scaled by
         self._H = None                           # the terms' unfiltered Hessian, for the lifting only
 
-    def __bool__(self) -> bool:
-        return bool(self.terms)
-
     @property
     def caps(self) -> bool:
         """Whether some term can cap a step (the pre-check is installed only then)."""
@@ -70,6 +67,7 @@ class ArrayTerms:
             A.assemble()
 
     def energy(self, x: PETSc.Vec) -> float:
+        """The terms' energy at x (each term's is the same on every rank), for the line-search objective."""
         return sum(t.energy(x) for t in self.terms)
 
     def max_step(self, x: PETSc.Vec, dx: PETSc.Vec) -> float:
