@@ -156,7 +156,7 @@ def solve_static(scene: Scene, material=None, model: Model | None = None) -> Sta
     problem = snes.NonlinearProblem(
         model.unknown, model.compiled("residual"), model.compiled("jacobian"), model.bcs,
         energy=model.compiled("energy") if model.conservative else None,
-        set_load=set_load, inadmissible=model.inadmissible, state=model.state)
+        set_load=set_load, inadmissible=model.inadmissible, state=model.state, array_terms=model.terms.arrays)
     linear_kind = "direct" if scene.discretization.formulation == "mixed" else scene.solver.linear
     r0 = rigid_motion.rest_residual(model)
     if rigid_motion.nothing_to_solve(model, r0):

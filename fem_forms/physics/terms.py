@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 from dolfinx import fem, mesh as dmesh
+import numpy as np
 from petsc4py import PETSc
 import ufl
 
@@ -204,6 +205,11 @@ class TermList:
     def with_role(self, role: str) -> list[Term]:
         return [t for t in self.all if t.role == role]
 
+    @property
+    def arrays(self) -> list:
+        """The terms whose energy is computed as arrays (ArrayTerm), for the solver's callbacks."""
+        return [t for t in self.all if isinstance(t, ArrayTerm)]
+
     def set_values(self, scene) -> None:
         for t in self.all:
             t.set_values(scene)
@@ -211,6 +217,52 @@ class TermList:
     def update(self, t: float) -> None:
         for term in self.all:
             term.update(t)
+
+
+class ArrayTerm(Term):
+    """A piece of the energy computed outside UFL (a lumped mass, a contact barrier) as arrays, at the
+    solver's state x (a PETSc Vec in the unknown's dof layout, owned entries). It sits in the model's
+    TermList like any term (role, keys, fields, set_values, update) but gives no UFL form: it joins the UFL
+    terms in the same Newton solve, energy line search and step cap (fem_forms.solvers.array_terms)."""
+    name: str = "array term"
+
+    def energy_value(self, x: PETSc.Vec) -> float:
+        """The term's energy at x, summed over ranks (the same value on every rank)."""
+        raise NotImplementedError
+
+    def add_gradient(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
+        """Add dE/dx into the residual b: into b.array (owned entries), or by b.setValues(ADD_VALUES) (the
+        caller assembles b after every term). Rows of Dirichlet dofs may get anything: set_bc follows."""
+        raise NotImplementedError
+
+    def add_hessian(self, x: PETSc.Vec, A: PETSc.Mat, constrained: np.ndarray) -> None:
+        """Add d2E/dx2 into the assembled tangent A (BAIJ or AIJ; the caller assembles it afterwards),
+        leaving out the rows and columns in `constrained` (global indices of the Dirichlet dofs, all ranks,
+        sorted): those stay the identity rows the UFL assembly made. `add_entries` does both."""
+        raise NotImplementedError
+
+    def max_step(self, x: PETSc.Vec, dx: PETSc.Vec) -> float:
+        """The largest safe fraction (0, 1] of the step x -> x + dx (the same on every rank)."""
+        return 1.0
+
+    @property
+    def caps(self) -> bool:
+        """Whether the term can cap a step (it overrides max_step)."""
+        return type(self).max_step is not ArrayTerm.max_step
+
+
+def add_entries(A: PETSc.Mat, rows: np.ndarray, cols: np.ndarray, values: np.ndarray,
+                constrained: np.ndarray) -> None:
+    """Add the (row, col, value) triplets (global indices, any rank's rows) into A, except those in a
+    constrained row or column. The entries must lie in A's sparsity pattern."""
+    keep = ~(np.isin(rows, constrained) | np.isin(cols, constrained))
+    rows, cols, values = rows[keep], cols[keep], values[keep]
+    order = np.argsort(rows, kind="stable")
+    rows, cols, values = rows[order], cols[order], values[order]
+    starts = np.flatnonzero(np.r_[True, rows[1:] != rows[:-1]]) if len(rows) else []
+    for i, j in zip(starts, list(starts[1:]) + [len(rows)]):
+        A.setValues(int(rows[i]), cols[i:j].astype(PETSc.IntType), values[i:j],
+                    addv=PETSc.InsertMode.ADD_VALUES)
 
 
 # load type (the [[load]] type key) -> builder(spec, index in scene.load, mesh) -> Term

@@ -18,6 +18,7 @@ import ufl
 
 from fem_forms import progress
 from fem_forms.solvers import linear
+from fem_forms.solvers.array_terms import ArrayTerms
 from fem_forms.solvers.preconditioner_reuse import PreconditionerReuse
 from fem_forms.state import State
 
@@ -37,8 +38,7 @@ class NonlinearProblem:
     set_load: Callable[[float], None] | None = None     # continuation parameter setter
     inadmissible: Callable[[], str | None] | None = None  # why a state is unphysical, or None
     state: State | None = None         # fields and history committed/rolled back with the steps (default: u)
-    extra: object | None = None        # assembled-only additions (a lumped mass): residual(x, b), jacobian(A),
-                                       # energy(x) -> float, each at the solver's x (owned entries)
+    array_terms: list = field(default_factory=list)   # physics.terms.ArrayTerm: energies as arrays (lumped mass)
 
 
 @dataclass
@@ -116,6 +116,7 @@ class SNESDriver:
         self.near_nullspace = near_nullspace
         self.L, self.a = as_compiled(problem.residual), as_compiled(problem.jacobian)
         self.E = as_compiled(problem.energy) if problem.energy is not None else None
+        self.arrays = ArrayTerms(problem.array_terms, problem.u.function_space, problem.bcs, self.a)
         self.b = fpetsc.create_vector(self.L)
         self.x = self.b.copy()
         self.assembly_time = 0.0
@@ -151,6 +152,7 @@ class SNESDriver:
             snes.setObjective(self._objective)
         snes.setMonitor(self._monitor)
         snes.setFromOptions()
+        self.arrays.install(snes)                # the array terms' step cap, if any
         # kept in the database (under this driver's own prefix) until the driver is gone: the factor's
         # and the multigrid levels' options (mat_mumps_icntl_*, mg_levels_*) are read at the first solve
         self.options = merged
@@ -185,8 +187,7 @@ class SNESDriver:
         fpetsc.assemble_vector(b, self.L)
         fpetsc.apply_lifting(b, [self.a], bcs=[self.p.bcs], x0=[x], scale=-1.0)
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        if self.p.extra is not None:
-            self.p.extra.residual(x, b)
+        self.arrays.add_gradient(x, b)
         fpetsc.set_bc(b, self.p.bcs, x, -1.0)
         self.assembly_time += time.perf_counter() - t
 
@@ -195,8 +196,7 @@ class SNESDriver:
         A.zeroEntries()
         fpetsc.assemble_matrix(A, self.a, bcs=self.p.bcs)
         A.assemble()
-        if self.p.extra is not None:
-            self.p.extra.jacobian(A)
+        self.arrays.add_hessian(x, A)
         self._A_norm = None                      # the round-off floor's |K|_inf, taken once per tangent
         if snes is not None and self.multigrid:
             if self.pc_reuse is None or self.pc_reuse.decide():
@@ -220,8 +220,7 @@ class SNESDriver:
         t = time.perf_counter()
         self._set_state(x)
         value = self.comm.allreduce(fem.assemble_scalar(self.E), op=MPI.SUM)
-        if self.p.extra is not None:
-            value += self.p.extra.energy(x)
+        value += self.arrays.energy(x)
         self.assembly_time += time.perf_counter() - t
         return value if math.isfinite(value) else 1e300   # NaN (e.g. ln J, J<0): reject the step
 

@@ -1,6 +1,6 @@
 """The implicit step (Newmark average acceleration or generalized-alpha): one SNES solve of the
 time-discrete balance through the one driver, accepted only after the driver's independent checks; a
-lumped mass enters the assembled system through the driver's `extra` hook (HRZ is not a UFL form)."""
+lumped mass joins the solve as an array term (HRZ is not a UFL form)."""
 from __future__ import annotations
 
 import math
@@ -10,13 +10,15 @@ import numpy as np
 from petsc4py import PETSc
 
 from fem_forms.analyses.dynamic.system import DynamicSystem
+from fem_forms.physics.terms import ArrayTerm
 from fem_forms.solvers import linear, snes
 from fem_forms.solvers.time_stepping import StepOutcome
 
 
-class LumpedInertia:
+class LumpedInertia(ArrayTerm):
     """D ((1 - alpha_m) a(x) + alpha_m a_n + alpha v_f(x)) added to the residual, its derivative to the
     tangent's diagonal, and the inertia's incremental potential to the energy (alpha = 0 only)."""
+    name = "lumped inertia"
 
     def __init__(self, system: DynamicSystem):
         self.s = system
@@ -34,21 +36,21 @@ class LumpedInertia:
         vel = v0 + dt * ((1 - gamma) * a0 + gamma * acc)
         return am, af, beta, gamma, dt, pred, acc, vel, v0, a0
 
-    def residual(self, x, b) -> None:
+    def add_gradient(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
         am, af, beta, gamma, dt, pred, acc, vel, v0, a0 = self._parts(x)
         force = (1 - am) * acc + am * a0 + self.alpha * ((1 - af) * vel + af * v0)
         b.array[:] += self.D.array * force
 
-    def jacobian(self, A) -> None:
+    def add_hessian(self, x: PETSc.Vec, A: PETSc.Mat, constrained: np.ndarray) -> None:
         am, af, beta, gamma = self.s.td.params
         dt = float(self.s.td.dt.value)
         d = self.D.copy()
         d.scale((1 - am) / (beta * dt * dt) + self.alpha * (1 - af) * gamma / (beta * dt))
-        d.array[self.s.constrained] = 0.0
+        d.array[self.s.constrained] = 0.0        # the owned ones among `constrained`, as local indices
         A.setDiagonal(d, addv=PETSc.InsertMode.ADD_VALUES)
         d.destroy()
 
-    def energy(self, x) -> float:
+    def energy_value(self, x: PETSc.Vec) -> float:
         am, af, beta, gamma, dt, pred, acc, vel, v0, a0 = self._parts(x)
         local = float(np.sum(self.D.array * ((1 - am) * 0.5 * (x.array - pred) ** 2 / (beta * dt * dt)
                                              + am * a0 * x.array)))
@@ -68,10 +70,10 @@ class ImplicitStepper:
         self.s = system
         self.released = released
         m = system.model
-        extra = LumpedInertia(system) if system.lumped is not None else None
+        lumped = [LumpedInertia(system)] if system.lumped is not None else []
         self.problem = snes.NonlinearProblem(m.u, system.residual, system.jacobian, m.bcs,
                                              energy=system.energy, inadmissible=m.inadmissible,
-                                             state=system.state, extra=extra)
+                                             state=system.state, array_terms=lumped + m.terms.arrays)
         # Full Newton first: the incremental potential is dominated by its M / (beta dt^2) part, so near
         # the answer its change drowns in round-off, the energy line search stalls and the polish has to
         # finish (measured on the benchmark beam: 2-5 Newton iterations per step, 2 with full Newton and

@@ -1,0 +1,96 @@
+"""The array terms of one nonlinear problem (energies computed outside UFL: a lumped mass, a contact
+barrier) summed into the SNES callbacks beside the UFL forms, and their step cap as a line-search pre-check."""
+from __future__ import annotations
+
+from dolfinx import fem
+from dolfinx.fem import petsc as fpetsc
+import numpy as np
+from petsc4py import PETSc
+
+from fem_forms.physics.terms import ArrayTerm
+
+
+def constrained_dofs(V: fem.FunctionSpace, bcs: list) -> np.ndarray:
+    """Global indices (unrolled, sorted) of every rank's Dirichlet dofs of the space V."""
+    imap, bs = V.dofmap.index_map, V.dofmap.index_map_bs
+    local = [bc.dof_indices()[0][: bc.dof_indices()[1]] for bc in bcs]
+    local = np.unique(np.concatenate(local)).astype(np.int64) if local else np.empty(0, np.int64)
+    owned = imap.local_to_global((local // bs).astype(np.int32)).astype(np.int64) * bs + local % bs
+    return np.unique(np.concatenate(V.mesh.comm.allgather(owned))).astype(PETSc.IntType)
+
+
+class ArrayTerms:
+    """The sum of a problem's array terms, as the SNES residual, Jacobian and objective callbacks add it."""
+
+    def __init__(self, terms: list[ArrayTerm], V: fem.FunctionSpace, bcs: list, tangent: fem.Form):
+        self.terms = list(terms)
+        self.bcs, self.tangent = bcs, tangent   # the tangent form gives the lifting matrix its pattern
+        self.constrained = constrained_dofs(V, bcs) if self.terms else np.empty(0, PETSc.IntType)
+        self.last_cap = 1.0                      # the fraction the last Newton direction was scaled by
+        self._H = None                           # the terms' unfiltered Hessian, for the lifting only
+
+    @property
+    def caps(self) -> bool:
+        """Whether some term can cap a step (the pre-check is installed only then)."""
+        return any(t.caps for t in self.terms)
+
+    def add_gradient(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
+        """Every term's gradient into the residual b (before set_bc writes the Dirichlet rows), with the
+        lifting the UFL part gets from apply_lifting: where x is off the Dirichlet values g (a start
+        state, never inside SNES), the free rows gain H_fc (g - x_c), H the terms' Hessian at x."""
+        if not self.terms:
+            return
+        for t in self.terms:
+            t.add_gradient(x, b)
+        b.assemble()                             # entries set on other ranks' rows, if a term did
+        w = x.duplicate()
+        w.set(0.0)
+        fpetsc.set_bc(w, self.bcs, x, 1.0)       # g - x on the Dirichlet dofs, 0 elsewhere
+        if w.norm(PETSc.NormType.INFINITY) > 0.0:
+            if self._H is None:
+                self._H = fpetsc.create_matrix(self.tangent, "aij")
+            self._H.zeroEntries()
+            for t in self.terms:
+                t.add_hessian(x, self._H, np.empty(0, PETSc.IntType))
+            self._H.assemble()
+            hw = b.duplicate()
+            self._H.mult(w, hw)
+            b.axpy(1.0, hw)                      # its Dirichlet rows are set_bc's to overwrite
+            hw.destroy()
+        w.destroy()
+
+    def add_hessian(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
+        """Every term's Hessian into the assembled tangent, Dirichlet rows and columns left out."""
+        for t in self.terms:
+            t.add_hessian(x, A, self.constrained)
+        if self.terms:
+            A.assemble()
+
+    def energy(self, x: PETSc.Vec) -> float:
+        """The terms' energy at x (each term's is the same on every rank), for the line-search objective."""
+        return sum(t.energy_value(x) for t in self.terms)
+
+    def max_step(self, x: PETSc.Vec, dx: PETSc.Vec) -> float:
+        """The smallest safe fraction over the terms of the step x -> x + dx."""
+        return min((t.max_step(x, dx) for t in self.terms if t.caps), default=1.0)
+
+    def precheck(self, x: PETSc.Vec, y: PETSc.Vec) -> bool:
+        """PETSc's line-search pre-check: newtonls tries x - lambda y (lambda = 1 first), so the step is
+        dx = -y; scale y by the safe fraction of that step. Returns whether y changed."""
+        dx = y.copy()
+        dx.scale(-1.0)
+        s = self.max_step(x, dx)
+        dx.destroy()
+        if not 0.0 < s <= 1.0:                   # a term's bug: stop the solve rather than step unsafely
+            raise ValueError(f"max_step gave {s}: a safe fraction of the step lies in (0, 1]")
+        self.last_cap = s
+        if s < 1.0:
+            y.scale(s)
+            return True
+        return False
+
+    def install(self, snes: PETSc.SNES) -> None:
+        """Cap the Newton direction before the line search's first trial, if some term can cap."""
+        if self.caps:
+            snes.setLineSearchPreCheck(self.precheck)
+
