@@ -114,7 +114,7 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
             if not same_step:
                 cuts += 1
                 dlam *= 0.5
-            drv._build_snes()                        # fresh solver state after a failure
+            drv.rebuild()                        # fresh solver state after a failure
             if cuts > max_cutbacks or dlam < min_step:
                 report.message = (f"no convergence: load factor {lam:.6g} reached, the step to "
                                   f"{trial:.6g} failed after {cuts - 1} cut-backs"

@@ -48,7 +48,7 @@ class HeatSolver:
         committed when accepted (unless the caller commits: a staggered step), rolled back otherwise."""
         self.forms.set_time(t, dt)
         if self.forms.linear and dt != self._dt and self._dt is not None:
-            self.driver._build_snes()            # a new dt changes the operator: assemble and factor anew
+            self.driver.rebuild()            # a new dt changes the operator: assemble and factor anew
         self._dt = dt
         record = self.driver.solve_step(check_start=False)   # T^4 and k grad T stay finite at any start
         self.iterations += max(record.iterations, 1)
@@ -63,7 +63,7 @@ class HeatSolver:
                 self.state.commit()
             return StepOutcome(True, record.iterations)
         self.state.rollback()
-        self.driver._build_snes()
+        self.driver.rebuild()
         why = record.reason if finite else "temperature not finite"
         return StepOutcome(False, record.iterations, why=why)
 

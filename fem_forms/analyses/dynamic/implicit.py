@@ -112,7 +112,7 @@ class ImplicitStepper:
         s, drv = self.s, self.driver
         if self.dt_factored is None or abs(dt - self.dt_factored) > 1e-6 * dt:
             if self.dt_factored is not None:
-                drv._build_snes()                  # a new dt: the kept factor is stale (not the last
+                drv.rebuild()                  # a new dt: the kept factor is stale (not the last
                 self.fresh = True                  # step's round-off difference from dt)
             self.dt_factored = dt
         s.td.dt.value = dt
@@ -123,10 +123,10 @@ class ImplicitStepper:
             rec, why = self._again(rec, dt)
         if why is not None and self.line_search_retry:
             drv.user_options["snes_linesearch_type"] = "bt"     # the energy line search, same dt
-            drv._build_snes()
+            drv.rebuild()
             rec, why = self._again(rec, dt)
             drv.user_options["snes_linesearch_type"] = "basic"
-            drv._build_snes()
+            drv.rebuild()
         if why is not None:
             self.last_why = why
             self.fresh = True
@@ -160,7 +160,7 @@ class ImplicitStepper:
         self.iterative = False
         drv.linear_kind, drv.reuse_factor = "direct", True
         drv.user_options = self._options()
-        drv._build_snes()
+        drv.rebuild()
         return True
 
     def _refresh(self, rec) -> None:
@@ -176,7 +176,7 @@ class ImplicitStepper:
         if slow or rec.krylov_iterations > self.KRYLOV_PER_NEWTON * max(rec.iterations, 1):
             if slow and self.fresh and self.may_unlag:
                 drv.user_options["snes_lag_jacobian"] = 1
-            drv._build_snes()
+            drv.rebuild()
             self.fresh = True
         else:
             self.fresh = False
@@ -213,7 +213,7 @@ class ImplicitStepper:
         if why is not None:
             self.stale_failed = drv.stale_preconditioner_failed()
             s.state.rollback()
-            drv._build_snes()
+            drv.rebuild()
         return rec, why
 
     def error_estimate(self, dt: float) -> float:
