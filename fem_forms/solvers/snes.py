@@ -51,6 +51,7 @@ class StepRecord:
     note: str = ""            # why an SNES-converged step was still rejected
     krylov_iterations: int = 0
     preconditioner_builds: int = 0   # multigrid hierarchies built (kept across Newton steps when cheaper)
+    checked_residual: float = math.nan   # the residual norm acceptance.why_rejected tested
 
 
 def as_compiled(form) -> fem.Form:
