@@ -16,8 +16,8 @@ ACCEPTED = 1e-6
 # Linear heat steps (`ksponly`: one LU or Krylov solve, no Newton iteration to go on with): the residual
 # after the solve must have fallen by this much from the one before it. Looser than ACCEPTED because the
 # iterative path stops at 1e-8 of the *preconditioned* residual, which bounds the true residual's drop only
-# up to the preconditioner's conditioning; the heat step is not adaptive (a rejection ends the run), so its
-# value stays the one the thermal tests were written with.
+# up to the preconditioner's conditioning. A rejection halves dt in a transient march and ends a steady
+# solve; ACCEPTED here was never measured, so the value stays the one the thermal tests were written with.
 LINEAR_DROP = 1e-5
 # A residual below this many times the round-off estimate (machine eps x |K|_inf x |u|_inf x sqrt(n),
 # SNESDriver.roundoff_floor) passes whatever its relative size: stiff, nearly incompressible materials put
