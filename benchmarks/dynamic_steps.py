@@ -77,7 +77,7 @@ class OursTimer:
         self.solve = solve
         self.options = None
         march, advance, probe_row = solve.march, EnergyAccount.advance, solve.probe_row
-        build, solve_step = snes.SNESDriver._build_snes, snes.SNESDriver.solve_step
+        build, solve_step = snes.SNESDriver.rebuild, snes.SNESDriver.solve_step
         residual_norm, inadmissible = snes.SNESDriver.residual_norm, Model.inadmissible
 
         def timed_march(stepper, t0, t_end, dt, on_accept, **kw):
@@ -121,7 +121,7 @@ class OursTimer:
             self.options = dict(driver.options)
         solve.march, solve.probe_row = timed_march, timed_probe_row
         EnergyAccount.advance = timed_advance
-        snes.SNESDriver._build_snes = recording_build
+        snes.SNESDriver.rebuild = recording_build
         snes.SNESDriver.solve_step = counted_solve_step
         snes.SNESDriver.residual_norm, Model.inadmissible = timed_check(residual_norm), timed_check(inadmissible)
 

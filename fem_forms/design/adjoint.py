@@ -11,6 +11,7 @@ import ufl
 from fem_forms.design.forward_on_rest import ForwardOnRest
 from fem_forms.errors import InputError, SolveError
 from fem_forms.meshes import mesh_size
+from fem_forms.solvers.linear import make_ksp
 
 
 class AdjointDesign:
@@ -72,9 +73,10 @@ class AdjointDesign:
         self.K = fpetsc.create_matrix(self.K_form)
         self.B = fpetsc.create_matrix(self.B_form)
         self.C = fpetsc.create_matrix(self.C_form)
-        self.ksp = _lu(comm, "fem_forms_adjoint_")
-        self.ksp_C = _lu(comm, "fem_forms_adjoint_c_")
-        self.ksp_N = _lu(comm, "fem_forms_adjoint_n_")
+        # MUMPS LU, each overridable under its own prefix (operators set as they are assembled)
+        self.ksp = make_ksp(None, "lu", "fem_forms_adjoint_", comm=comm)
+        self.ksp_C = make_ksp(None, "lu", "fem_forms_adjoint_c_", comm=comm)
+        self.ksp_N = make_ksp(None, "lu", "fem_forms_adjoint_n_", comm=comm)
         self.N: PETSc.Mat | None = None
         # the rest shape stays attached where the body is supported: d is fixed (0) on supported dofs
         fixed = [bc.dof_indices()[0] for bc in fwd.bcs]
@@ -203,18 +205,6 @@ class AdjointDesign:
         self.ksp_C.solve(v, out)
         out.array[self.fixed] = 0.0
 
-
-
-def _lu(comm, prefix: str) -> PETSc.KSP:
-    """A direct (MUMPS LU) solver whose options can be overridden under `prefix`."""
-    ksp = PETSc.KSP().create(comm)
-    ksp.setOptionsPrefix(prefix)
-    opts = PETSc.Options()
-    for k, val in {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}.items():
-        if not opts.hasName(prefix + k):
-            opts[prefix + k] = val
-    ksp.setFromOptions()
-    return ksp
 
 
 def _snap_points(V: fem.FunctionSpace, points: list):

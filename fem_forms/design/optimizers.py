@@ -15,6 +15,7 @@ from fem_forms.design.forward_on_rest import ForwardOnRest
 from fem_forms.design.parameters import InverseResult, target_scene
 from fem_forms.meshes import LoadedMesh, load_mesh, mesh_size
 from fem_forms.scene import Scene
+from fem_forms.solvers.linear import make_ksp, make_tao
 
 class _GaussNewtonOperator:
     """PETSc shell-matrix and shell-preconditioner context for the damped Gauss-Newton matrix."""
@@ -49,15 +50,8 @@ def _gauss_newton(design: AdjointDesign, spec, J_stop: float, history: list, sca
     bound = spec.max_move
     H = PETSc.Mat().createPython(((n, None), (n, None)), _GaussNewtonOperator(design), comm=comm)
     H.setUp()
-    cg = PETSc.KSP().create(comm)
-    cg.setOptionsPrefix("fem_forms_gn_")
-    cg.setType("cg")
-    pc = cg.getPC()
-    pc.setType("python")
-    pc.setPythonContext(_GaussNewtonOperator(design))
-    cg.setTolerances(rtol=1e-3, max_it=200)
-    cg.setOperators(H)
-    cg.setFromOptions()
+    cg = make_ksp(H, "cg-python", "fem_forms_gn_", {"ksp_rtol": 1e-3, "ksp_max_it": 200},
+                  python_pc=_GaussNewtonOperator(design))
     out = design.evaluate(d)
     if out is None:
         return d, False, "no forward equilibrium at the target shape itself", 0
@@ -142,9 +136,7 @@ def _lbfgs(design: AdjointDesign, spec, J_stop: float, history: list, mesh):
         else:
             tao.setConvergedReason(0)
 
-    tao = PETSc.TAO().create(comm)
-    tao.setOptionsPrefix("fem_forms_tao_")
-    tao.setType("blmvm")
+    tao = make_tao(comm, "blmvm", "fem_forms_tao_")
     tao.setObjectiveGradient(objgrad, x.duplicate())
     lb, ub = x.duplicate(), x.duplicate()
     big = 1e20 if spec.max_move is None else spec.max_move
@@ -154,7 +146,6 @@ def _lbfgs(design: AdjointDesign, spec, J_stop: float, history: list, mesh):
     ub.array[design.fixed] = 0.0
     tao.setVariableBounds(lb, ub)
     tao.setConvergenceTest(converged)
-    tao.setFromOptions()
     tao.solve(x)
     reason, its = tao.getConvergedReason(), tao.getIterationNumber()
     d = x.array / scale

@@ -25,6 +25,8 @@ import numpy as np
 from petsc4py import PETSc
 import ufl
 
+from fem_forms.solvers.linear import make_ksp
+
 RTOL = 1e-12              # the projection is solved far below the discretisation error
 
 
@@ -60,11 +62,8 @@ class Recovery:
             s, t = ufl.TrialFunction(S), ufl.TestFunction(S)
             M = fpetsc.assemble_matrix(fem.form(ufl.inner(s, t) * self.dx))
             M.assemble()
-            ksp = PETSc.KSP().create(self.mesh.comm)
-            ksp.setOperators(M)
-            ksp.setType("cg")
-            ksp.getPC().setType("jacobi")
-            ksp.setTolerances(rtol=RTOL, atol=0.0, max_it=1000)
+            ksp = make_ksp(M, "mass", "fem_forms_recovery_",
+                           {"ksp_rtol": RTOL, "ksp_atol": 0.0, "ksp_max_it": 1000})
             rhs, sol = M.createVecRight(), M.createVecLeft()
             self._scalar = (S, ksp, M, rhs, sol)
         return self._scalar

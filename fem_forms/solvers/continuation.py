@@ -7,19 +7,13 @@ import re
 import time
 from typing import Callable
 
-from mpi4py import MPI
-import numpy as np
 from petsc4py import PETSc
 
 from fem_forms import progress
 from fem_forms.errors import SolveError
-from fem_forms.solvers import linear
+from fem_forms.solvers import acceptance, linear
 from fem_forms.solvers.snes import NonlinearProblem, SNESDriver, SolveReport
 from fem_forms.state import State
-
-# a step SNES calls converged is accepted when an independent re-assembly of its residual is below this
-# fraction of the load's (or at round-off)
-ACCEPTED = 1e-6
 
 
 def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1,
@@ -70,9 +64,9 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
         progress.report("load_step", load=trial, step=len(report.steps) + 1)
         rec = drv.solve_step()
         rec.load = trial
-        why, same_step = None, False
+        why = acceptance.why_rejected(drv, rec, load_scale=r_full)   # SNES, finite, admissible, residual
+        same_step = False
         if not rec.accepted:
-            why = f"SNES {rec.reason}"
             if rec.reason == "DIVERGED_LINEAR_SOLVE" and drv.stale_preconditioner_failed():
                 pass                                 # the retry (fresh SNES) rebuilds the preconditioner
             elif (rec.reason == "DIVERGED_LINEAR_SOLVE" and drv.linear_kind == "iterative"
@@ -84,19 +78,8 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
                 same_step = True                     # retries this step at its size
             elif rec.reason == "DIVERGED_LINEAR_SOLVE" and drv.reuse_factor:
                 drv.reuse_factor = False             # stale LU too far off: factor every iteration
-        else:
-            arr = u.x.array
-            if not u.function_space.mesh.comm.allreduce(bool(np.all(np.isfinite(arr))), op=MPI.LAND):
-                why = "NaN or Inf in the solution"
-            elif problem.inadmissible is not None and (bad := problem.inadmissible()):
-                why = bad
-            else:
-                rn = drv.residual_norm()
-                r0 = rec.residuals[0] if rec.residuals else 0.0
-                if rn > ACCEPTED * max(r_full, r0) and rn > drv.roundoff_floor():
-                    why = f"residual {rn:.3e} after SNES reported convergence (scale {max(r_full, r0):.3e})"
-                else:
-                    report.residual_norm = rn
+        elif why is None:
+            report.residual_norm = rec.checked_residual     # the independently re-assembled residual
         rec.accepted = why is None
         rec.note = why or ""
         report.steps.append(rec)
@@ -114,7 +97,7 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
             if not same_step:
                 cuts += 1
                 dlam *= 0.5
-            drv._build_snes()                        # fresh solver state after a failure
+            drv.rebuild()                        # fresh solver state after a failure
             if cuts > max_cutbacks or dlam < min_step:
                 report.message = (f"no convergence: load factor {lam:.6g} reached, the step to "
                                   f"{trial:.6g} failed after {cuts - 1} cut-backs"

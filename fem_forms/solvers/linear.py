@@ -1,8 +1,12 @@
 """Linear solver choice for Newton steps: MUMPS LU by default, CG + GAMG with the rigid-body
-near-nullspace for large, mildly nonlinear problems (see STACK.md for the measured crossover)."""
+near-nullspace for large, mildly nonlinear problems (see STACK.md for the measured crossover); and the
+one factory (make_ksp, make_tao) for every KSP and TAO built outside SNES."""
 from __future__ import annotations
 
+import re
+
 from dolfinx import fem
+from mpi4py import MPI
 import numpy as np
 from petsc4py import PETSc
 
@@ -80,3 +84,81 @@ def rigid_body_modes(V: fem.FunctionSpace) -> PETSc.NullSpace:
         v.normalize()
         vecs.append(v)
     return PETSc.NullSpace().create(vectors=vecs, comm=V.mesh.comm)
+
+
+# The default options of each kind of KSP made outside SNES (make_ksp); a caller's `options` and then the
+# PETSc options database under the KSP's prefix (the command line) override them.
+KSP_KINDS = {
+    # MUMPS LU: the design's forward and adjoint systems, the linear extension of a bad start
+    "lu": DIRECT,
+    # MUMPS LDL^T (Cholesky) with the inertia counted (stability of the tangent): ICNTL(13) 1 keeps
+    # ScaLAPACK off the root node so that every pivot's sign is counted (INFOG(12)); ICNTL(24) 1 detects null
+    # pivots (INFOG(28)) instead of failing on them. The matrix must be AIJ (MUMPS's LDL^T refuses BAIJ).
+    "inertia": {"ksp_type": "preonly", "pc_type": "cholesky", "pc_factor_mat_solver_type": "mumps",
+                "mat_mumps_icntl_13": 1, "mat_mumps_icntl_24": 1},
+    # CG + Jacobi: mass-matrix solves (recovery projections, the initial acceleration): SPD and well
+    # conditioned, a few dozen iterations; the caller sets its tolerances
+    "mass": {"ksp_type": "cg", "pc_type": "jacobi"},
+    # CG on a matrix-free operator preconditioned by the caller's python PC context (`python_pc`)
+    "cg-python": {"ksp_type": "cg", "pc_type": "python"},
+}
+TAO_KINDS = {
+    # bounded L-BFGS (the adjoint design's optional optimiser)
+    "blmvm": {"tao_type": "blmvm"},
+}
+# options PETSc reads after setFromOptions (multigrid levels and sub-solvers at set-up): kept in the database
+_READ_LATER = ("mg_", "sub_", "fieldsplit_")
+
+
+def make_ksp(A: PETSc.Mat | None, kind: str, prefix: str | None = None, options: dict | None = None,
+             comm: MPI.Comm | None = None, python_pc: object | None = None) -> PETSc.KSP:
+    """A KSP of `kind` (KSP_KINDS) on operator A (None: the caller sets it later; then give `comm`) under
+    options `prefix` (default fem_forms_<kind>_): the kind's defaults, overridden by `options`, overridden
+    by what the options database already holds under the prefix. mat_mumps_icntl_* entries are set on the
+    factor (this needs A). `python_pc`: the context of a python preconditioner (kind "cg-python")."""
+    merged = {**KSP_KINDS[kind], **(options or {})}
+    prefix = prefix if prefix is not None else f"fem_forms_{re.sub(r'[^0-9a-zA-Z]', '_', kind)}_"
+    ksp = PETSc.KSP().create(comm if A is None else A.getComm())
+    ksp.setOptionsPrefix(prefix)
+    if python_pc is not None:
+        pc = ksp.getPC()
+        pc.setType("python")
+        pc.setPythonContext(python_pc)
+    if A is not None:
+        ksp.setOperators(A)
+    icntl = {k: v for k, v in merged.items() if k.startswith("mat_mumps_icntl_")}
+    _from_options(ksp, prefix, {k: v for k, v in merged.items() if k not in icntl})
+    if icntl:
+        if A is None:
+            raise ValueError(f"make_ksp({kind!r}): MUMPS controls need the operator")
+        db = PETSc.Options()
+        pc = ksp.getPC()
+        pc.setFactorSetUpSolverType()
+        F = pc.getFactorMatrix()
+        for k, v in icntl.items():
+            F.setMumpsIcntl(int(k.rsplit("_", 1)[1]), db.getInt(prefix + k, int(v)))
+    return ksp
+
+
+def make_tao(comm: MPI.Comm, kind: str = "blmvm", prefix: str | None = None,
+             options: dict | None = None) -> PETSc.TAO:
+    """A TAO of `kind` (TAO_KINDS) under options `prefix` (default fem_forms_tao_), its options merged as
+    make_ksp's; the caller sets objective, bounds and convergence test afterwards."""
+    prefix = prefix if prefix is not None else "fem_forms_tao_"
+    tao = PETSc.TAO().create(comm)
+    tao.setOptionsPrefix(prefix)
+    _from_options(tao, prefix, {**TAO_KINDS[kind], **(options or {})})
+    return tao
+
+
+def _from_options(obj, prefix: str, defaults: dict) -> None:
+    """setFromOptions with `defaults` under `prefix` where the database has no value of its own; the values
+    written are removed again once read (except those read later), so no other object inherits them."""
+    db = PETSc.Options()
+    written = [k for k in defaults if not db.hasName(prefix + k)]
+    for k in written:
+        db[prefix + k] = defaults[k]
+    obj.setFromOptions()
+    for k in written:
+        if not k.startswith(_READ_LATER):
+            db.delValue(prefix + k)

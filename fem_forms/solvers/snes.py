@@ -51,6 +51,7 @@ class StepRecord:
     note: str = ""            # why an SNES-converged step was still rejected
     krylov_iterations: int = 0
     preconditioner_builds: int = 0   # multigrid hierarchies built (kept across Newton steps when cheaper)
+    checked_residual: float = math.nan   # the residual norm acceptance.why_rejected tested
 
 
 def as_compiled(form) -> fem.Form:
@@ -121,11 +122,14 @@ class SNESDriver:
         self.x = self.b.copy()
         self.assembly_time = 0.0
         self.load_factor = 1.0           # for progress reports; set by the continuation
-        self._build_snes()
+        self.rebuild()
 
     # -- PETSc objects -------------------------------------------------------------------------
-    def _build_snes(self) -> None:
-        """(Re)create matrix and SNES: done at start, after a failed step and on solver switch."""
+    def rebuild(self) -> None:
+        """(Re)create the tangent matrix and the SNES from the current linear kind, factor reuse and user
+        options. Done at start; callers must call it after a failed step (a diverged SNES's vectors can make
+        the next solve report convergence in 0 iterations: STACK.md), after changing `linear_kind`,
+        `reuse_factor` or `user_options`, and when the operator changes under a kept factor (a new dt)."""
         merged = dict(self.DEFAULTS)
         merged["snes_linesearch_type"] = "bt" if self.E is not None else "basic"
         merged.update(linear.options(self.linear_kind, symmetric=self.E is not None,
@@ -259,11 +263,7 @@ class SNESDriver:
         r = self.b.duplicate()
         self._residual(None, x_old, r)
         self._jacobian(None, x_old, self.A, self.A)
-        ksp = PETSc.KSP().create(self.comm)
-        ksp.setOperators(self.A)
-        ksp.setType("preonly")
-        ksp.getPC().setType("lu")
-        ksp.getPC().setFactorSolverType("mumps")
+        ksp = linear.make_ksp(self.A, "lu", prefix=f"{self.prefix}extension_")
         dx = r.duplicate()
         ksp.solve(r, dx)
         x_old.axpy(-1.0, dx)

@@ -23,6 +23,7 @@ from fem_forms.output import probes
 from fem_forms.physics.inertia import Inertia
 from fem_forms.scene import Scene
 from fem_forms.solvers import continuation, snes
+from fem_forms.solvers.linear import make_ksp
 from fem_forms.solvers.time_stepping import MarchReport, history_corners, march
 
 
@@ -116,11 +117,8 @@ def initial_acceleration(system: DynamicSystem, released: set) -> None:
         M = fpetsc.assemble_matrix(fem.form(Inertia().mass(system.model.context, ufl.TrialFunction(V),
                                                            ufl.TestFunction(V))), bcs=system.model.bcs)
         M.assemble()
-        ksp = PETSc.KSP().create(system.model.mesh.comm)
-        ksp.setOperators(M)
-        ksp.setType("cg")
-        ksp.getPC().setType("jacobi")
-        ksp.setTolerances(rtol=1e-12, atol=1e-300, max_it=2000)
+        ksp = make_ksp(M, "mass", "fem_forms_initial_acceleration_",
+                       {"ksp_rtol": 1e-12, "ksp_atol": 1e-300, "ksp_max_it": 2000})
         ksp.solve(b, a.vector)
         ksp.destroy()
         M.destroy()

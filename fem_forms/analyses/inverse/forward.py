@@ -27,7 +27,7 @@ from fem_forms.equilibrium import StaticResult, solve_static
 from fem_forms.meshes import LoadedMesh
 from fem_forms.model import build_model
 from fem_forms.scene import MeshSpec, Scene
-from fem_forms.solvers import continuation, snes
+from fem_forms.solvers import acceptance, continuation, snes
 from fem_forms.solvers.linear import rigid_body_modes
 
 # The check's tangent is symmetric and (at the designed equilibrium) positive definite: with the scene's
@@ -126,7 +126,7 @@ def solve_at_target(fscene: Scene, loaded: LoadedMesh, pts_rest: np.ndarray, pts
         rtol = driver.options["snes_rtol"]
         bounds = {"rest shape": rtol * scale, "design": rtol * design_scale,
                   "round-off": min(snes.roundoff_floor(K.norm(PETSc.NormType.INFINITY), model.unknown.vector),
-                                   continuation.ACCEPTED * scale)}
+                                   acceptance.ACCEPTED * scale)}
         driver.user_options.setdefault("snes_atol", max(bounds.values()))
         tolerance = float(driver.user_options["snes_atol"])
         set_by = max(bounds, key=bounds.get) if tolerance == max(bounds.values()) else "snes_atol"

@@ -12,6 +12,7 @@ from dolfinx.fem import petsc as fpetsc
 from petsc4py import PETSc
 import ufl
 
+from fem_forms.solvers.linear import make_ksp
 from fem_forms.solvers.snes import as_compiled
 
 
@@ -44,16 +45,9 @@ def assemble_tangent(jacobian: ufl.Form | fem.Form, bcs: list) -> PETSc.Mat:
 def inertia_of(A: PETSc.Mat) -> Inertia:
     """Factor the symmetric A as L D L^T with MUMPS and count its negative and null pivots (the same on
     every rank)."""
-    ksp = PETSc.KSP().create(A.getComm())
-    ksp.setOperators(A)
-    ksp.setType("preonly")
+    ksp = make_ksp(A, "inertia", "fem_forms_inertia_")    # MUMPS LDL^T, every pivot's sign counted
     pc = ksp.getPC()
-    pc.setType("cholesky")
-    pc.setFactorSolverType("mumps")
-    pc.setFactorSetUpSolverType()
     F = pc.getFactorMatrix()
-    F.setMumpsIcntl(13, 1)      # no ScaLAPACK at the root node: every pivot's sign is counted (INFOG(12))
-    F.setMumpsIcntl(24, 1)      # detect null pivots (INFOG(28)) instead of failing on them
     dofs = A.getSize()[0]
     try:
         pc.setUp()
