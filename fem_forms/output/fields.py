@@ -19,15 +19,6 @@ def p1_interpolant(f: fem.Function, name: str | None = None) -> fem.Function:
     return g
 
 
-def cellwise(expr, mesh, name: str) -> fem.Function:
-    """A UFL expression evaluated at cell midpoints into a DG0 function (e.g. von Mises stress)."""
-    shape = expr.ufl_shape
-    space = fem.FunctionSpace(mesh, ("DG", 0)) if not shape else fem.VectorFunctionSpace(mesh, ("DG", 0))
-    g = fem.Function(space, name=name)
-    g.interpolate(fem.Expression(expr, space.element.interpolation_points()))
-    return g
-
-
 def write_fields(path: Path, mesh, functions: list) -> None:
     """One XDMF file (+ .h5) with the mesh and the given P1/DG0 functions, for ParaView."""
     with io.XDMFFile(mesh.comm, str(path), "w") as xdmf:

@@ -19,12 +19,6 @@ class Inertia(Term):
         """int rho a . v dX: the mass form with trial `a` and test `v` (or a load form for a fixed a)."""
         return ctx.volume(ctx.parameters.density * ufl.inner(a, v))
 
-    def kinetic_energy(self, ctx: Context, velocity) -> ufl.Form:
-        """1/2 int rho |velocity|^2 dX."""
-        return 0.5 * ctx.volume(ctx.parameters.density * ufl.inner(velocity, velocity))
-
-
-class DiscreteInertia(Inertia):
     """The generalized-alpha inertia force (1 - alpha_m) M a(u) + alpha_m M a_n as the gradient in u of
     (1 - alpha_m) / (2 beta dt^2) int rho |u - u~|^2 dX + alpha_m int rho a_n . u dX
     (consistent mass; a lumped mass is added to the assembled system by the time stepper)."""

@@ -60,9 +60,6 @@ class TimeDiscrete:
     def mid_f(self, new, old):
         return (1 - self.alpha_f) * new + self.alpha_f * old
 
-    def mid_m(self, new, old):
-        return (1 - self.alpha_m) * new + self.alpha_m * old
-
     # -- arrays ------------------------------------------------------------------------------------
     def update(self, u: np.ndarray, u0: np.ndarray, v0: np.ndarray, a0: np.ndarray) -> tuple:
         """(v_{n+1}, a_{n+1}) from the converged u_{n+1} and the old values (same formulas as above)."""

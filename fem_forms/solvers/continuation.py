@@ -10,7 +10,6 @@ from typing import Callable
 from petsc4py import PETSc
 
 from fem_forms import progress
-from fem_forms.errors import SolveError
 from fem_forms.solvers import acceptance, linear
 from fem_forms.solvers.snes import NonlinearProblem, SNESDriver, SolveReport
 from fem_forms.state import State
@@ -124,8 +123,4 @@ def _distinct(notes) -> list:
         first.setdefault(re.sub(r"[-+]?[0-9][0-9.e+-]*", "#", n), n)
     return list(first.values())
 
-
-def require_converged(report: SolveReport) -> None:
-    if not report.converged:
-        raise SolveError(report.message)
 

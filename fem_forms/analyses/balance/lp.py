@@ -11,7 +11,7 @@ Speed (benchmarks/balance_scaling.md): 200k tetrahedra, a spin design's 4 LPs in
 """
 from __future__ import annotations
 
-from dataclasses import astuple, dataclass, replace
+from dataclasses import astuple, dataclass
 import time
 
 import numpy as np
@@ -149,5 +149,3 @@ def _milp_on(p: Program, fixed: np.ndarray, free: np.ndarray) -> np.ndarray | No
     return s
 
 
-def with_rhs(p: Program, b_ub: np.ndarray) -> Program:
-    return replace(p, b_ub=b_ub)

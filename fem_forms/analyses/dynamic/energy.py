@@ -34,7 +34,6 @@ from ufl.algorithms import expand_derivatives
 
 from fem_forms.analyses.dynamic.system import DynamicSystem, damping_terms
 from fem_forms.physics.assemble import total_energy, virtual_work
-from fem_forms.physics.inertia import Inertia
 from fem_forms.physics.terms import Context
 
 
@@ -111,8 +110,7 @@ class EnergyAccount:
         self.plastic = fem.form(term.plastic_dissipation(start, ctx)) if plastic else None
         self.plastic_thermal = fem.form(term.thermal_work(start, ctx)) if plastic and self.thermal else None
         if s.lumped is None:
-            self.M = fpetsc.assemble_matrix(fem.form(Inertia().mass(m.context, ufl.TrialFunction(V),
-                                                                    ufl.TestFunction(V))))
+            self.M = fpetsc.assemble_matrix(s.mass)
             self.M.assemble()
         self.now = Energies()
 

@@ -10,7 +10,6 @@ from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
 import numpy as np
 from petsc4py import PETSc
-import ufl
 
 from fem_forms.analyses.dynamic import checkpoint
 from fem_forms.analyses.dynamic.energy import EnergyAccount
@@ -20,7 +19,6 @@ from fem_forms.analyses.dynamic.implicit import ImplicitStepper
 from fem_forms.analyses.dynamic.system import DynamicSystem, build_system
 from fem_forms.errors import InputError, SolveError
 from fem_forms.output import probes
-from fem_forms.physics.inertia import Inertia
 from fem_forms.scene import Scene
 from fem_forms.solvers import continuation, snes
 from fem_forms.solvers.linear import make_ksp
@@ -113,9 +111,7 @@ def initial_acceleration(system: DynamicSystem, released: set) -> None:
         a.vector.array[:] = b.array * inv.array
         inv.destroy()
     else:
-        V = system.model.V
-        M = fpetsc.assemble_matrix(fem.form(Inertia().mass(system.model.context, ufl.TrialFunction(V),
-                                                           ufl.TestFunction(V))), bcs=system.model.bcs)
+        M = fpetsc.assemble_matrix(system.mass, bcs=system.model.bcs)
         M.assemble()
         ksp = make_ksp(M, "mass", "fem_forms_initial_acceleration_",
                        {"ksp_rtol": 1e-12, "ksp_atol": 1e-300, "ksp_max_it": 2000})

@@ -39,12 +39,17 @@ def damping_terms(scene: Scene, model: Model, ctx: Context, velocity, with_mass:
     return terms
 
 
-def hrz_lumped_mass(model: Model) -> PETSc.Vec:
+def mass_form(model: Model) -> fem.Form:
+    """The consistent mass form int rho du . v dX, compiled once per dynamic system (lumping, the
+    initial acceleration and the energy account share it)."""
+    V = model.V
+    return fem.form(Inertia().mass(model.context, ufl.TrialFunction(V), ufl.TestFunction(V)))
+
+
+def hrz_lumped_mass(model: Model, mass: fem.Form) -> PETSc.Vec:
     """HRZ lumping: the consistent mass's diagonal scaled to keep the total mass (row sums for P1,
     positive for P2, where row sums are not)."""
-    V = model.V
-    m = fem.form(Inertia().mass(model.context, ufl.TrialFunction(V), ufl.TestFunction(V)))
-    M = fpetsc.assemble_matrix(m)
+    M = fpetsc.assemble_matrix(mass)
     M.assemble()
     diag = M.getDiagonal()
     one = fem.form(model.parameters.density * model.dx)
@@ -70,6 +75,7 @@ class DynamicSystem:
     lumped: PETSc.Vec | None      # HRZ diagonal (lumped mass), zero nowhere
     constrained: np.ndarray       # owned local indices of supported dofs
     loads: list                   # the model's load terms (each with its factor Constant)
+    mass: fem.Form                # the consistent mass form, compiled once
 
     @property
     def u(self) -> fem.Function:
@@ -116,10 +122,11 @@ def build_system(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> DynamicSystem
     wd = virtual_work(damping_terms(scene, model, model.context, v_h, True), model.context, test)
     if wd is not None:
         explicit = explicit + wd
+    mass = mass_form(model)
     nown = V.dofmap.index_map.size_local * V.dofmap.index_map_bs
     constrained = np.unique(np.concatenate([bc.dof_indices()[0][: bc.dof_indices()[1]] for bc in model.bcs])) \
         if model.bcs else np.empty(0, dtype=np.int32)
     constrained = constrained[constrained < nown]
     return DynamicSystem(scene, model, state, td, v, a, residual, ufl.derivative(residual, u, trial),
                          energy if extra is None else None, explicit, v_h,
-                         hrz_lumped_mass(model) if lumped else None, constrained, model.loads)
+                         hrz_lumped_mass(model, mass) if lumped else None, constrained, model.loads, mass)

@@ -85,10 +85,6 @@ class DampingSpec:
     shear: float = 0.0
     bulk: float = 0.0
 
-    @property
-    def active(self) -> bool:
-        return any((self.alpha, self.beta, self.shear, self.bulk))
-
 
 def _check(scene) -> None:
     n = len(scene.load)
