@@ -8,6 +8,7 @@ from typing import Callable, Protocol
 import ufl
 
 from fem_forms.errors import InputError
+from fem_forms.keys import Key, check_range
 from fem_forms.kinematics import biot_invariants, green_strain, invariants, small_strain
 
 
@@ -158,6 +159,22 @@ MODELS = {
 }
 
 
+# the parameters a hyperelastic model is built from, declared once: the scene reads them with these Keys
+# (type only) and make_material checks their ranges, once; mu, lambda, C10 and C01 are checked by the
+# model that holds them (its __post_init__), so a model built directly in Python is checked the same way
+PARAMETER_KEYS = (
+    Key("E", "number", "Young's modulus (with nu)", unit="Pa", exclusive_minimum=0,
+        note="Young's modulus must be positive", checked_by="material"),
+    Key("nu", "number", "Poisson's ratio (with E)", exclusive_minimum=-1.0, exclusive_maximum=0.5,
+        note="Poisson's ratio must lie in (-1, 0.5) for a compressible model", checked_by="material"),
+    Key("mu", "number", "shear modulus (with lambda)", unit="Pa", exclusive_minimum=0, checked_by="material"),
+    Key("lambda", "number", "Lame's first parameter (with mu)", unit="Pa", attr="lmbda", checked_by="material"),
+    Key("C10", "number", "Mooney-Rivlin C10 (default 3 mu / 8)", unit="Pa", minimum=0, checked_by="material"),
+    Key("C01", "number", "Mooney-Rivlin C01 (default mu / 8)", unit="Pa", minimum=0, checked_by="material"),
+)
+_PARAMETER = {k.name: k for k in PARAMETER_KEYS}
+
+
 def make_material(model: str, *, E: float | None = None, nu: float | None = None,
                   mu: float | None = None, lmbda: float | None = None,
                   C10: float | None = None, C01: float | None = None) -> Material:
@@ -168,11 +185,10 @@ def make_material(model: str, *, E: float | None = None, nu: float | None = None
     if E is not None or nu is not None:
         if E is None or nu is None:
             raise InputError("material: give both E and nu (or mu and lambda)")
-        if not (math.isfinite(E) and E > 0):
-            raise InputError(f"material.E = {E}: Young's modulus must be positive")
-        if not (-1.0 < nu < 0.5):
-            raise InputError(f"material.nu = {nu}: Poisson's ratio must lie in (-1, 0.5) "
-                             f"for the compressible model {model!r}")
+        for name, value in (("E", E), ("nu", nu)):
+            if not math.isfinite(value):
+                raise InputError(f"material.{name} = {value}: must be finite")
+            check_range(_PARAMETER[name], value, f"material.{name}")
         mu, lmbda = lame_from_young_poisson(E, nu)
     if model == "mooney-rivlin":
         if C10 is None and C01 is None:

@@ -7,8 +7,6 @@ No string from a scene is ever evaluated as code.
 """
 from __future__ import annotations
 
-import copy
-import dataclasses
 import math
 import re
 from dataclasses import dataclass
@@ -16,63 +14,8 @@ from pathlib import Path
 from typing import Any, Callable
 
 from fem_forms.errors import InputError
+from fem_forms.keys import AXES, Key, brief, check_range, range_message
 from fem_forms.scene.petsc_options import check_options
-
-AXES = {"x": 0, "y": 1, "z": 2}
-
-
-@dataclass(frozen=True)
-class Key:
-    """One scene key: its TOML type (`kind`), range, default, unit and a one-line doc.
-
-    kinds: number, integer, string, boolean, vector (numbers; `integer` for whole ones), points
-    (a list of vectors), axes (distinct names from x, y, z -> indices), file (a path that must
-    exist), table (a sub-table of `keys`, read into the same spec), map (name -> `item`), options
-    (PETSc option -> scalar), selector (a boundary selector read by `parse`; `choices` limits its kinds),
-    selection (distinct names from `choices`; true means the default list, false none), tables (an array
-    of sub-tables of `keys`, each read into a dict),
-    either (one of the alternatives in `keys`, told apart by shape: a list or a table).
-    `note` replaces the generic range message; `attr` names the spec attribute when it differs.
-    """
-    name: str
-    kind: str
-    doc: str
-    default: Any = None
-    unit: str = ""
-    required: bool = False
-    minimum: float | None = None
-    exclusive_minimum: float | None = None
-    maximum: float | None = None
-    exclusive_maximum: float | None = None
-    choices: tuple | None = None
-    length: int | None = None
-    min_items: int | None = None
-    max_items: int | None = None
-    integer: bool = False
-    keys: tuple = ()
-    item: "Key | None" = None
-    attr: str | None = None
-    note: str = ""
-    default_note: str = ""            # a default computed from other keys, said in words
-    parse: Callable | None = None     # selector kind: parse(value, key, allowed kinds) -> Selector
-
-    @property
-    def target(self) -> str:
-        """The spec attribute this key fills."""
-        return self.attr or self.name
-
-    def value_default(self) -> Any:
-        """The default as the spec holds it (axes names become indices; lists are fresh copies)."""
-        if self.kind == "axes" and self.default is not None:
-            return [AXES[c] for c in self.default]
-        return copy.deepcopy(self.default)
-
-    def field(self) -> Any:
-        """A dataclass field whose default is this key's default (so defaults are declared once)."""
-        if isinstance(self.default, (list, dict)):
-            return dataclasses.field(default_factory=self.value_default)
-        return dataclasses.field(default=self.value_default())
-
 
 @dataclass(frozen=True)
 class Variants:
@@ -95,12 +38,6 @@ class Variants:
                     seen.add(id(k))
                     out.append(k)
         return out
-
-
-def brief(v: Any, limit: int = 60) -> str:
-    """repr(v) on one line and at most `limit` characters (a message must never repeat a huge value)."""
-    text = repr(v)
-    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 _PLAIN_NAME = re.compile(r"^[A-Za-z0-9_-]{1,40}$")
@@ -135,24 +72,6 @@ def check_vector(v: Any, key: str, length: int | None = 3, *, positive=False, in
     return [check_number(x, f"{key}[{i}]", positive=positive, integer=integer) for i, x in enumerate(v)]
 
 
-def _range_message(k: Key, v: Any) -> str | None:
-    """Why v is outside k's declared range, or None."""
-    lo, xlo, hi, xhi = k.minimum, k.exclusive_minimum, k.maximum, k.exclusive_maximum
-    bad = ((lo is not None and v < lo) or (xlo is not None and v <= xlo)
-           or (hi is not None and v > hi) or (xhi is not None and v >= xhi))
-    if not bad:
-        return None
-    if k.note:
-        return k.note
-    if xlo == 0 and hi is None and xhi is None:
-        return "must be positive"
-    if lo == 0 and hi is None and xhi is None:
-        return "must not be negative"
-    left = f"[{lo}" if lo is not None else f"({xlo}" if xlo is not None else "(-inf"
-    right = f"{hi}]" if hi is not None else f"{xhi})" if xhi is not None else "inf)"
-    return f"must lie in {left}, {right}"
-
-
 def _scalar(k: Key, v: Any, key: str) -> Any:
     given = v
     if k.kind in ("number", "integer"):
@@ -165,10 +84,8 @@ def _scalar(k: Key, v: Any, key: str) -> Any:
             raise InputError(f"{key} = {brief(v)}: must be true or false")
     if k.choices is not None and v not in k.choices:
         raise InputError(f"{key} = {brief(v)}: " + (k.note or f"must be one of {', '.join(map(repr, k.choices))}"))
-    if k.kind in ("number", "integer"):
-        why = _range_message(k, v)
-        if why:
-            raise InputError(f"{key} = {brief(given)}: {why}")
+    if k.kind in ("number", "integer") and not k.checked_by:
+        check_range(k, given, key)
     return v
 
 
@@ -176,7 +93,7 @@ def _elements(k: Key, v: list, key: str) -> list:
     """The numbers of a vector, each checked against k's range."""
     v = check_vector(v, key, k.length, integer=k.integer)
     for i, x in enumerate(v):
-        why = _range_message(k, x)
+        why = range_message(k, x)
         if why:
             raise InputError(f"{key}[{i}] = {brief(x)}: {why}")
     return v

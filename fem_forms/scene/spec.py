@@ -10,6 +10,7 @@ from typing import Any
 
 from fem_forms.errors import InputError
 from fem_forms.materials import MODELS, Material, make_material
+from fem_forms.materials.hyperelastic import PARAMETER_KEYS
 from fem_forms.materials.plasticity import make_plasticity
 from fem_forms.scene.plasticity import PLASTICITY, material_plasticity_rules
 from fem_forms.surface_meshes import SURFACE_SUFFIXES
@@ -184,14 +185,7 @@ def prism_rules(mesh: MeshSpec, disc: "Discretization", loads: list, analysis: s
 MATERIAL_KEYS = (
     Key("model", "string", "hyperelastic energy density", default="neo-hookean", choices=tuple(MODELS),
         note=f"unknown model (choose from {', '.join(MODELS)})"),
-    Key("E", "number", "Young's modulus (with nu)", unit="Pa", exclusive_minimum=0,
-        note="Young's modulus must be positive"),
-    Key("nu", "number", "Poisson's ratio (with E)", exclusive_minimum=-1.0, exclusive_maximum=0.5,
-        note="Poisson's ratio must lie in (-1, 0.5) for a compressible model"),
-    Key("mu", "number", "shear modulus (with lambda)", unit="Pa", exclusive_minimum=0),
-    Key("lambda", "number", "Lame's first parameter (with mu)", unit="Pa", attr="lmbda"),
-    Key("C10", "number", "Mooney-Rivlin C10 (default 3 mu / 8)", unit="Pa", minimum=0),
-    Key("C01", "number", "Mooney-Rivlin C01 (default mu / 8)", unit="Pa", minimum=0),
+    *PARAMETER_KEYS,
     Key("rho", "number", "mass density (gravity and modal analysis need it)", default=0.0, unit="kg/m^3",
         minimum=0),
     PLASTICITY,
