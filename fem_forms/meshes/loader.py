@@ -1,4 +1,4 @@
-"""Meshes: the built-in box, gmsh-generated solids, and volume-mesh files, all on one loader.
+"""The one mesh loader: the built-in box, gmsh-generated solids, and volume-mesh files, all on one loader.
 
 Non-box meshes are built on rank 0 as plain arrays (points, cells, named facet groups), checked
 for degenerate and inverted cells, and then distributed by ``dolfinx.mesh.create_mesh``.
@@ -14,10 +14,12 @@ from mpi4py import MPI
 import numpy as np
 import ufl
 
-from fem_forms import mesh_groups, resources, surface_meshes
 from fem_forms.errors import InputError
-from fem_forms.prisms import create_prism_box
+from fem_forms.meshes import resources, surfaces
+from fem_forms.meshes.groups import cell_groups, curve_and_point_groups, distribute_cell_groups
+from fem_forms.meshes.prisms import create_prism_box
 from fem_forms.scene import MeshSpec
+from fem_forms.scene.spec import SURFACE_SUFFIXES
 
 
 @dataclass
@@ -123,8 +125,8 @@ def _gmsh_arrays(gmsh) -> MeshArrays:
     nv = kinds[usable[0][0]][1]
     per = [gmsh.model.mesh.getElementProperties(t)[3] for t, _ in usable]
     cells = np.vstack([index[n.reshape(-1, k)[:, :nv]] for (t, n), k in zip(usable, per)])
-    volumes = mesh_groups.cell_groups(gmsh, np.concatenate([np.asarray(t) for t in element_tags]))
-    curves, points_named = mesh_groups.curve_and_point_groups(gmsh, points, index)
+    volumes = cell_groups(gmsh, np.concatenate([np.asarray(t) for t in element_tags]))
+    curves, points_named = curve_and_point_groups(gmsh, points, index)
     groups = {}
     for dim, tag in gmsh.model.getPhysicalGroups(2):
         name = gmsh.model.getPhysicalName(dim, tag) or str(tag)
@@ -222,15 +224,15 @@ def read_surface_file(path: Path, h: float | None, limit: float, degree: int) ->
     """A closed surface (STL, OBJ, PLY, OFF) filled with tetrahedra of size h (default: the surface's
     mean edge length), after checking that it is closed and that the mesh will fit in memory."""
     key = f"mesh.file = {str(path)!r}"
-    points, tris = surface_meshes.read_surface(path)
-    surface_meshes.check_closed(points, tris, key)
-    h = h or surface_meshes.mean_edge(points, tris)
-    cells, dofs = resources.tetrahedra_counts(surface_meshes.enclosed_volume(points, tris), h, degree)
+    points, tris = surfaces.read_surface(path)
+    surfaces.check_closed(points, tris, key)
+    h = h or surfaces.mean_edge(points, tris)
+    cells, dofs = resources.tetrahedra_counts(surfaces.enclosed_volume(points, tris), h, degree)
     resources.check_fits(cells, dofs, "tetrahedron", degree, f"{key} at h = {h:.3g}", limit)
-    x, tets = surface_meshes.tetrahedralise(points, tris, h, key)
+    x, tets = surfaces.tetrahedralise(points, tris, h, key)
     arrays = _compact(MeshArrays(x, tets, "tetrahedron"))
     arrays.info = {"source": f"{path.name} (surface, {len(tris)} triangles) meshed by gmsh at h = {h:.4g}",
-                   **surface_meshes.quality(arrays.points, arrays.cells)}
+                   **surfaces.quality(arrays.points, arrays.cells)}
     return arrays
 
 
@@ -246,7 +248,7 @@ def read_mesh_file(path: Path) -> MeshArrays:
             return _gmsh_arrays(gmsh)
         finally:
             gmsh.finalize()
-    m = surface_meshes.read_meshio(path)
+    m = surfaces.read_meshio(path)
     kinds = {"tetra": ("tetrahedron", 4), "tetra10": ("tetrahedron", 4),
              "hexahedron": ("hexahedron", 8), "hexahedron20": ("hexahedron", 8),
              "hexahedron27": ("hexahedron", 8)}
@@ -295,7 +297,7 @@ def distribute(comm: MPI.Comm, arrays: MeshArrays | None) -> LoadedMesh:
     else:
         cells, x = np.empty((0, nv), dtype=np.int64), np.empty((0, 3))
     mesh = dmesh.create_mesh(comm, cells, x, domain)
-    cell_sets = mesh_groups.distribute_cell_groups(
+    cell_sets = distribute_cell_groups(
         mesh, arrays.cells if comm.rank == 0 else None, arrays.cell_groups if comm.rank == 0 else None,
         volumes, cell_type) if volumes else {}
     extra = dict(cells=cell_sets, curves=curves, points=points, info=info)
@@ -337,7 +339,7 @@ def load_mesh(spec: MeshSpec, comm: MPI.Comm = MPI.COMM_WORLD, degree: int = 1) 
     key = "mesh.file" if spec.generator == "file" else f"mesh ({spec.generator})"
 
     def build():
-        if spec.generator == "file" and spec.file.suffix.lower() in surface_meshes.SURFACE_SUFFIXES:
+        if spec.generator == "file" and spec.file.suffix.lower() in SURFACE_SUFFIXES:
             arrays = read_surface_file(spec.file, spec.h, limit, degree)
         elif spec.generator == "file":
             arrays = read_mesh_file(spec.file)
@@ -347,7 +349,7 @@ def load_mesh(spec: MeshSpec, comm: MPI.Comm = MPI.COMM_WORLD, degree: int = 1) 
                                  "tetrahedron", degree, f"mesh.h = {spec.h}", limit)
             arrays = _generate(spec)
             arrays.info = {"source": f"{spec.generator} meshed by gmsh at h = {spec.h:.4g}",
-                           **surface_meshes.quality(arrays.points, arrays.cells)}
+                           **surfaces.quality(arrays.points, arrays.cells)}
         check_cells(arrays, key)
         return arrays
 
