@@ -1,13 +1,12 @@
-"""The one mesh loader: the built-in box, gmsh-generated solids, and volume-mesh files, all on one loader.
-
-Non-box meshes are built on rank 0 as plain arrays (points, cells, named facet groups), checked
-for degenerate and inverted cells, and then distributed by ``dolfinx.mesh.create_mesh``.
+"""The one mesh loader: the built-in box (tetrahedra, hexahedra, prisms), gmsh-generated solids and
+mesh files, refused before they are built when they would not fit in memory. Non-box meshes are built
+on rank 0 as MeshArrays, checked for degenerate and inverted cells, and then distributed by
+``dolfinx.mesh.create_mesh`` with their named groups (LoadedMesh). Also the mesh's bounding box and
+size (a length scale for tolerances).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-import math
-from pathlib import Path
 
 from dolfinx import cpp, mesh as dmesh
 from mpi4py import MPI
@@ -16,23 +15,13 @@ import ufl
 
 from fem_forms.errors import InputError
 from fem_forms.meshes import resources, surfaces
-from fem_forms.meshes.groups import cell_groups, curve_and_point_groups, distribute_cell_groups
+from fem_forms.meshes.arrays import MeshArrays, check_cells
+from fem_forms.meshes.files import read_mesh_file, read_surface_file
+from fem_forms.meshes.gmsh_models import generate_solid
+from fem_forms.meshes.groups import distribute_cell_groups
 from fem_forms.meshes.prisms import create_prism_box
 from fem_forms.scene import MeshSpec
 from fem_forms.scene.spec import SURFACE_SUFFIXES
-
-
-@dataclass
-class MeshArrays:
-    """A volume mesh on one rank: points (n, 3), cells (m, k) in gmsh/VTK vertex order."""
-    points: np.ndarray
-    cells: np.ndarray
-    cell_type: str                                     # "tetrahedron" | "hexahedron"
-    facet_groups: dict = field(default_factory=dict)   # name -> (f, 3|4) vertex indices
-    cell_groups: dict = field(default_factory=dict)    # volume group name -> rows of cells
-    curve_groups: dict = field(default_factory=dict)   # curve group name -> (k, 2, 3) edge end points
-    point_groups: dict = field(default_factory=dict)   # point group name -> (k, 3) coordinates
-    info: dict = field(default_factory=dict)           # what results.json says about the mesh
 
 
 @dataclass
@@ -52,220 +41,6 @@ class LoadedMesh:
         return "; ".join(f"{k} {', '.join(sorted(g))}" for k, g in kinds if g) or "none"
 
 
-# ----------------------------------------------------------------------------- quality checks
-def cell_volumes(points: np.ndarray, cells: np.ndarray, cell_type: str) -> np.ndarray:
-    """Signed volume of tetrahedra; for hexahedra the smallest corner Jacobian times the cell volume
-    scale, so a negative value means an inverted (or self-crossing) hexahedron."""
-    p = points[cells]
-    if cell_type == "tetrahedron":
-        a, b, c = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0], p[:, 3] - p[:, 0]
-        return np.einsum("ij,ij->i", a, np.cross(b, c)) / 6.0
-    # hexahedron, VTK order: bottom 0-1-2-3, top 4-5-6-7; three edges at each corner, right-handed
-    corners = [(0, 1, 3, 4), (1, 2, 0, 5), (2, 3, 1, 6), (3, 0, 2, 7),
-               (4, 7, 5, 0), (5, 4, 6, 1), (6, 5, 7, 2), (7, 6, 4, 3)]
-    dets = []
-    for o, i, j, k in corners:
-        a, b, c = p[:, i] - p[:, o], p[:, j] - p[:, o], p[:, k] - p[:, o]
-        dets.append(np.einsum("ij,ij->i", a, np.cross(b, c)))
-    d = np.array(dets)
-    return np.where(d.min(axis=0) < 0, d.min(axis=0), d.mean(axis=0))
-
-
-def check_cells(arrays: MeshArrays, key: str) -> None:
-    """Reject meshes with degenerate (zero-volume) or inverted cells, naming how many and where."""
-    if len(arrays.cells) == 0:
-        raise InputError(f"{key}: the mesh has no cells")
-    vol = cell_volumes(arrays.points, arrays.cells, arrays.cell_type)
-    p = arrays.points[arrays.cells]
-    edge = np.linalg.norm(p[:, 1] - p[:, 0], axis=1)
-    scale = max(float(np.mean(edge)), 1e-300) ** 3
-    if np.mean(vol) < 0:   # consistently reversed orientation: flip to the convention
-        vol = -vol
-        arrays.cells = arrays.cells[:, _flip(arrays.cell_type)]
-    degenerate = np.abs(vol) <= 1e-10 * scale
-    inverted = (vol < 0) & ~degenerate
-    if degenerate.any():
-        i = int(np.argmax(degenerate))
-        raise InputError(f"{key}: {int(degenerate.sum())} degenerate (zero-volume) cells, the first is "
-                         f"cell {i} at {np.round(p[i].mean(axis=0), 6).tolist()}")
-    if inverted.any():
-        i = int(np.argmax(inverted))
-        raise InputError(f"{key}: {int(inverted.sum())} inverted cells, the first is cell {i} at "
-                         f"{np.round(p[i].mean(axis=0), 6).tolist()}")
-
-
-def _flip(cell_type: str) -> list:
-    return [0, 2, 1, 3] if cell_type == "tetrahedron" else [4, 5, 6, 7, 0, 1, 2, 3]
-
-
-# ----------------------------------------------------------------------------- gmsh generators
-def _gmsh_session():
-    import gmsh
-    gmsh.initialize()
-    gmsh.option.setNumber("General.Terminal", 0)
-    gmsh.model.add("fem_forms")
-    return gmsh
-
-
-def _gmsh_arrays(gmsh) -> MeshArrays:
-    """Linear tetrahedra or hexahedra of the current gmsh model, with its named surface groups."""
-    tags, coords, _ = gmsh.model.mesh.getNodes()
-    order = np.argsort(tags)
-    tags, points = tags[order], coords.reshape(-1, 3)[order]
-    index = np.full(int(tags.max()) + 1, -1, dtype=np.int64)
-    index[tags] = np.arange(len(tags))
-    types, element_tags, nodes = gmsh.model.mesh.getElements(3)
-    kinds = {4: ("tetrahedron", 4), 5: ("hexahedron", 8), 11: ("tetrahedron", 4), 12: ("hexahedron", 8)}
-    found = [gmsh.model.mesh.getElementProperties(t)[0] for t in types]
-    usable = [(t, n) for t, n in zip(types, nodes) if t in kinds]
-    if not usable or len({kinds[t][0] for t, _ in usable}) != 1 or len(usable) != len(types):
-        raise InputError(f"mesh: needs volume cells all tetrahedra or all hexahedra (found: "
-                         f"{', '.join(found) or 'no volume cells'})")
-    cell_type = kinds[usable[0][0]][0]
-    nv = kinds[usable[0][0]][1]
-    per = [gmsh.model.mesh.getElementProperties(t)[3] for t, _ in usable]
-    cells = np.vstack([index[n.reshape(-1, k)[:, :nv]] for (t, n), k in zip(usable, per)])
-    volumes = cell_groups(gmsh, np.concatenate([np.asarray(t) for t in element_tags]))
-    curves, points_named = curve_and_point_groups(gmsh, points, index)
-    groups = {}
-    for dim, tag in gmsh.model.getPhysicalGroups(2):
-        name = gmsh.model.getPhysicalName(dim, tag) or str(tag)
-        facets = []
-        for ent in gmsh.model.getEntitiesForPhysicalGroup(dim, tag):
-            ftypes, _, fnodes = gmsh.model.mesh.getElements(2, ent)
-            for ft, fn in zip(ftypes, fnodes):
-                k = gmsh.model.mesh.getElementProperties(ft)[3]
-                corner = 3 if cell_type == "tetrahedron" else 4
-                facets.append(index[fn.reshape(-1, k)[:, :corner]])
-        if facets:
-            groups[name] = np.vstack(facets)
-    return _compact(MeshArrays(points, cells, cell_type, groups, volumes, curves, points_named))
-
-
-def _compact(a: MeshArrays) -> MeshArrays:
-    """Drop points no cell uses (geometry points, midside nodes) and renumber."""
-    used = np.unique(a.cells)
-    if len(used) == len(a.points):
-        return a
-    new = np.full(len(a.points), -1, dtype=np.int64)
-    new[used] = np.arange(len(used))
-    # facets touching unused nodes (degenerate surfaces, e.g. the revolution axis) are dropped
-    groups = {n: new[f][np.all(new[f] >= 0, axis=1)] for n, f in a.facet_groups.items()}
-    return MeshArrays(a.points[used], new[a.cells], a.cell_type, {n: f for n, f in groups.items() if len(f)},
-                      a.cell_groups, a.curve_groups, a.point_groups, a.info)
-
-
-def _generate(spec: MeshSpec) -> MeshArrays:
-    gmsh = _gmsh_session()
-    try:
-        occ = gmsh.model.occ
-        ox, oy, oz = spec.origin
-        if spec.generator == "cylinder":
-            vol = occ.addCylinder(ox, oy, oz, 0, 0, spec.height, spec.radius)
-        elif spec.generator == "sphere":
-            vol = occ.addSphere(ox, oy, oz, spec.radius)
-        else:
-            vol = _revolved_profile(occ, spec)
-        occ.synchronize()
-        gmsh.model.addPhysicalGroup(3, [vol], 1)
-        _name_surfaces(gmsh, spec)
-        gmsh.option.setNumber("Mesh.CharacteristicLengthMax", spec.h)
-        gmsh.option.setNumber("Mesh.CharacteristicLengthMin", spec.h / 4)
-        gmsh.option.setNumber("Mesh.Optimize", 1)
-        gmsh.model.mesh.generate(3)
-        return _gmsh_arrays(gmsh)
-    finally:
-        gmsh.finalize()
-
-
-def _revolved_profile(occ, spec: MeshSpec) -> int:
-    """Revolve a closed r-z outline about the z axis through the origin into a solid."""
-    pts = spec.profile
-    if pts[0] == pts[-1]:
-        pts = pts[:-1]
-    ox, oy, oz = spec.origin
-    tags = [occ.addPoint(ox + r, oy, oz + z) for r, z in pts]
-    lines = [occ.addLine(tags[i], tags[(i + 1) % len(tags)]) for i in range(len(tags))]
-    surf = occ.addPlaneSurface([occ.addCurveLoop(lines)])
-    out = occ.revolve([(2, surf)], ox, oy, oz, 0, 0, 1, 2 * math.pi)
-    vols = [t for d, t in out if d == 3]
-    if len(vols) != 1:
-        raise InputError("mesh.profile: revolving the outline did not give one solid")
-    return vols[0]
-
-
-def _name_surfaces(gmsh, spec: MeshSpec) -> None:
-    """Physical groups for generated surfaces: flat horizontal faces at the lowest/highest z are
-    'bottom'/'top' and the rest 'side' (cylinder, revolve); a sphere has one group 'surface'."""
-    surfaces = [t for _, t in gmsh.model.getEntities(2)]
-    if spec.generator == "sphere":
-        gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, surfaces, 10), "surface")
-        return
-    boxes = {s: gmsh.model.getBoundingBox(2, s) for s in surfaces}
-    zlo = min(b[2] for b in boxes.values())
-    zhi = max(b[5] for b in boxes.values())
-    tol = 1e-4 * (zhi - zlo)              # OCC pads bounding boxes by its tolerance
-    named = {"bottom": [], "top": [], "side": []}
-    for s, b in boxes.items():
-        flat = b[5] - b[2] < tol
-        if flat and abs(b[2] - zlo) < tol:
-            named["bottom"].append(s)
-        elif flat and abs(b[5] - zhi) < tol:
-            named["top"].append(s)
-        else:
-            named["side"].append(s)
-    for i, (n, ss) in enumerate(named.items()):
-        if ss:
-            gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, ss, 10 + i), n)
-
-
-# ----------------------------------------------------------------------------- files
-def read_surface_file(path: Path, h: float | None, limit: float, degree: int) -> MeshArrays:
-    """A closed surface (STL, OBJ, PLY, OFF) filled with tetrahedra of size h (default: the surface's
-    mean edge length), after checking that it is closed and that the mesh will fit in memory."""
-    key = f"mesh.file = {str(path)!r}"
-    points, tris = surfaces.read_surface(path)
-    surfaces.check_closed(points, tris, key)
-    h = h or surfaces.mean_edge(points, tris)
-    cells, dofs = resources.tetrahedra_counts(surfaces.enclosed_volume(points, tris), h, degree)
-    resources.check_fits(cells, dofs, "tetrahedron", degree, f"{key} at h = {h:.3g}", limit)
-    x, tets = surfaces.tetrahedralise(points, tris, h, key)
-    arrays = _compact(MeshArrays(x, tets, "tetrahedron"))
-    arrays.info = {"source": f"{path.name} (surface, {len(tris)} triangles) meshed by gmsh at h = {h:.4g}",
-                   **surfaces.quality(arrays.points, arrays.cells)}
-    return arrays
-
-
-def read_mesh_file(path: Path) -> MeshArrays:
-    """A gmsh .msh (with its named groups of every dimension) or any meshio-readable volume mesh."""
-    if path.suffix == ".msh":
-        gmsh = _gmsh_session()
-        try:
-            try:
-                gmsh.merge(str(path))
-            except Exception as e:
-                raise InputError(f"mesh.file = {str(path)!r}: gmsh cannot read it ({e})") from None
-            return _gmsh_arrays(gmsh)
-        finally:
-            gmsh.finalize()
-    m = surfaces.read_meshio(path)
-    kinds = {"tetra": ("tetrahedron", 4), "tetra10": ("tetrahedron", 4),
-             "hexahedron": ("hexahedron", 8), "hexahedron20": ("hexahedron", 8),
-             "hexahedron27": ("hexahedron", 8)}
-    blocks = [(kinds[b.type], b.data) for b in m.cells if b.type in kinds]
-    if not blocks or len({k[0] for k, _ in blocks}) != 1:
-        found = ", ".join(sorted({b.type for b in m.cells})) or "nothing"
-        raise InputError(f"mesh.file = {str(path)!r}: needs volume cells all tetrahedra or all "
-                         f"hexahedra (found: {found})")
-    (cell_type, nv), _ = blocks[0]
-    cells = np.vstack([d[:, :nv] for _, d in blocks]).astype(np.int64)
-    pts = np.asarray(m.points, dtype=np.float64)
-    if pts.shape[1] != 3:
-        raise InputError(f"mesh.file = {str(path)!r}: points must have 3 coordinates")
-    return _compact(MeshArrays(pts, cells, cell_type, {}))
-
-
-# ----------------------------------------------------------------------------- distribution
 def _on_root(comm: MPI.Comm, build):
     """Run build() on rank 0; an error there is raised on every rank as one InputError line (a reader's
     or gmsh's own exception must not leave the other ranks waiting in the broadcast)."""
@@ -347,7 +122,7 @@ def load_mesh(spec: MeshSpec, comm: MPI.Comm = MPI.COMM_WORLD, degree: int = 1) 
         else:
             resources.check_fits(*resources.tetrahedra_counts(resources.solid_volume(spec), spec.h, degree),
                                  "tetrahedron", degree, f"mesh.h = {spec.h}", limit)
-            arrays = _generate(spec)
+            arrays = generate_solid(spec)
             arrays.info = {"source": f"{spec.generator} meshed by gmsh at h = {spec.h:.4g}",
                            **surfaces.quality(arrays.points, arrays.cells)}
         check_cells(arrays, key)
