@@ -32,7 +32,7 @@ from fem_forms.analyses.balance.body import Body
 from fem_forms.analyses.balance.design import design
 from fem_forms.analyses.balance.evaluate import evaluate, unmet
 from fem_forms.meshes import load_mesh
-from fem_forms.occ_parts import mesh_part
+from fem_forms.meshes.occ_parts import mesh_part
 
 SIZES = (25_000, 50_000, 100_000, 200_000)
 QUICK = (25_000, 100_000)

@@ -14,7 +14,7 @@ import sys
 
 import fem_forms as ff
 from fem_forms.analyses import run_analysis
-from fem_forms.occ_parts import write_part
+from fem_forms.meshes.occ_parts import write_part
 
 
 def toy(occ, R: float = 0.05, H: float = 0.04) -> list:

@@ -13,7 +13,7 @@ import sys
 
 import fem_forms as ff
 from fem_forms.analyses import run_analysis
-from fem_forms.occ_parts import write_part
+from fem_forms.meshes.occ_parts import write_part
 
 
 def top(occ) -> list:

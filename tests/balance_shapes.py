@@ -2,7 +2,7 @@
 properties and a leaning figure."""
 from pathlib import Path
 
-from fem_forms.occ_parts import write_part
+from fem_forms.meshes.occ_parts import write_part
 
 
 def _mesh(path: Path, build, h: float) -> Path:

@@ -6,7 +6,7 @@ from pathlib import Path
 from dolfinx import cpp, fem, io, mesh as dmesh
 import numpy as np
 
-from fem_forms import prisms
+from fem_forms.meshes import prisms
 
 
 def p1_interpolant(f: fem.Function, name: str | None = None) -> fem.Function:

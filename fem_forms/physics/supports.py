@@ -10,9 +10,9 @@ from mpi4py import MPI
 import numpy as np
 from petsc4py import PETSc
 
-from fem_forms import mesh_groups
 from fem_forms.errors import InputError
 from fem_forms.meshes import LoadedMesh, bounding_box, mesh_size
+from fem_forms.meshes.groups import distance_to_points, distance_to_segments
 from fem_forms.scene import Fix, Load, Selector
 
 
@@ -78,12 +78,12 @@ def _geometric_marker(loaded: LoadedMesh, sel: Selector):
         return lambda x: np.linalg.norm(x.T - node, axis=1) <= close
     if sel.kind == "line":
         seg = np.array([sel.line])
-        return lambda x: mesh_groups.distance_to_segments(x.T, seg) <= tol
+        return lambda x: distance_to_segments(x.T, seg) <= tol
     if sel.group in loaded.curves:
         segs = loaded.curves[sel.group]
-        return lambda x: mesh_groups.distance_to_segments(x.T, segs) <= tol
+        return lambda x: distance_to_segments(x.T, segs) <= tol
     pts = loaded.points[sel.group]
-    return lambda x: mesh_groups.distance_to_points(x.T, pts) <= tol
+    return lambda x: distance_to_points(x.T, pts) <= tol
 
 
 def support_dofs(V: fem.FunctionSpace, loaded: LoadedMesh, sel: Selector, components: list) -> list:

@@ -13,7 +13,6 @@ from fem_forms.materials import MODELS, Material, make_material
 from fem_forms.materials.hyperelastic import PARAMETER_KEYS
 from fem_forms.materials.plasticity import make_plasticity
 from fem_forms.scene.plasticity import PLASTICITY, material_plasticity_rules
-from fem_forms.surface_meshes import SURFACE_SUFFIXES
 from fem_forms.scene.reader import AXES, Key, Section, Table, Variants, brief, check_vector
 
 # --- selectors ------------------------------------------------------------------------------
@@ -92,6 +91,7 @@ def where(doc: str, required: bool = True, kinds: tuple | None = None) -> Key:
 
 
 # --- mesh -----------------------------------------------------------------------------------
+SURFACE_SUFFIXES = (".stl", ".obj", ".ply", ".off")    # closed surfaces the loader fills with tetrahedra
 GENERATOR = Key("generator", "string", "how the mesh is made: a built-in shape or a mesh file",
                 default="box", choices=("box", "cylinder", "sphere", "revolve", "file"))
 CELL = Key("cell", "string", "cell type (cylinder, sphere and revolve make tetrahedra only; prism: box only, "
@@ -165,7 +165,7 @@ def _mesh_rules(m: MeshSpec, t: Table) -> None:
 
 
 def prism_rules(mesh: MeshSpec, disc: "Discretization", loads: list, analysis: str) -> None:
-    """What dolfinx 0.5.2 cannot do on prisms, refused when the scene is read (see fem_forms/prisms.py)."""
+    """What dolfinx 0.5.2 cannot do on prisms, refused when the scene is read (see fem_forms/meshes/prisms.py)."""
     if mesh.cell != "prism":
         return
     if analysis == "inverse":

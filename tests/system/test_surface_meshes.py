@@ -85,7 +85,7 @@ def test_h_is_only_for_surface_files(tmp_path):
 def test_meshio_warnings_do_not_reach_the_terminal(tmp_path, capfd):
     """A gmsh 2.2 file without physical tags makes meshio warn ("Appending zeros ..."): silent here."""
     import meshio
-    from fem_forms.surface_meshes import read_meshio
+    from fem_forms.meshes.surfaces import read_meshio
     pts, _ = box_surface(1, 1, 1)
     tets = np.array([[0, 1, 3, 5], [0, 3, 2, 6], [0, 5, 4, 6], [3, 5, 6, 7], [0, 3, 6, 5]])
     p = pts[tets]

@@ -35,7 +35,7 @@ def scene_dict(E=1e6, nu=0.3, rho=1000.0, g=-9.81, traction=-10.0, pressure=50.0
 @pytest.fixture
 def compilations(monkeypatch, tmp_path):
     """A list that grows by one entry per FFCx compilation, with an empty JIT cache (a warm cache would
-    hide a form that compiles under a second signature: it happened, see meshes.settle_coordinate_element)."""
+    hide a form that compiles under a second signature: it happened, see meshes.loader.settle_coordinate_element)."""
     monkeypatch.setitem(dolfinx.jit.DOLFINX_DEFAULT_JIT_PARAMETERS, "cache_dir", (tmp_path / "jit", "test"))
     seen = []
     original = ffcx_jit._compile_objects

@@ -11,7 +11,7 @@ from petsc4py import PETSc
 
 import fem_forms as ff
 from fem_forms.kinematics import deformation_gradient
-from fem_forms.prisms import create_prism_mesh, prism_box_arrays
+from fem_forms.meshes.prisms import create_prism_mesh, prism_box_arrays
 
 G = np.array([[1.0e-3, 2.0e-3, -1.0e-3], [0.5e-3, -2.0e-3, 1.5e-3], [-1.0e-3, 0.0, 3.0e-3]])
 

@@ -7,7 +7,7 @@ mesh of size h, written as hemisphere.msh (straight-sided tetrahedra inscribed i
 import argparse
 from pathlib import Path
 
-from fem_forms.occ_parts import write_part
+from fem_forms.meshes.occ_parts import write_part
 
 
 def _half_ball(occ, radius: float) -> list:

@@ -3,7 +3,7 @@
 Volumes (dimension 3) become cell groups: row indices into the cell array on rank 0, distributed as
 local cell indices. Curves (1) and points (0) become coordinates, the same on every rank: a support
 on them fixes the dofs that lie on the curve's mesh edges or at the points, found geometrically
-(dolfinx keeps no edge or vertex tags through mesh distribution). Surfaces (2) stay in meshes.py.
+(dolfinx keeps no edge or vertex tags through mesh distribution). Surfaces (2) stay in gmsh_models.py.
 """
 from __future__ import annotations
 

@@ -18,7 +18,6 @@ import numpy as np
 
 from fem_forms.errors import InputError
 
-SURFACE_SUFFIXES = (".stl", ".obj", ".ply", ".off")
 FEATURE_ANGLE = 40.0        # degrees: sharper creases between facets become edges of the geometry
 
 

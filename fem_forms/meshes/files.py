@@ -1,0 +1,59 @@
+"""Mesh files to MeshArrays: a gmsh .msh (with its named groups of every dimension), any other volume
+mesh meshio reads, and a closed surface (STL, OBJ, PLY, OFF) filled with tetrahedra once it is known
+to be closed and to fit in memory.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from fem_forms.errors import InputError
+from fem_forms.meshes import resources, surfaces
+from fem_forms.meshes.arrays import MeshArrays, compact
+from fem_forms.meshes.gmsh_models import gmsh_arrays, gmsh_session
+
+
+def read_surface_file(path: Path, h: float | None, limit: float, degree: int) -> MeshArrays:
+    """A closed surface (STL, OBJ, PLY, OFF) filled with tetrahedra of size h (default: the surface's
+    mean edge length), after checking that it is closed and that the mesh will fit in memory."""
+    key = f"mesh.file = {str(path)!r}"
+    points, tris = surfaces.read_surface(path)
+    surfaces.check_closed(points, tris, key)
+    h = h or surfaces.mean_edge(points, tris)
+    cells, dofs = resources.tetrahedra_counts(surfaces.enclosed_volume(points, tris), h, degree)
+    resources.check_fits(cells, dofs, "tetrahedron", degree, f"{key} at h = {h:.3g}", limit)
+    x, tets = surfaces.tetrahedralise(points, tris, h, key)
+    arrays = compact(MeshArrays(x, tets, "tetrahedron"))
+    arrays.info = {"source": f"{path.name} (surface, {len(tris)} triangles) meshed by gmsh at h = {h:.4g}",
+                   **surfaces.quality(arrays.points, arrays.cells)}
+    return arrays
+
+
+def read_mesh_file(path: Path) -> MeshArrays:
+    """A gmsh .msh (with its named groups of every dimension) or any meshio-readable volume mesh."""
+    if path.suffix == ".msh":
+        gmsh = gmsh_session()
+        try:
+            try:
+                gmsh.merge(str(path))
+            except Exception as e:
+                raise InputError(f"mesh.file = {str(path)!r}: gmsh cannot read it ({e})") from None
+            return gmsh_arrays(gmsh)
+        finally:
+            gmsh.finalize()
+    m = surfaces.read_meshio(path)
+    kinds = {"tetra": ("tetrahedron", 4), "tetra10": ("tetrahedron", 4),
+             "hexahedron": ("hexahedron", 8), "hexahedron20": ("hexahedron", 8),
+             "hexahedron27": ("hexahedron", 8)}
+    blocks = [(kinds[b.type], b.data) for b in m.cells if b.type in kinds]
+    if not blocks or len({k[0] for k, _ in blocks}) != 1:
+        found = ", ".join(sorted({b.type for b in m.cells})) or "nothing"
+        raise InputError(f"mesh.file = {str(path)!r}: needs volume cells all tetrahedra or all "
+                         f"hexahedra (found: {found})")
+    (cell_type, nv), _ = blocks[0]
+    cells = np.vstack([d[:, :nv] for _, d in blocks]).astype(np.int64)
+    pts = np.asarray(m.points, dtype=np.float64)
+    if pts.shape[1] != 3:
+        raise InputError(f"mesh.file = {str(path)!r}: points must have 3 coordinates")
+    return compact(MeshArrays(pts, cells, cell_type, {}))
