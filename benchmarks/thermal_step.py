@@ -27,8 +27,8 @@ import ufl
 
 import fem_forms as ff
 from fem_forms.meshes import load_mesh
-from fem_forms.physics.heat import HeatForms, temperature_space
-from fem_forms.solvers.heat_step import HeatSolver
+from fem_forms.physics.thermal import HeatForms, temperature_space
+from fem_forms.solvers.thermal_step import HeatSolver
 from fem_forms.state import State
 
 HERE = Path(__file__).resolve().parent

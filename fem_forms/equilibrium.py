@@ -11,9 +11,9 @@ import numpy as np
 
 from fem_forms.errors import InputError, SolveError
 from fem_forms.model import Model, build_model
-from fem_forms.physics.heat import HeatForms
+from fem_forms.physics.thermal import HeatForms
 from fem_forms.physics.thermoelastic import young_modulus
-from fem_forms.solvers.heat_step import HeatSolver, max_value, min_value
+from fem_forms.solvers.thermal_step import HeatSolver, max_value, min_value
 from fem_forms.state import State
 from fem_forms.output.quantities import Quantities
 from fem_forms.output.reactions import reaction_report

@@ -19,6 +19,8 @@ class Inertia(Term):
         """int rho a . v dX: the mass form with trial `a` and test `v` (or a load form for a fixed a)."""
         return ctx.volume(ctx.parameters.density * ufl.inner(a, v))
 
+
+class DiscreteInertia(Inertia):
     """The generalized-alpha inertia force (1 - alpha_m) M a(u) + alpha_m M a_n as the gradient in u of
     (1 - alpha_m) / (2 beta dt^2) int rho |u - u~|^2 dX + alpha_m int rho a_n . u dX
     (consistent mass; a lumped mass is added to the assembled system by the time stepper)."""

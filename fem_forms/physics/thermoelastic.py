@@ -14,7 +14,7 @@ import ufl
 
 from fem_forms.errors import InputError
 from fem_forms.materials.constants import parameter_value
-from fem_forms.physics.heat import temperature_space
+from fem_forms.physics.thermal import temperature_space
 from fem_forms.physics.terms import Context
 
 

@@ -15,7 +15,7 @@ from fem_forms.scene.analyses.balance import BalanceSpec
 from fem_forms.scene.analyses.dynamic import DampingSpec, DynamicSpec
 from fem_forms.scene.analyses.inverse import InverseSpec
 from fem_forms.scene.analyses.modal import ModalSpec, SoundSpec
-from fem_forms.scene.analyses.heat import ThermalSpec
+from fem_forms.scene.analyses.thermal_section import ThermalSpec
 from fem_forms.scene.files import parse_assignment, read_toml, set_key
 from fem_forms.scene.reader import AXES, Key, Section, Table, Variants, check_number, check_vector
 from fem_forms.scene.registry import ANALYSIS_KEY

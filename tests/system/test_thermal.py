@@ -16,7 +16,7 @@ from scipy.optimize import brentq
 
 import fem_forms as ff
 from fem_forms.analyses.thermal import solve_thermal
-from fem_forms.physics.heat import STEFAN_BOLTZMANN
+from fem_forms.physics.thermal import STEFAN_BOLTZMANN
 from helpers import mpirun, toml_dumps
 
 E, NU, ALPHA, DT = 2.0e11, 0.3, 1.2e-5, 100.0

@@ -15,7 +15,7 @@ from fem_forms.output import results
 from fem_forms.output.plastic import plastic_summary
 from fem_forms.output.quantities import Quantities
 from fem_forms.scene import Scene
-from fem_forms.solvers.heat_step import max_value
+from fem_forms.solvers.thermal_step import max_value
 
 __all__ = ["DynamicResult", "run", "solve_dynamic"]
 

@@ -14,7 +14,7 @@ from petsc4py import PETSc
 from fem_forms.analyses.dynamic import checkpoint
 from fem_forms.analyses.dynamic.energy import EnergyAccount
 from fem_forms.analyses.dynamic.explicit import ExplicitStepper, check_stable
-from fem_forms.analyses.dynamic.heat import StaggeredStepper
+from fem_forms.analyses.dynamic.thermal import StaggeredStepper
 from fem_forms.analyses.dynamic.implicit import ImplicitStepper
 from fem_forms.analyses.dynamic.system import DynamicSystem, build_system
 from fem_forms.errors import InputError, SolveError

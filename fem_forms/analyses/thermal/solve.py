@@ -13,9 +13,9 @@ from fem_forms.equilibrium import peak_memory_mb
 from fem_forms.errors import SolveError
 from fem_forms.meshes import LoadedMesh, load_mesh
 from fem_forms.output import probes
-from fem_forms.physics.heat import HeatForms, temperature_space
+from fem_forms.physics.thermal import HeatForms, temperature_space
 from fem_forms.scene import Scene
-from fem_forms.solvers.heat_step import HeatSolver, max_value, min_value
+from fem_forms.solvers.thermal_step import HeatSolver, max_value, min_value
 from fem_forms.solvers.time_stepping import history_corners, march
 from fem_forms.state import State
 

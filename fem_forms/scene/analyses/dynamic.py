@@ -5,7 +5,7 @@ from dataclasses import dataclass
 
 from fem_forms.errors import InputError
 from fem_forms.scene.analyses import Analysis
-from fem_forms.scene.analyses.heat import THERMAL, check_coupled
+from fem_forms.scene.analyses.thermal_section import THERMAL, check_coupled
 from fem_forms.scene.reader import Key, Section, Table
 
 SCHEMES = ("newmark", "generalized-alpha", "central-difference")

@@ -1,6 +1,6 @@
 """Static analysis: equilibrium under the scene's loads (and, with [thermal], a steady temperature's strain)."""
 from fem_forms.scene.analyses import Analysis
-from fem_forms.scene.analyses.heat import THERMAL, check_coupled
+from fem_forms.scene.analyses.thermal_section import THERMAL, check_coupled
 
 ANALYSIS = Analysis(
     name="static",

@@ -1,11 +1,11 @@
 """The thermal analysis: heat alone, steady without [dynamic], transient by backward Euler with [dynamic]
-duration, dt, output_every (the only [dynamic] keys it reads). Its [thermal] section is scene/analyses/heat.py."""
+duration, dt, output_every (the only [dynamic] keys it reads). Its [thermal] section is scene/analyses/thermal_section.py."""
 from __future__ import annotations
 
 from fem_forms.errors import InputError
 from fem_forms.scene.analyses import Analysis
 from fem_forms.scene.analyses.dynamic import DYNAMIC_KEYS, DynamicSpec
-from fem_forms.scene.analyses.heat import THERMAL, check_coupled
+from fem_forms.scene.analyses.thermal_section import THERMAL, check_coupled
 from fem_forms.scene.reader import Section, Table
 
 # the thermal analysis reads only the time keys of [dynamic]

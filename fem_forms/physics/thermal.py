@@ -15,7 +15,7 @@ import ufl
 
 from fem_forms.meshes import LoadedMesh
 from fem_forms.physics.supports import load_regions, locate_facets
-from fem_forms.scene.analyses.heat import ThermalSpec
+from fem_forms.scene.analyses.thermal_section import ThermalSpec
 from fem_forms.physics.histories import piecewise_linear
 
 STEFAN_BOLTZMANN = 5.670374419e-8       # W/(m^2 K^4)

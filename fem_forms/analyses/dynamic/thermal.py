@@ -14,8 +14,8 @@ from dataclasses import replace
 from dolfinx import fem
 
 from fem_forms.physics.damping import ViscousDamping
-from fem_forms.physics.heat import HeatForms
-from fem_forms.solvers.heat_step import HeatSolver
+from fem_forms.physics.thermal import HeatForms
+from fem_forms.solvers.thermal_step import HeatSolver
 from fem_forms.solvers.time_stepping import StepOutcome
 
 

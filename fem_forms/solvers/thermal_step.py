@@ -8,7 +8,7 @@ import math
 
 from mpi4py import MPI
 
-from fem_forms.physics.heat import HeatForms
+from fem_forms.physics.thermal import HeatForms
 from fem_forms.solvers import acceptance, snes
 from fem_forms.solvers.time_stepping import StepOutcome
 from fem_forms.state import State
