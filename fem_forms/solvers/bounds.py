@@ -72,8 +72,11 @@ class Bounds:
         ra[at_upper] = np.maximum(ra[at_upper], 0.0)
 
 
-def options(merged: dict, user_options: dict) -> None:
-    """A bounded problem's SNES options, in place: a VI type unless the user chose one, and its line search."""
+def options(merged: dict, user_options: dict, bounds: Bounds | None) -> None:
+    """A bounded problem's SNES options, in place: a VI type unless the user chose one, and its line search
+    (nothing without `bounds`)."""
+    if bounds is None:
+        return
     if not str(user_options.get("snes_type", "")).startswith("vi"):
         merged["snes_type"] = "vinewtonrsls"
     if "snes_linesearch_type" not in user_options:
