@@ -17,7 +17,7 @@ from petsc4py import PETSc
 import ufl
 
 from fem_forms import progress
-from fem_forms.solvers import linear
+from fem_forms.solvers import bounds as vi, linear
 from fem_forms.solvers.array_terms import ArrayTerms
 from fem_forms.solvers.preconditioner_reuse import PreconditionerReuse
 from fem_forms.state import State
@@ -39,6 +39,7 @@ class NonlinearProblem:
     inadmissible: Callable[[], str | None] | None = None  # why a state is unphysical, or None
     state: State | None = None         # fields and history committed/rolled back with the steps (default: u)
     array_terms: list = field(default_factory=list)   # physics.terms.ArrayTerm: energies as arrays (lumped mass)
+    bounds: tuple | None = None        # (lower, upper): fem.Function (e.g. State.old["damage"]), float or None
 
 
 @dataclass
@@ -118,6 +119,7 @@ class SNESDriver:
         self.L, self.a = as_compiled(problem.residual), as_compiled(problem.jacobian)
         self.E = as_compiled(problem.energy) if problem.energy is not None else None
         self.arrays = ArrayTerms(problem.array_terms, problem.u.function_space, problem.bcs, self.a)
+        self.bounds = vi.Bounds(problem.u, problem.bounds, problem.bcs) if problem.bounds is not None else None
         self.b = fpetsc.create_vector(self.L)
         self.x = self.b.copy()
         self.assembly_time = 0.0
@@ -135,6 +137,7 @@ class SNESDriver:
         merged.update(linear.options(self.linear_kind, symmetric=self.E is not None,
                                      reuse_factor=self.reuse_factor))
         merged.update(self.user_options)
+        vi.options(merged, self.user_options, self.bounds)     # bounded: vinewtonrsls and its line search
         # block (BAIJ) matrices assemble 2.5-3x faster and MUMPS takes them; multigrid (GAMG, hypre) needs
         # AIJ and builds from an AIJ copy (self.P, made when it rebuilds); other solvers get AIJ
         mumps = merged.get("pc_type") in ("lu", "cholesky") and merged.get("pc_factor_mat_solver_type") == "mumps"
@@ -238,11 +241,14 @@ class SNESDriver:
             snes.setTolerances(atol=max(self.base_atol(), self.roundoff_floor(1.0)))
 
     # -- public ----------------------------------------------------------------------------------
-    def residual_norm(self) -> float:
-        """Assemble the residual at the current u, independently of SNES, and return its norm."""
+    def residual_norm(self, projected: bool = True) -> float:
+        """Assemble the residual at the current u, independently of SNES, and return its norm (with bounds
+        and `projected`: the norm of its KKT violation, bounds.Bounds.kkt_violation)."""
         x = self.p.u.vector.copy()
         r = self.b.duplicate()
         self._residual(None, x, r)
+        if projected and self.bounds is not None:
+            self.bounds.kkt_violation(x, r)
         n = r.norm()
         x.destroy()
         r.destroy()
@@ -279,7 +285,7 @@ class SNESDriver:
             u = self.p.u
             saved = u.x.array.copy()
             u.x.array[:] = 0.0
-            self._load_scale = self.residual_norm()
+            self._load_scale = self.residual_norm(projected=False)
             u.x.array[:] = saved
         return self._load_scale
 
@@ -317,6 +323,8 @@ class SNESDriver:
                 self._linear_extension(x_old)
             x_old.destroy()
         self.snes.setTolerances(atol=self.base_atol())
+        if self.bounds is not None:
+            self.bounds.install(self.snes)           # refreshed: a bound may be a committed old value
         builds0 = 0
         if self.pc_reuse is not None:
             if not self.keep_preconditioner:
@@ -325,7 +333,7 @@ class SNESDriver:
         self.snes.solve(None, self.x)
         reason = self.snes.getConvergedReason()
         iterations, krylov = self.snes.getIterationNumber(), self.snes.getLinearSolveIterations()
-        if reason == PETSc.SNES.ConvergedReason.CONVERGED_SNORM_RELATIVE and self.E is not None:
+        if self.E is not None:
             reason, its, kits = self._polish(reason)
             iterations, krylov = iterations + its, krylov + kits
         self._set_state(self.x)
@@ -339,9 +347,13 @@ class SNESDriver:
         so the energy line search sees no decrease and takes a tiny step while the residual is still
         above what round-off allows (measured: 4.8e-5 left where 1e-9 was reachable). Full Newton steps
         (no line search) converge quadratically from there: take up to 3 and keep them only if they
-        reduced the residual. Returns (reason, Newton iterations, Krylov iterations) added."""
+        reduced the residual; also after a line search failed below 1e-6 of the load scale (measured: bt on a
+        staggered sub-solve 1e-9 from its answer). Returns (reason, Newton iterations, Krylov iterations) added."""
         last = self._history[-1] if self._history else math.inf
-        if last <= max(self.base_atol(), self.roundoff_floor(1.0)):
+        near = last < 1e-6 * (getattr(self, "_load_scale", None) or 0.0)
+        stuck = near and reason == PETSc.SNES.ConvergedReason.DIVERGED_LINE_SEARCH
+        if not (stuck or reason == PETSc.SNES.ConvergedReason.CONVERGED_SNORM_RELATIVE) \
+                or last <= max(self.base_atol(), self.roundoff_floor(1.0)):
             return reason, 0, 0
         saved, history = self.x.copy(), list(self._history)
         max_it = self.snes.getTolerances()[3]

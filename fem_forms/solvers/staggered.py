@@ -1,0 +1,77 @@
+"""Staggered (alternate minimization) solve of several fields: one SNES sub-problem per field, each for its own
+Function with the others frozen (its forms simply reference the other fields' Functions), swept in order
+until no field changes any more.
+
+Monolithic or staggered, chosen per analysis: monolithic is one NonlinearProblem on a mixed (or block) space
+(the mixed u-p formulation of model.py), solved by the continuation as any other problem: Newton on the
+coupled tangent, quadratic convergence, but one indefinite or non-convex system. Staggered is this module:
+each sub-problem is small and convex in its own field where the whole is not (phase-field fracture: the
+energy is convex in u and in d separately, not jointly), and each may carry its own bounds (d_old <= d <= 1);
+it converges linearly, at a rate set by the coupling (~ c^2 / (a b) for two quadratic fields)."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Sequence
+
+from mpi4py import MPI
+import numpy as np
+
+from fem_forms.solvers import acceptance
+from fem_forms.solvers.snes import NonlinearProblem, SNESDriver, StepRecord
+
+
+@dataclass
+class StaggeredReport:
+    converged: bool
+    iterations: int                  # sweeps over all fields
+    changes: list = field(default_factory=list)   # per sweep: each field's |change|_inf / |field|_inf
+    reason: str = ""
+    records: list = field(default_factory=list)   # per sweep: each field's StepRecord
+
+
+def solve(problems: Sequence[NonlinearProblem | SNESDriver], rtol: float = 1e-8, max_iterations: int = 100,
+          options: dict | None = None) -> StaggeredReport:
+    """Alternate over `problems` (one per field, in order) until the largest relative change of any field in a
+    sweep is below `rtol` or `max_iterations` sweeps are done. Each sub-solve is judged by
+    acceptance.why_rejected against the residual of its field at zero (the others frozen); a rejected one ends
+    the solve (converged False, the reason says which field and why). Fields are left at the last iterate:
+    committing or rolling back a State is the caller's. Drivers built here (from NonlinearProblems, with
+    `options`) are destroyed at the end; drivers passed in are reused and kept."""
+    drivers = [p if isinstance(p, SNESDriver) else SNESDriver(p, options) for p in problems]
+    report = StaggeredReport(False, 0)
+    try:
+        for sweep in range(1, max_iterations + 1):
+            changes, records = [], []
+            for i, drv in enumerate(drivers):
+                before = drv.p.u.x.array.copy()
+                drv._load_scale = None               # the frozen fields moved: scale of this field's residual
+                scale = drv.load_scale()
+                rec: StepRecord = drv.solve_step()
+                records.append(rec)
+                if why := acceptance.why_rejected(drv, rec, load_scale=scale):
+                    drv.rebuild()                    # a failed SNES must not be reused as it is
+                    report.iterations, report.reason = sweep, f"field {i} ({drv.p.u.name}), sweep {sweep}: {why}"
+                    report.records.append(records)
+                    return report
+                changes.append(_relative_change(drv, before))
+            report.changes.append(changes)
+            report.records.append(records)
+            report.iterations = sweep
+            if max(changes) <= rtol:
+                report.converged, report.reason = True, f"largest change {max(changes):.2e} <= {rtol:.1e}"
+                return report
+        report.reason = f"{max_iterations} sweeps, largest change still {max(report.changes[-1]):.2e}"
+        return report
+    finally:
+        for p, drv in zip(problems, drivers):
+            if drv is not p:
+                drv.snes.destroy()
+
+
+def _relative_change(drv: SNESDriver, before: np.ndarray) -> float:
+    """|u - before|_inf / |u|_inf over the owned dofs of all ranks (0 for a field that is and stays 0)."""
+    owned = drv.p.u.function_space.dofmap.index_map.size_local * drv.p.u.function_space.dofmap.index_map_bs
+    now = drv.p.u.x.array[:owned]
+    diff = drv.comm.allreduce(float(np.abs(now - before[:owned]).max(initial=0.0)), op=MPI.MAX)
+    size = drv.comm.allreduce(float(np.abs(now).max(initial=0.0)), op=MPI.MAX)
+    return diff / size if size > 0 else diff
