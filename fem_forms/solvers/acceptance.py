@@ -7,7 +7,8 @@ from __future__ import annotations
 from mpi4py import MPI
 import numpy as np
 
-from fem_forms.solvers.snes import SNESDriver, StepRecord
+from fem_forms.solvers.reports import StepRecord
+from fem_forms.solvers.snes import SNESDriver
 
 # Statics and dynamics: the residual at the accepted state must be below this fraction of the step's scale.
 # 1000x above SNES's own snes_rtol (1e-9), so a step SNES really converged always passes, while a stop on

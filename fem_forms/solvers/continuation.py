@@ -11,7 +11,8 @@ from petsc4py import PETSc
 
 from fem_forms import progress
 from fem_forms.solvers import acceptance, linear
-from fem_forms.solvers.snes import NonlinearProblem, SNESDriver, SolveReport
+from fem_forms.solvers.reports import SolveReport
+from fem_forms.solvers.snes import NonlinearProblem, SNESDriver
 from fem_forms.state import State
 
 

@@ -1,0 +1,45 @@
+"""What a solve reports: one record per SNES solve (a load or time step) and the report of a whole
+continuation (steps, Newton and Krylov counts, timings, the message)."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import math
+
+
+@dataclass
+class StepRecord:
+    load: float
+    iterations: int
+    residuals: list
+    reason: str
+    accepted: bool
+    note: str = ""            # why an SNES-converged step was still rejected
+    krylov_iterations: int = 0
+    preconditioner_builds: int = 0   # multigrid hierarchies built (kept across Newton steps when cheaper)
+    checked_residual: float = math.nan   # the residual norm acceptance.why_rejected tested
+
+
+@dataclass
+class SolveReport:
+    converged: bool
+    load_reached: float
+    newton_iterations: int
+    residual_norm: float
+    steps: list = field(default_factory=list)
+    linear_solver: str = "direct"
+    assembly_time: float = 0.0
+    solve_time: float = 0.0
+    message: str = ""
+    load_scale: float = 0.0         # the residual of the starting state under the full load (tolerances' scale)
+
+    @property
+    def load_steps(self) -> int:
+        return sum(1 for s in self.steps if s.accepted)
+
+    @property
+    def krylov_iterations(self) -> int:
+        return sum(s.krylov_iterations for s in self.steps)
+
+    @property
+    def preconditioner_builds(self) -> int:
+        return sum(s.preconditioner_builds for s in self.steps)
