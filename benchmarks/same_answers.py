@@ -1,7 +1,8 @@
 """Do two versions of fem_forms give the same answers? Runs every demo and benchmark scene (made small
-with --set where they are large) through `python -m fem_forms run` in a checkout of REF and in this tree,
-and compares the numbers users read (probe displacements and rest positions, frequencies, max |u|,
-energy) to a relative tolerance (numbers below 1e-6 of a scene's largest against that floor).
+with --set where they are large) through `python -m fem_forms run`, every demo script and every case of the
+verification manual, in a checkout of REF and in this tree, and compares the numbers users read from each
+results.json (probe displacements and rest positions, frequencies, max |u|, energy) to a relative
+tolerance (numbers below 1e-6 of a run's largest against that floor).
 
     .venv/bin/python benchmarks/same_answers.py cb0ef34 [--tol 1e-10] [--out benchmarks/same_answers.md]
 """
@@ -56,6 +57,38 @@ def run(tree: Path, scene: str, sets: list[str], out: Path) -> dict:
     return json.loads(res.read_text())
 
 
+def run_folder(tree: Path, args: list[str], cwd: Path) -> dict[str, dict]:
+    """Run `python ARGS` from `tree` in `cwd` (a demo script, the verification runner) and read every
+    results.json it wrote under cwd: {relative path: results}."""
+    cwd.mkdir(parents=True, exist_ok=True)
+    env = dict(os.environ, PYTHONPATH=str(tree), OPENBLAS_NUM_THREADS="1")
+    subprocess.run([sys.executable, *args], cwd=cwd, env=env, capture_output=True, text=True)
+    return {str(p.relative_to(cwd)): json.loads(p.read_text()) for p in sorted(cwd.rglob("results.json"))}
+
+
+def compare(a: dict[str, float], b: dict[str, float]) -> tuple[float, str]:
+    """Largest relative difference of b against a (a number missing in b counts as NaN) and its name."""
+    scale = max((abs(v) for v in a.values()), default=1.0) or 1.0
+    diffs = {k: abs(a[k] - b.get(k, float("nan"))) / max(abs(a[k]), 1e-6 * scale) for k in a}
+    worst_key = max(diffs, key=lambda k: (diffs[k] != diffs[k], diffs[k])) if diffs else "-"
+    return diffs.get(worst_key, 0.0), worst_key
+
+
+def runs(ref_tree: Path, tmp: Path):
+    """(name, reference results, this tree's results) of every scene, demo run and verification case."""
+    for scene, sets in SCENES:
+        yield (f"{scene} {' '.join(sets)}", run(ref_tree, scene, sets, tmp / "a" / Path(scene).stem),
+               run(ROOT, scene, sets, tmp / "b" / Path(scene).stem))
+    jobs = [(f"demos/{p.name}", ["demos/" + p.name]) for p in sorted((ROOT / "demos").glob("*.py"))]
+    jobs.append(("verification", ["verification/run.py", "--no-readme", "--out", "out"]))
+    for name, args in jobs:
+        folder = Path(name).stem
+        a = run_folder(ref_tree, [str(ref_tree / args[0]), *args[1:]], tmp / "a" / folder)
+        b = run_folder(ROOT, [str(ROOT / args[0]), *args[1:]], tmp / "b" / folder)
+        for path in a:
+            yield f"{name}: {path}", a[path], b.get(path, {})
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("ref", help="git revision to compare with (e.g. the previous main)")
@@ -68,25 +101,20 @@ def main() -> int:
         subprocess.run(["git", "worktree", "add", "--detach", str(ref_tree), args.ref], cwd=ROOT,
                        check=True, capture_output=True)
         try:
-            for scene, sets in SCENES:
-                a = key_numbers(run(ref_tree, scene, sets, Path(tmp) / "a" / Path(scene).stem))
-                b = key_numbers(run(ROOT, scene, sets, Path(tmp) / "b" / Path(scene).stem))
-                scale = max((abs(v) for v in a.values()), default=1.0) or 1.0
-                diffs = {k: abs(a[k] - b.get(k, float("nan"))) / max(abs(a[k]), 1e-6 * scale)
-                         for k in a}
-                worst_key = max(diffs, key=lambda k: (diffs[k] != diffs[k], diffs[k])) if diffs else "-"
-                worst = diffs.get(worst_key, 0.0)
-                worst_all = max(worst_all, worst)
-                rows.append(f"| {scene} {' '.join(sets)} | {len(a)} | {worst:.1e} ({worst_key}) |")
+            for name, a, b in runs(ref_tree, Path(tmp)):
+                a, b = key_numbers(a), key_numbers(b)
+                worst, worst_key = compare(a, b)
+                worst_all = max(worst_all, worst) if worst == worst else float("nan")
+                rows.append(f"| {name} | {len(a)} | {worst:.1e} ({worst_key}) |")
                 print(rows[-1], flush=True)
         finally:
             subprocess.run(["git", "worktree", "remove", "--force", str(ref_tree)], cwd=ROOT,
                            capture_output=True)
-    ok = worst_all <= args.tol
+    ok = worst_all <= args.tol                   # NaN (a number missing): not met
     text = (f"# Same answers as {args.ref}\n\n`benchmarks/same_answers.py {args.ref}`: largest relative "
             f"difference of the numbers results.json reports (numbers below 1e-6 of the scene's largest "
             f"are compared with that floor), tolerance {args.tol:g}: {'met' if ok else 'NOT met'}.\n\n"
-            "| scene | numbers | largest relative difference |\n|---|---:|---|\n" + "\n".join(rows) + "\n")
+            "| run | numbers | largest relative difference |\n|---|---:|---|\n" + "\n".join(rows) + "\n")
     Path(args.out).write_text(text)
     print(text)
     return 0 if ok else 1
