@@ -179,7 +179,7 @@ def solve_static(scene: Scene, material=None, model: Model | None = None) -> Sta
         result.probes = model.probes.evaluate(model.u)
         result.quantities = Quantities(model)
         result.probe_stresses = result.quantities.at_probes(model.probes)
-        result.reactions = reaction_report(model)
+        result.reactions = reaction_report(model, noise=report.residual_norm)
         if model.temperature is not None:
             for name, value in model.probes.evaluate(model.temperature).items():
                 result.probe_stresses.setdefault(name, {})["temperature"] = value[0]

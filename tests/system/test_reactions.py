@@ -109,3 +109,15 @@ def test_two_ranks_give_the_serial_reactions(tmp_path):
     np.testing.assert_allclose(par["probes"]["top"]["stress"], serial["probes"]["top"]["stress"],
                                rtol=1e-7, atol=1e-7 * abs(serial["probes"]["top"]["stress"][0][0]))
     assert par["probes"]["top"]["von_mises"] == pytest.approx(serial["probes"]["top"]["von_mises"], rel=1e-7)
+
+
+def test_equilibrium_error_is_relative_only_above_round_off():
+    """A ratio of two round-off numbers is no error: below 1e3 x the accepted residual the relative error is
+    None and the absolute imbalance stands alone; above it the ratio is the imbalance over the larger side."""
+    from fem_forms.output.reactions import equilibrium_error, equilibrium_imbalance
+    tiny_r, tiny_f = np.array([[1e-13, 0.0, 0.0]]), np.array([-0.16e-13, 0.0, 0.0])
+    assert equilibrium_error(tiny_r, tiny_f, noise=1e-12) is None
+    assert equilibrium_imbalance(tiny_r, tiny_f) == pytest.approx(0.84e-13)
+    real_r, real_f = np.array([[10.0, 0.0, 0.0], [0.0, 5.0, 0.0]]), np.array([-10.0, -5.0 + 1e-9, 0.0])
+    assert equilibrium_error(real_r, real_f, noise=1e-12) == pytest.approx(1e-9 / 15.0)
+    assert equilibrium_error(np.zeros((1, 3)), np.zeros(3)) is None
