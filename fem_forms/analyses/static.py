@@ -42,7 +42,7 @@ def write_static_outputs(result: StaticResult, out: "Path") -> dict:
             summary["max_von_mises"] = comm.allreduce(
                 float(vm.x.array.max()) if vm.x.array.size else 0.0, op=MPI.MAX)
         if scene.output.picture:
-            pictures.picture(out / "deformed.png", result.u, scene.title)
+            pictures.picture(out / "deformed.png", result.u, scene.title, up=pictures.scene_up(scene))
             files["picture"] = "deformed.png"
     results.write_newton_history(out / "newton_history.csv", result.report.steps, comm)
     files["newton_history"] = "newton_history.csv"

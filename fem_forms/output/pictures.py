@@ -32,12 +32,31 @@ def viridis(t: np.ndarray) -> np.ndarray:
     return np.concatenate([rgb, np.ones(rgb.shape[:-1] + (1,))], axis=-1)
 
 
-def view_axes(elev: float = VIEW[0], azim: float = VIEW[1]) -> tuple[np.ndarray, np.ndarray]:
-    """(2, 3) screen axes (right, up) and the unit vector towards the viewer, as in mplot3d."""
+def view_axes(elev: float = VIEW[0], azim: float = VIEW[1], up=None) -> tuple[np.ndarray, np.ndarray]:
+    """(2, 3) screen axes (right, up) and the unit vector towards the viewer, as in mplot3d, with `up` (the
+    direction against gravity; default +z) drawn vertical: elevation and azimuth are taken in the frame
+    (e1, e2, up) of upright_frame, (x, y, z) itself for +z."""
+    e1, e2, w = upright_frame(up)
     e, a = np.radians(elev), np.radians(azim)
-    toward = np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])
-    right = np.array([-np.sin(a), np.cos(a), 0.0])
+    toward = np.cos(e) * np.cos(a) * e1 + np.cos(e) * np.sin(a) * e2 + np.sin(e) * w
+    right = -np.sin(a) * e1 + np.cos(a) * e2
     return np.vstack([right, np.cross(toward, right)]), toward
+
+
+def scene_up(scene) -> np.ndarray | None:
+    """The direction against the scene's gravity (its gravity loads' g summed), or None without gravity."""
+    g = sum((np.asarray(ld.g, dtype=float) for ld in scene.load if ld.type == "gravity"), np.zeros(3))
+    return -g / np.linalg.norm(g) if np.linalg.norm(g) > 0 else None
+
+
+def upright_frame(up=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A right-handed orthonormal (e1, e2, up): e1 the x axis made horizontal (the y axis if up is along x),
+    so a part laid out along x is seen along its length whatever the gravity; (x, y, z) for up = +z."""
+    w = np.array([0.0, 0.0, 1.0]) if up is None else np.asarray(up, dtype=float) / np.linalg.norm(up)
+    axis = np.eye(3)[0] if abs(w[0]) < 0.9 else np.eye(3)[1]
+    e1 = axis - (axis @ w) * w
+    e1 /= np.linalg.norm(e1)
+    return e1, np.cross(w, e1), w
 
 
 def shade(points: np.ndarray, polys: np.ndarray, rgba, toward: np.ndarray) -> np.ndarray:
@@ -140,8 +159,9 @@ class Canvas:
         self.image.reduce(self.s).save(path)
 
 
-def picture(path: Path, u: fem.Function, title: str, scale: float = 1.0) -> None:
-    """PNG of the deformed boundary coloured by displacement magnitude, undeformed outline in grey."""
+def picture(path: Path, u: fem.Function, title: str, scale: float = 1.0, up=None) -> None:
+    """PNG of the deformed boundary coloured by displacement magnitude, undeformed outline in grey; `up`
+    (against gravity, default +z) drawn vertical."""
     surf = boundary_surface(u)
     if surf is None:
         u.function_space.mesh.comm.barrier()
@@ -150,7 +170,7 @@ def picture(path: Path, u: fem.Function, title: str, scale: float = 1.0) -> None
     x = X + scale * d
     mag = np.linalg.norm(d, axis=1)
     vmax = mag.max() if mag.max() > 0 else 1.0
-    view = view_axes()
+    view = view_axes(up=up)
     canvas = Canvas(900, 500)
     to_px = canvas.fit((10, 40, 760, 480), np.vstack([X, x]) @ view[0].T)
     canvas.surface(to_px, X, polys, (0.6, 0.6, 0.6, 0.08), (0.4, 0.4, 0.4, 0.15), view=view)

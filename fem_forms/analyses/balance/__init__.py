@@ -78,7 +78,7 @@ def run(scene: Scene, out, echo: bool = False) -> dict:
     files = write_outputs(out, mesh, body.density(r["solid"], st.rho, b.fill_density), carved)
     if scene.output.picture:
         picture(out / "balance.png", mesh, carved, r["before"], after, scene.title, f" ({b.goal})",
-                sag=node_values(r["u"]) if b.elastic else None, up=st.frame[0])
+                sag=node_values(r["u"]) if b.elastic else None, up=st.frame[0], check=b.goal == "check")
         files["picture"] = "balance.png"
     summary = {"analysis": "balance", "title": scene.title, "goal": b.goal, "elastic": b.elastic,
                **after, "before": r["before"], "cells": comm.allreduce(len(body.ids)),

@@ -117,10 +117,12 @@ def _rocking(ax, nums: dict, up: np.ndarray) -> None:
 
 
 def picture(path: Path, mesh, carved: np.ndarray, before: dict, after: dict, title: str,
-            extra: str = "", sag: np.ndarray | None = None, up: np.ndarray | None = None) -> None:
+            extra: str = "", sag: np.ndarray | None = None, up: np.ndarray | None = None,
+            check: bool = False) -> None:
     """Two panels, each with the marks `overlays` names (CoM, support polygon, axis, buoyancy and waterline,
     or rocking circle): the part solid and carved; or, given the sag (displacement per local geometry node,
-    elastic = true), the design rigid and sagged. `up`: against gravity (default +z)."""
+    elastic = true), the design rigid and sagged; one panel for a `check` (nothing carved). `up`: against
+    gravity (default +z), drawn vertical."""
     flags = mesh.comm.gather(carved, root=0)
     g = gather_mesh(mesh)
     gs = gather_mesh(mesh, sag) if sag is not None else None
@@ -136,14 +138,16 @@ def picture(path: Path, mesh, carved: np.ndarray, before: dict, after: dict, tit
     outer = boundary_faces(cells)
     carved_all = np.concatenate(flags)
     void = boundary_faces(cells[carved_all]) if carved_all.any() else None
-    fig = plt.figure(figsize=(11, 5.5))
     panels = [("solid", before, False, points), ("carved", after, True, points)]
     if gs is not None:
         panels = [("rigid", after, True, points), ("sagged", after["deformed"], True, gs[0])]
+    elif check:                                    # goal "check": nothing carved, one panel says it all
+        panels = [("as it is", after, False, points)]
+    fig = plt.figure(figsize=(11 if len(panels) == 2 else 6, 5.5))
     lo = np.min([p[3].min(axis=0) for p in panels], axis=0)
     hi = np.max([p[3].max(axis=0) for p in panels], axis=0)
     for k, (label, nums, show_void, points) in enumerate(panels):
-        ax = fig.add_subplot(1, 2, k + 1, projection="3d")
+        ax = fig.add_subplot(1, len(panels), k + 1, projection="3d")
         ax.computed_zorder = False                  # the marks drawn over the surfaces, never hidden in the void
         ax.plot_trisurf(points[:, 0], points[:, 1], points[:, 2], triangles=outer, color=(0.7, 0.7, 0.75, 0.15),
                         edgecolor=(0.3, 0.3, 0.3, 0.05), linewidth=0.1)
@@ -159,7 +163,7 @@ def picture(path: Path, mesh, carved: np.ndarray, before: dict, after: dict, tit
             poly = np.asarray(nums["support_polygon"])
             loop = np.vstack([poly, poly[:1]])
             ax.plot(loop[:, 0], loop[:, 1], loop[:, 2], color="tab:blue", lw=2, label="support polygon")
-            down = np.array([c[0], c[1], poly[:, 2].mean()])
+            down = c - float((c - poly.mean(axis=0)) @ up) * up      # the plumb line from the CoM
             ax.plot(*np.stack([c, down]).T, "k--", lw=1)
         if "buoyancy" in marks:
             ax.scatter(*nums["center_of_buoyancy"], color="tab:cyan", s=40, label="buoyancy")
@@ -170,7 +174,7 @@ def picture(path: Path, mesh, carved: np.ndarray, before: dict, after: dict, tit
             L = np.ptp(points, axis=0).max()
             ax.plot(*np.stack([t, t + L * a]).T, color="tab:red", lw=1.5, label="spin axis")
         marked = _marked_points(nums)
-        _style_axes(ax, np.minimum(lo, marked.min(axis=0)), np.maximum(hi, marked.max(axis=0)))
+        _style_axes(ax, np.minimum(lo, marked.min(axis=0)), np.maximum(hi, marked.max(axis=0)), up)
         ax.set_title(panel_title(label, nums), fontsize=9)
         ax.legend(loc="upper left", fontsize=7)
     fig.suptitle(title + extra)
@@ -197,13 +201,19 @@ def _marked_points(nums: dict) -> np.ndarray:
                     dtype=float)
 
 
-def _style_axes(ax, lo: np.ndarray, hi: np.ndarray) -> None:
-    """True-proportion 3D matplotlib axes spanning [lo, hi], few ticks on short axes, seen from the side."""
+def _style_axes(ax, lo: np.ndarray, hi: np.ndarray, up: np.ndarray) -> None:
+    """True-proportion 3D matplotlib axes spanning [lo, hi], few ticks on short axes, seen from the side with
+    the coordinate axis closest to `up` (against gravity) drawn vertical and pointing up."""
     import matplotlib.ticker
     ax.set_xlim(lo[0], hi[0]), ax.set_ylim(lo[1], hi[1]), ax.set_zlim(lo[2], hi[2])
     span = np.maximum(hi - lo, 1e-3 * (hi - lo).max())
-    ax.set_box_aspect(span)
+    k = int(np.argmax(np.abs(up)))
+    # matplotlib 3.6 rolls the box aspect by (vertical axis - 2) before use: roll it back so x, y, z keep
+    # their true proportions whichever axis is vertical
+    ax.set_box_aspect(np.roll(span, 2 - k))
     for axis, s in zip((ax.xaxis, ax.yaxis, ax.zaxis), span):
         axis.set_major_locator(matplotlib.ticker.MaxNLocator(max(2, int(6 * s / span.max()))))
     ax.set_xlabel("x [m]"), ax.set_ylabel("y [m]"), ax.set_zlabel("z [m]")
-    ax.view_init(elev=15, azim=-75)
+    ax.view_init(elev=15, azim=-75, vertical_axis="xyz"[k])
+    if up[k] < 0:                                    # gravity along +axis: that axis points down
+        (ax.invert_xaxis, ax.invert_yaxis, ax.invert_zaxis)[k]()

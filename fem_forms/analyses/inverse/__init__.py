@@ -15,7 +15,7 @@ from fem_forms.design.parameters import InverseResult, target_scene
 from fem_forms.equilibrium import max_norm
 from fem_forms.errors import SolveError
 from fem_forms.meshes import load_mesh
-from fem_forms.output import fields, probes, results
+from fem_forms.output import fields, pictures, probes, results
 from fem_forms.scene import Scene
 
 
@@ -65,7 +65,7 @@ def run(scene: Scene, out: Path, echo: bool = False) -> dict:
                              for n, p in scene.output.probes.items()}
         fields.write_fields(out / "fields.xdmf", res.loaded.mesh,
                             [fields.p1_interpolant(res.v, "rest_minus_target")])
-        picture(out / "inverse.png", res, check, scene.title)
+        picture(out / "inverse.png", res, check, scene.title, up=pictures.scene_up(scene))
     summary["usable"] = not problems
     summary["problems"] = problems
     summary["wall_time_s"] = time.perf_counter() - t0

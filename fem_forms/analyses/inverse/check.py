@@ -142,7 +142,7 @@ def check_rest_shape(scene: Scene, res: InverseResult, out: Path) -> ForwardChec
     return ForwardCheck(mismatch, static, problems, gap, matched_max, solve, drawn)
 
 
-def picture(path: Path, res: InverseResult, check: ForwardCheck, title: str) -> None:
+def picture(path: Path, res: InverseResult, check: ForwardCheck, title: str, up=None) -> None:
     """Three panels: the target, the designed rest shape, the forward check (rest shape under load), the
     first two from the arrays the check gathered (the rest shape has the target's cells and faces)."""
     fwd = None
@@ -158,7 +158,7 @@ def picture(path: Path, res: InverseResult, check: ForwardCheck, title: str) -> 
         kind = check.solve.kind if check.solve is not None else ""
         panels.append((f"forward check, {kind} (mismatch {check.mismatch_max:.2g} m)", fwd[0],
                        rest_shape.boundary_faces(fwd[1], fwd[2]), (0.17, 0.63, 0.17, 0.75)))
-    view = pictures.view_axes()
+    view = pictures.view_axes(up=up)                 # up: against gravity, drawn vertical
     everything = np.vstack([pts for _, pts, _, _ in panels]) @ view[0].T
     canvas = pictures.Canvas(500 * len(panels), 320)
     for k, (name, pts, faces, colour) in enumerate(panels):
