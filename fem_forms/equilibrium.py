@@ -123,7 +123,8 @@ def load_path(model: Model) -> tuple:
     dynamic analysis), prescribed displacements still scale with lambda, and every history corner is a
     step end."""
     timed = [t for t in model.loads if t.history]
-    if not timed:
+    model.terms.update(0.0)                   # every load's own factor from its history (1 without one): none
+    if not timed:                             # is left where an earlier run of this model put it
         return model.load.set, ()
     t_end = max(t.history[-1][0] for t in timed)
 

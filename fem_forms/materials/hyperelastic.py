@@ -22,8 +22,10 @@ def lame_from_young_poisson(E: float, nu: float) -> tuple[float, float]:
 
 
 def _check_lame(mu: float, lmbda: float) -> None:
-    if not (math.isfinite(mu) and mu > 0):
-        raise InputError(f"material.mu = {mu}: must be a positive finite number")
+    """mu against its declared range (PARAMETER_KEYS), and the bulk modulus positive."""
+    if not math.isfinite(mu):
+        raise InputError(f"material.mu = {mu}: must be finite")
+    check_range(_PARAMETER["mu"], mu, "material.mu")
     if not (math.isfinite(lmbda) and 3 * lmbda + 2 * mu > 0):
         raise InputError(f"material.lambda = {lmbda}: the bulk modulus lambda + 2 mu/3 must be positive")
 
@@ -91,8 +93,10 @@ class MooneyRivlin:
     lmbda: float
 
     def __post_init__(self):
-        if not (self.C10 >= 0 and self.C01 >= 0 and self.C10 + self.C01 > 0):
-            raise InputError(f"material.C10/C01 = {self.C10}/{self.C01}: must be non-negative with a positive sum")
+        for name in ("C10", "C01"):
+            check_range(_PARAMETER[name], getattr(self, name), f"material.{name}")
+        if not self.C10 + self.C01 > 0:
+            raise InputError(f"material.C10/C01 = {self.C10}/{self.C01}: their sum must be positive")
         _check_lame(2 * (self.C10 + self.C01), self.lmbda)
 
     def psi(self, F):
@@ -160,8 +164,9 @@ MODELS = {
 
 
 # the parameters a hyperelastic model is built from, declared once: the scene reads them with these Keys
-# (type only) and make_material checks their ranges, once; mu, lambda, C10 and C01 are checked by the
-# model that holds them (its __post_init__), so a model built directly in Python is checked the same way
+# (type only) and their ranges are checked once, against these declarations: E and nu by make_material
+# (they are not kept), mu, C10 and C01 by the model that holds them (its __post_init__, so a model built
+# directly in Python is checked the same way); lambda's rule involves mu (a positive bulk modulus)
 PARAMETER_KEYS = (
     Key("E", "number", "Young's modulus (with nu)", unit="Pa", exclusive_minimum=0,
         note="Young's modulus must be positive", checked_by="material"),
@@ -182,6 +187,9 @@ def make_material(model: str, *, E: float | None = None, nu: float | None = None
     (default split C01 = mu/8, C10 = 3 mu/8 of mu = 2 (C10 + C01) when only E, nu are given)."""
     if model not in MODELS:
         raise InputError(f"material.model = {model!r}: unknown model (choose from {', '.join(MODELS)})")
+    if model != "mooney-rivlin" and (C10 is not None or C01 is not None):
+        raise InputError(f"material.{'C10' if C10 is not None else 'C01'}: only for model = 'mooney-rivlin' "
+                         f"(model is {model!r})")
     if E is not None or nu is not None:
         if E is None or nu is None:
             raise InputError("material: give both E and nu (or mu and lambda)")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
+from mpi4py import MPI
 import numpy as np
 from petsc4py import PETSc
 
@@ -24,25 +25,37 @@ class ArrayTerms:
 
     def __init__(self, terms: list[ArrayTerm], V: fem.FunctionSpace, bcs: list, tangent: fem.Form):
         self.terms = list(terms)
-        self.bcs, self.tangent = bcs, tangent   # the tangent form gives the lifting matrix its pattern
-        self.constrained = constrained_dofs(V, bcs) if self.terms else np.empty(0, PETSc.IntType)
+        self.V, self.bcs, self.tangent = V, bcs, tangent   # the tangent form gives the lifting matrix its pattern
         self.last_cap = 1.0                      # the fraction the last Newton direction was scaled by
         self._H = None                           # the terms' unfiltered Hessian, for the lifting only
+        self._constrained = None
+
+    @property
+    def constrained(self) -> np.ndarray:
+        """Global indices of every rank's Dirichlet dofs, gathered on first use (a term that adds off-diagonal
+        Hessian entries needs them; the lumped mass does not)."""
+        if self._constrained is None:
+            self._constrained = constrained_dofs(self.V, self.bcs)
+        return self._constrained
 
     @property
     def caps(self) -> bool:
         """Whether some term can cap a step (the pre-check is installed only then)."""
         return any(t.caps for t in self.terms)
 
-    def add_gradient(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
+    def add_gradient(self, x: PETSc.Vec, b: PETSc.Vec, lifting: bool = True) -> None:
         """Every term's gradient into the residual b (before set_bc writes the Dirichlet rows), with the
         lifting the UFL part gets from apply_lifting: where x is off the Dirichlet values g (a start
-        state, never inside SNES), the free rows gain H_fc (g - x_c), H the terms' Hessian at x."""
+        state), the free rows gain H_fc (g - x_c), H the terms' Hessian at x. Inside SNES x is on them
+        (Newton steps are zero on constrained rows): the caller passes lifting=False there, saving a
+        vector, a set_bc and a global norm per residual."""
         if not self.terms:
             return
         for t in self.terms:
             t.add_gradient(x, b)
         b.assemble()                             # entries set on other ranks' rows, if a term did
+        if not lifting:
+            return
         w = x.duplicate()
         w.set(0.0)
         fpetsc.set_bc(w, self.bcs, x, 1.0)       # g - x on the Dirichlet dofs, 0 elsewhere
@@ -72,7 +85,8 @@ class ArrayTerms:
 
     def max_step(self, x: PETSc.Vec, dx: PETSc.Vec) -> float:
         """The smallest safe fraction over the terms of the step x -> x + dx."""
-        return min((t.max_step(x, dx) for t in self.terms if t.caps), default=1.0)
+        local = min((t.max_step(x, dx) for t in self.terms if t.caps), default=1.0)
+        return x.comm.tompi4py().allreduce(local, op=MPI.MIN)     # one step for all ranks, whatever a term did
 
     def precheck(self, x: PETSc.Vec, y: PETSc.Vec) -> bool:
         """PETSc's line-search pre-check: newtonls tries x - lambda y (lambda = 1 first), so the step is

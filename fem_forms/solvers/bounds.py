@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
+from mpi4py import MPI
 import numpy as np
 from petsc4py import PETSc
 
@@ -37,7 +38,8 @@ class Bounds:
         for vec, spec, infinite in ((self.lower, self.lower_spec, PETSc.NINFINITY),
                                     (self.upper, self.upper_spec, PETSc.INFINITY)):
             if isinstance(spec, fem.Function):
-                if spec.vector.getSizes() != vec.getSizes():
+                if not self.u.function_space.mesh.comm.allreduce(spec.vector.getSizes() == vec.getSizes(),
+                                                                 op=MPI.LAND):
                     raise ValueError(f"bound {spec.name!r} is not in the unknown's dof layout")
                 spec.vector.copy(vec)
             else:
@@ -52,14 +54,13 @@ class Bounds:
         prescribed.destroy()
         for vec in (self.lower, self.upper):
             vec.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-        if self.lower.array_r.size and np.any(self.lower.array_r > self.upper.array_r):
+        crossed = bool(self.lower.array_r.size and np.any(self.lower.array_r > self.upper.array_r))
+        if self.u.function_space.mesh.comm.allreduce(crossed, op=MPI.LOR):      # every rank raises together
             raise ValueError("a lower bound lies above its upper bound")
 
     def install(self, snes: PETSc.SNES) -> None:
-        """Refresh the bounds and hand them to `snes`, which must be a VI type (others ignore bounds)."""
-        if not snes.getType().startswith("vi"):
-            raise ValueError(f"bounds need a VI SNES type (vinewtonrsls), not {snes.getType()!r}")
-        self.refresh()
+        """Refresh the bounds and hand them to `snes` (a VI type: options() sees to it; others ignore bounds)."""
+        self.refresh()                            # options() made the type a VI one (a user's non-VI type too)
         snes.setVariableBounds(self.lower, self.upper)
 
     def kkt_violation(self, x: PETSc.Vec, r: PETSc.Vec) -> None:
@@ -73,8 +74,8 @@ class Bounds:
 
 
 def options(merged: dict, user_options: dict, bounds: Bounds | None) -> None:
-    """A bounded problem's SNES options, in place: a VI type unless the user chose one, and its line search
-    (nothing without `bounds`)."""
+    """A bounded problem's SNES options, in place: a VI type unless the user chose one (a user's non-VI type
+    is replaced: bounds it would ignore are no option), and its line search (nothing without `bounds`)."""
     if bounds is None:
         return
     if not str(user_options.get("snes_type", "")).startswith("vi"):

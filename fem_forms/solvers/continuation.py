@@ -45,8 +45,7 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
 
     # reference scale: residual of the undeformed state under full load
     set_load(1.0)
-    drv._load_scale = None                           # a reused driver's loads or rest shape may have changed
-    r_full = drv.load_scale()
+    r_full = drv.load_scale(refresh=True)            # a reused driver's loads or rest shape may have changed
 
     report = SolveReport(False, 0.0, 0, math.nan, linear_solver=drv.linear_kind, load_scale=r_full)
     lam, dlam, cuts = 0.0, 1.0 / steps, 0

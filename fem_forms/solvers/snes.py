@@ -95,7 +95,7 @@ class SNESDriver:
     def rebuild(self) -> None:
         """(Re)create the tangent matrix and the SNES from the current linear kind, factor reuse and user
         options. Done at start; callers must call it after a failed step (a diverged SNES's vectors can make
-        the next solve report convergence in 0 iterations: STACK.md), after changing `linear_kind`,
+        the next solve report convergence in 0 iterations, seen with dolfinx 0.5.2), after changing `linear_kind`,
         `reuse_factor` or `user_options`, and when the operator changes under a kept factor (a new dt)."""
         merged = dict(self.DEFAULTS)
         merged["snes_linesearch_type"] = "bt" if self.E is not None else "basic"
@@ -141,6 +141,13 @@ class SNESDriver:
         for k in getattr(self, "options", {}):
             opts.delValue(self.prefix + k)
 
+    def destroy(self) -> None:
+        """Free the PETSc objects and this driver's options now (a driver built for one solve)."""
+        for obj in (self.snes, self.A, getattr(self, "P", None), self.b, self.x):
+            if obj is not None:
+                obj.destroy()
+        self._clear_options()
+
     def __del__(self):
         try:
             self._clear_options()
@@ -159,7 +166,7 @@ class SNESDriver:
         fpetsc.assemble_vector(b, self.L)
         fpetsc.apply_lifting(b, [self.a], bcs=[self.p.bcs], x0=[x], scale=-1.0)
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        self.arrays.add_gradient(x, b)
+        self.arrays.add_gradient(x, b, lifting=snes is None)   # SNES's own iterates sit on the Dirichlet values
         fpetsc.set_bc(b, self.p.bcs, x, -1.0)
         self.assembly_time += time.perf_counter() - t
 
@@ -243,10 +250,11 @@ class SNESDriver:
         for obj in (ksp, dx, r, x_old):
             obj.destroy()
 
-    def load_scale(self) -> float:
+    def load_scale(self, refresh: bool = False) -> float:
         """Residual norm of the unloaded state (u = 0) under the current load: the scale that
-        convergence and acceptance are measured against. Computed once per driver."""
-        if getattr(self, "_load_scale", None) is None:
+        convergence and acceptance are measured against. Computed once per driver (again with `refresh`:
+        the loads, the rest shape or another field changed)."""
+        if refresh or getattr(self, "_load_scale", None) is None:
             u = self.p.u
             saved = u.x.array.copy()
             u.x.array[:] = 0.0
@@ -312,8 +320,9 @@ class SNESDriver:
         so the energy line search sees no decrease and takes a tiny step while the residual is still
         above what round-off allows (measured: 4.8e-5 left where 1e-9 was reachable). Full Newton steps
         (no line search) converge quadratically from there: take up to 3 and keep them only if they
-        reduced the residual; also after a line search failed below 1e-6 of the load scale (measured: bt on a
-        staggered sub-solve 1e-9 from its answer). Returns (reason, Newton iterations, Krylov iterations) added."""
+        reduced the residual; with `polish_stuck` (staggered sub-solves only) also after a line search failed
+        below 1e-6 of the load scale last computed (measured: bt on a staggered sub-solve 1e-9 from its answer).
+        Returns (reason, Newton iterations, Krylov iterations) added."""
         last = self._history[-1] if self._history else math.inf
         near = self.polish_stuck and last < 1e-6 * (getattr(self, "_load_scale", None) or 0.0)
         stuck = near and reason == PETSc.SNES.ConvergedReason.DIVERGED_LINE_SEARCH

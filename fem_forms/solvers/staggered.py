@@ -39,6 +39,7 @@ def solve(problems: Sequence[NonlinearProblem | SNESDriver], rtol: float = 1e-8,
     committing or rolling back a State is the caller's. Drivers built here (from NonlinearProblems, with
     `options`) are destroyed at the end; drivers passed in are reused and kept."""
     drivers = [p if isinstance(p, SNESDriver) else SNESDriver(p, options) for p in problems]
+    kept = [d.polish_stuck for d in drivers]     # a caller's driver gets its own setting back at the end
     for d in drivers:
         d.polish_stuck = True                    # a sub-solve 1e-9 from its answer: the line search sees only noise
     report = StaggeredReport(False, 0)
@@ -47,8 +48,7 @@ def solve(problems: Sequence[NonlinearProblem | SNESDriver], rtol: float = 1e-8,
             changes, records = [], []
             for i, drv in enumerate(drivers):
                 before = drv.p.u.x.array.copy()
-                drv._load_scale = None               # the frozen fields moved: scale of this field's residual
-                scale = drv.load_scale()
+                scale = drv.load_scale(refresh=True)  # the frozen fields moved: scale of this field's residual
                 rec: StepRecord = drv.solve_step()
                 records.append(rec)
                 if why := acceptance.why_rejected(drv, rec, load_scale=scale):
@@ -66,9 +66,11 @@ def solve(problems: Sequence[NonlinearProblem | SNESDriver], rtol: float = 1e-8,
         report.reason = f"{max_iterations} sweeps, largest change still {max(report.changes[-1]):.2e}"
         return report
     finally:
-        for p, drv in zip(problems, drivers):
-            if drv is not p:
-                drv.snes.destroy()
+        for p, drv, flag in zip(problems, drivers, kept):
+            if drv is p:
+                drv.polish_stuck = flag
+            else:
+                drv.destroy()
 
 
 def _relative_change(drv: SNESDriver, before: np.ndarray) -> float:

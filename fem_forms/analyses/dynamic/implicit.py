@@ -18,7 +18,7 @@ from fem_forms.solvers.time_stepping import StepOutcome
 class LumpedInertia(ArrayTerm):
     """D ((1 - alpha_m) a(x) + alpha_m a_n + alpha v_f(x)) added to the residual, its derivative to the
     tangent's diagonal, and the inertia's incremental potential to the energy (alpha = 0 only)."""
-    name = "lumped inertia"
+    name, role, keys = "lumped inertia", "inertia", ("dynamic", "mass")
 
     def __init__(self, system: DynamicSystem):
         self.s = system
