@@ -56,6 +56,9 @@ class Bordered:
         self.ksp = None
         if driver.bounds is not None or driver.arrays.caps:
             raise ValueError("global scalars: bounds and capping array terms are not supported")
+        if driver.p.state is not None:                   # committed and rolled back with the problem's fields
+            for s in self.scalars:
+                driver.p.state.add_scalar(s.name, s.value)
 
     # -- layout ----------------------------------------------------------------------------------
     def values(self) -> np.ndarray:
@@ -125,6 +128,9 @@ class Bordered:
         self._assemble_border(self.R_p, self.Rp_vecs)
         self._assemble_border(self.c_u, self.cu_vecs)
         if drv.multigrid:                                  # multigrid builds from an AIJ copy
+            if drv.P is None and drv.near_nullspace is not None:
+                drv.P = drv.A.convert("aij", PETSc.Mat())
+                drv.P.setNearNullSpace(drv.near_nullspace())
             drv.P = drv.A.convert("aij", drv.P if drv.P is not None else PETSc.Mat())
         self.ksp.setOperators(drv.A, drv.P if drv.multigrid else drv.A)
         self.ksp.setUp()
@@ -137,6 +143,7 @@ class Bordered:
         J.assemble()                                      # a new operator state: SNES/KSP see the change
 
     def _solve_K(self, r: PETSc.Vec, z: PETSc.Vec) -> None:
+        """z = K^-1 r with the inner KSP (NaN if it failed)."""
         self.ksp.solve(r, z)
         if self.ksp.getConvergedReason() < 0:       # NaN: SNES stops with a diverged reason, no exception
             z.set(np.nan)
@@ -206,5 +213,7 @@ class Bordered:
         self.unpack(self.X, xf)
 
     def residual_norm(self, field_norm: float) -> float:
-        """The augmented residual's norm at the current state, from the field residual's."""
-        return float(np.sqrt(field_norm ** 2 + np.sum(self.equations() ** 2)))
+        """The augmented residual's norm at the current state, from the field residual's (inf, not NaN, for a
+        non-finite one: acceptance compares it with "greater than", which NaN never is)."""
+        n = float(np.sqrt(field_norm ** 2 + np.sum(self.equations() ** 2)))
+        return n if np.isfinite(n) else np.inf

@@ -181,3 +181,26 @@ def test_without_scalars_the_driver_is_main_s_bit_for_bit(tmp_path):
     print(f"without scalars: {runs['branch']['iterations']} Newton iterations on both, line search "
           f"{runs['branch']['line_search']}")
     assert runs["branch"] == runs["main"]
+
+
+def test_an_iterative_k_solve_gives_the_direct_answer():
+    """The driver's iterative kind (GAMG) on the inner K solve, its tolerance tightened to 1e-12: the same
+    Newton iterations and answer as MUMPS LU."""
+    answers = {}
+    for kind in ("direct", "iterative"):
+        p, lam, _ = constrained("neo", DELTA_NH, comm=MPI.COMM_SELF)
+        drv = SNESDriver(p, linear_kind=kind)
+        rec = drv.solve_step()
+        answers[kind] = (rec.iterations, p.u.x.array.copy(), float(lam.value))
+    assert drv.options["K_ksp_rtol"] <= 1e-12 and drv.options["ksp_type"] == "preonly"
+    (n_d, u_d, l_d), (n_i, u_i, l_i) = answers["direct"], answers["iterative"]
+    print(f"iterative K: {n_i} Newton iterations (direct {n_d}), u {_rel(u_i, u_d):.1e}, "
+          f"lam {abs(l_i - l_d) / l_d:.1e}")
+    assert n_i == n_d and _rel(u_i, u_d) < 1e-10 and abs(l_i - l_d) < 1e-10 * l_d
+
+
+def test_a_problem_s_own_state_takes_its_scalars():
+    p, lam, _ = constrained("linear", DELTA, comm=MPI.COMM_SELF)
+    p.state = State({"u": p.u})
+    SNESDriver(p)
+    assert p.state.scalars == {"resultant": lam}
