@@ -4,6 +4,7 @@ State changes only through two doors: `commit()` after an accepted step (history
 brought up to date from the accepted fields, then everything becomes the new old values) and
 `rollback()` on a cut-back (every field and history variable returns to the last committed values), so a
 rejected step leaves no trace. Old values are fem.Functions, so forms (inertia, plastic flow) can use them.
+Global scalar unknowns (fem.Constants, solvers/scalars.py) are committed and rolled back with the fields.
 """
 from __future__ import annotations
 
@@ -23,7 +24,15 @@ class State:
         self.old: dict[str, fem.Function] = {}
         for name, f in self.fields.items():
             self.old[name] = _copy(f, f"{name}_old")
+        self.scalars: dict[str, fem.Constant] = {}
+        self.old_scalars: dict[str, float] = {}
         self.commits = 0
+
+    def add_scalar(self, name: str, constant: fem.Constant) -> None:
+        """A global scalar unknown, committed and rolled back with the fields (adding it again: no change)."""
+        if name not in self.scalars:
+            self.scalars[name] = constant
+            self.old_scalars[name] = float(constant.value)
 
     def add_history(self, name: str, function: fem.Function, update: Callable[[], np.ndarray]) -> None:
         """A history variable (e.g. on a quadrature space): `update()` returns its new local values,
@@ -41,6 +50,8 @@ class State:
             h.x.scatter_forward()
         for name, f in {**self.fields, **self.history}.items():
             self.old[name].x.array[:] = f.x.array
+        for name, c in self.scalars.items():
+            self.old_scalars[name] = float(c.value)
         self.commits += 1
 
     def restore(self, values: dict[str, np.ndarray]) -> None:
@@ -61,6 +72,8 @@ class State:
         for name, f in {**self.fields, **self.history}.items():
             f.x.array[:] = self.old[name].x.array
             f.x.scatter_forward()
+        for name, c in self.scalars.items():
+            c.value = self.old_scalars[name]
 
     def change(self, name: str) -> np.ndarray:
         """Current minus committed values of a field (local array, ghosts included)."""

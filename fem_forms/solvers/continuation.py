@@ -40,6 +40,8 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
     u = problem.u
     set_load = problem.set_load or (lambda lam: None)
     state = problem.state or State({"unknown": u})
+    for s in problem.scalars:                        # global scalars: committed and rolled back with u
+        state.add_scalar(s.name, s.value)
     old = state.old[next(k for k, f in state.fields.items() if f is u)]
     state.commit()                                   # the starting point is what a cut-back returns to
 

@@ -2,6 +2,7 @@
 nonlinear problem, with the energy as line-search objective where one exists."""
 from __future__ import annotations
 
+from contextlib import nullcontext
 from dataclasses import dataclass, field
 import itertools
 import math
@@ -19,6 +20,7 @@ import ufl
 from fem_forms import progress
 from fem_forms.solvers import bounds as vi, linear
 from fem_forms.solvers.array_terms import ArrayTerms
+from fem_forms.solvers.bordered import Bordered
 from fem_forms.solvers.preconditioner_reuse import PreconditionerReuse
 from fem_forms.solvers.reports import SolveReport, StepRecord  # noqa: F401 (snes.SolveReport: the drivers' reports)
 from fem_forms.state import State
@@ -41,6 +43,7 @@ class NonlinearProblem:
     state: State | None = None         # fields and history committed/rolled back with the steps (default: u)
     array_terms: list = field(default_factory=list)   # physics.terms.ArrayTerm: energies as arrays (lumped mass)
     bounds: tuple | None = None        # (lower, upper): fem.Function (e.g. State.old["damage"]), float or None
+    scalars: list = field(default_factory=list)   # solvers.scalars.GlobalScalar: solved with u (bordered.py)
 
 
 def as_compiled(form) -> fem.Form:
@@ -79,11 +82,13 @@ class SNESDriver:
         self.prefix = f"{prefix}{next(_DRIVER_IDS)}_"   # one per driver: options of two drivers never mix
         self.near_nullspace = near_nullspace
         self.L, self.a = as_compiled(problem.residual), as_compiled(problem.jacobian)
-        self.E = as_compiled(problem.energy) if problem.energy is not None else None
+        # global scalars (Lagrange multipliers) make a saddle point: no energy line search
+        self.E = as_compiled(problem.energy) if problem.energy is not None and not problem.scalars else None
         self.arrays = ArrayTerms(problem.array_terms, problem.u.function_space, problem.bcs, self.a)
         self.bounds = vi.Bounds(problem.u, problem.bounds, problem.bcs) if problem.bounds is not None else None
         self.b = fpetsc.create_vector(self.L)
         self.x = self.b.copy()
+        self.bordered = Bordered(self, problem.scalars) if problem.scalars else None
         self.assembly_time = 0.0
         self.load_factor = 1.0           # for progress reports; set by the continuation
         # polish also after a failed line search near the answer (staggered sub-solves); off for continuation:
@@ -112,6 +117,8 @@ class SNESDriver:
         self.P = None
         self.A = fpetsc.create_matrix(self.a, "baij" if mumps or self.multigrid else "aij")
         self._A_norm = None
+        if self.bordered is not None:
+            self.bordered.options(merged)        # K's linear options move to the inner solve
         self._clear_options()
         opts = PETSc.Options()
         for k, v in merged.items():
@@ -124,6 +131,8 @@ class SNESDriver:
             snes.setObjective(self._objective)
         snes.setMonitor(self._monitor)
         snes.setFromOptions()
+        if self.bordered is not None:
+            self.bordered.install(snes, self.prefix)    # augmented residual, bordered Jacobian and inverse
         self.arrays.install(snes)                # the array terms' step cap, if any
         # kept in the database (under this driver's own prefix) until the driver is gone: the factor's
         # and the multigrid levels' options (mat_mumps_icntl_*, mg_levels_*) are read at the first solve
@@ -221,7 +230,7 @@ class SNESDriver:
         self._residual(None, x, r)
         if projected and self.bounds is not None:
             self.bounds.kkt_violation(x, r)
-        n = r.norm()
+        n = self.bordered.residual_norm(r.norm()) if self.bordered is not None else r.norm()
         x.destroy()
         r.destroy()
         return n
@@ -258,7 +267,8 @@ class SNESDriver:
             u = self.p.u
             saved = u.x.array.copy()
             u.x.array[:] = 0.0
-            self._load_scale = self.residual_norm(projected=False)
+            with self.bordered.unloaded() if self.bordered is not None else nullcontext():
+                self._load_scale = self.residual_norm(projected=False)
             u.x.array[:] = saved
         return self._load_scale
 
@@ -303,7 +313,10 @@ class SNESDriver:
             if not self.keep_preconditioner:
                 self.pc_reuse.start_solve()
             builds0 = self.pc_reuse.rebuilds
-        self.snes.solve(None, self.x)
+        if self.bordered is not None:
+            self.bordered.solve(self.snes, self.x)  # on [u; p], the Constants set from its answer
+        else:
+            self.snes.solve(None, self.x)
         reason = self.snes.getConvergedReason()
         iterations, krylov = self.snes.getIterationNumber(), self.snes.getLinearSolveIterations()
         if self.E is not None:
