@@ -154,10 +154,7 @@ def solve_static(scene: Scene, material=None, model: Model | None = None) -> Sta
     if model.temperature is not None:
         solve_temperature(model)
     set_load, stops = load_path(model)
-    problem = snes.NonlinearProblem(
-        model.unknown, model.compiled("residual"), model.compiled("jacobian"), model.bcs,
-        energy=model.compiled("energy") if model.conservative else None,
-        set_load=set_load, inadmissible=model.inadmissible, state=model.state, array_terms=model.terms.arrays)
+    problem = model.problem(set_load)
     linear_kind = "direct" if scene.discretization.formulation == "mixed" else scene.solver.linear
     r0 = rigid_motion.rest_residual(model)
     if rigid_motion.nothing_to_solve(model, r0):
@@ -175,7 +172,8 @@ def solve_static(scene: Scene, material=None, model: Model | None = None) -> Sta
     if report.converged:
         model.sync_displacement()
         if model.energy is not None and model.solid.energy(model.context) is not None:   # von Mises: none
-            result.energy = model.mesh.comm.allreduce(fem.assemble_scalar(model.compiled("energy")), op=MPI.SUM)
+            result.energy = model.mesh.comm.allreduce(fem.assemble_scalar(model.compiled("energy")), op=MPI.SUM) \
+                + sum(t.energy_value(model.unknown.vector) for t in model.terms.arrays)
         result.max_displacement = max_norm(model.u)
         result.probes = model.probes.evaluate(model.u)
         result.quantities = Quantities(model)

@@ -16,6 +16,7 @@ from fem_forms.physics.assemble import equilibrium_forms, scene_physics
 from fem_forms.physics.parameters import Parameters
 from fem_forms.physics.supports import LoadFactor
 from fem_forms.physics.terms import Context, Load, Solid, TermList
+from fem_forms.solvers.snes import NonlinearProblem
 from fem_forms.physics.thermoelastic import couple_temperature
 from fem_forms.scene import Scene
 from fem_forms.state import State
@@ -122,6 +123,19 @@ class Model:
             return f"inverted elements (smallest det F = {jmin:.3g})"
         return None
 
+    def problem(self, set_load=None, state: State | None = None) -> NonlinearProblem:
+        """The model's equilibrium as the one SNES driver takes it: the compiled residual, tangent and (for a
+        conservative model) energy, the supports, the admissibility check, the State and every array term."""
+        return NonlinearProblem(self.unknown, self.compiled("residual"), self.compiled("jacobian"), self.bcs,
+                                energy=self.compiled("energy") if self.conservative else None, set_load=set_load,
+                                inadmissible=self.inadmissible, state=state or self.state,
+                                array_terms=self.terms.arrays)
+
+    def only_ufl_terms(self, analysis: str) -> None:
+        """InputError if a term computed as arrays (ArrayTerm) is in a model whose `analysis` assembles UFL
+        forms alone (its energy would silently be left out)."""
+        self.terms.only_ufl(analysis)
+
     def set_values(self, scene: Scene) -> None:
         """Take the material constants, density, load and support values of `scene` (same mesh, same
         kinds of terms): only Constants and Functions change, no form is compiled."""
@@ -177,3 +191,4 @@ def build_model(scene: Scene, material=None, comm: MPI.Comm = MPI.COMM_WORLD,
     return Model(scene, loaded, V, u, terms.solid.material, context.dx, physics.load, physics.bcs, forms.energy,
                  forms.residual, forms.jacobian, conservative, unknown, u_form, context, terms,
                  context.parameters, state, warnings, physics.support_owners, fields.get("temperature"))
+

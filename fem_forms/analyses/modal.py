@@ -199,6 +199,7 @@ def solve_modal(scene: Scene, material=None, model: Model | None = None) -> Moda
     t0 = time.perf_counter()
     spec = scene.modal
     model = model or build_model(scene, material)
+    model.only_ufl_terms("modal analysis")
     _strike_point_check(model, scene)
     static = None
     if spec.prestress:

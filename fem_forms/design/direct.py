@@ -27,6 +27,7 @@ def solve_direct(scene: Scene, material=None, loaded: LoadedMesh | None = None) 
 
     def build(sc: Scene):
         physics = scene_physics(sc, loaded, w - v, V, material, rest_map=G, bc_sign=-1.0)
+        physics.terms.only_ufl("inverse design")
         physics.context.deformation = ufl.inv(G) + ufl.grad(w) * ufl.inv(G)
         return inverse_forms(physics.terms, physics.context, v, w), physics, sc.discretization.quadrature
 

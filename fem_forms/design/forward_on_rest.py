@@ -25,6 +25,7 @@ class ForwardOnRest:
         self.u = fem.Function(V, name="displacement")
         G = ufl.Identity(3) + ufl.grad(self.d)
         physics = scene_physics(scene, loaded, self.u, V, material, rest_map=G)
+        physics.terms.only_ufl("inverse design")
         self.load, self.bcs = physics.load, physics.bcs
         ctx, terms = physics.context, physics.terms
         if not all(t.conservative for t in terms):

@@ -20,6 +20,7 @@ import numpy as np
 from petsc4py import PETSc
 import ufl
 
+from fem_forms.errors import InputError
 from fem_forms.physics.parameters import Parameters
 from fem_forms.physics.supports import LoadFactor
 from fem_forms.physics.histories import piecewise_linear
@@ -209,6 +210,13 @@ class TermList:
     def arrays(self) -> list:
         """The terms whose energy is computed as arrays (ArrayTerm), for the solver's callbacks."""
         return [t for t in self.all if isinstance(t, ArrayTerm)]
+
+    def only_ufl(self, analysis: str) -> None:
+        """InputError naming the array terms (energies computed outside UFL) that `analysis` cannot take yet:
+        left out, their energy would silently be missing."""
+        if self.arrays:
+            raise InputError(f"{', '.join(t.name for t in self.arrays)}: not available in {analysis} yet (its "
+                             "energy is computed as arrays; static and implicit dynamic solves take it)")
 
     def set_values(self, scene) -> None:
         for t in self.all:

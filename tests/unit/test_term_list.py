@@ -77,3 +77,19 @@ def test_a_registered_section_adds_its_terms_to_every_model(monkeypatch):
     support = np.sum(list(held.reactions["reactions"].values()), axis=0)
     np.testing.assert_allclose(support + held.reactions["applied_load"], pull, rtol=1e-6, atol=1e-8)
     assert abs(pull[2]) > 1e-2 * abs(held.reactions["applied_load"][2])   # the spring carries a share
+
+
+def test_paths_that_assemble_ufl_alone_refuse_array_terms():
+    """An energy computed as arrays must never be silently left out: the analyses that do not take array
+    terms yet say so by name (InputError: exit 2), the static solve hands them to the driver."""
+    from fem_forms.errors import InputError
+    from fem_forms.physics.terms import ArrayTerm
+
+    class Floor(ArrayTerm):
+        name, role = "floor", "contact"
+
+    model = build_model(scene())
+    model.terms = TermList([*model.terms, Floor()])
+    with pytest.raises(InputError, match="floor: not available in modal analysis"):
+        model.only_ufl_terms("modal analysis")
+    assert [t.name for t in model.problem().array_terms] == ["floor"]

@@ -58,6 +58,7 @@ class ExplicitStepper:
 
     def __init__(self, system: DynamicSystem, released: set):
         self.s, self.released = system, released
+        system.model.only_ufl_terms("explicit dynamics")
         system.td.set_params(NEWMARK_AVERAGE)          # loads at t_{n+1} (alpha_f = 0)
         self.L = fem.form(system.explicit_residual)
         self.b = fpetsc.create_vector(self.L)

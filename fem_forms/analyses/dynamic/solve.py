@@ -20,7 +20,7 @@ from fem_forms.analyses.dynamic.system import DynamicSystem, build_system
 from fem_forms.errors import InputError, SolveError
 from fem_forms.output import probes
 from fem_forms.scene import Scene
-from fem_forms.solvers import continuation, snes
+from fem_forms.solvers import continuation
 from fem_forms.solvers.linear import make_ksp
 from fem_forms.solvers.time_stepping import MarchReport, history_corners, march
 
@@ -84,9 +84,7 @@ def initial_static(system: DynamicSystem) -> None:
     for term in system.loads:
         term.factor.value = 1.0 if term.index in held else term.factor_at(0.0)
     m = system.model
-    problem = snes.NonlinearProblem(m.u, m.compiled("residual"), m.compiled("jacobian"), m.bcs,
-                                    energy=m.compiled("energy") if m.conservative else None,
-                                    set_load=m.load.set, inadmissible=m.inadmissible, state=system.state)
+    problem = m.problem(m.load.set, state=system.state)
     rep = continuation.solve(problem, system.scene.solver.petsc, steps=system.scene.solver.steps,
                              max_cutbacks=system.scene.solver.max_cutbacks, linear_kind="direct")
     if not rep.converged:

@@ -105,10 +105,7 @@ def solve_at_target(fscene: Scene, loaded: LoadedMesh, pts_rest: np.ndarray, pts
     steps = EQUILIBRIUM_NEWTON_STEPS if fscene.discretization.degree == 1 else CURVED_NEWTON_STEPS
     predicted_displacement(model.u, pts_rest, pts_target)
     model.load.set(1.0)
-    problem = snes.NonlinearProblem(model.unknown, model.compiled("residual"), model.compiled("jacobian"),
-                                    model.bcs, energy=model.compiled("energy") if model.conservative else None,
-                                    set_load=None,
-                                    inadmissible=model.inadmissible, state=model.state)
+    problem = model.problem()
     # full Newton steps: at an equilibrium the energy's changes are round-off, an energy line search sees
     # no decrease and wastes a step (measured on the soft beam: 2 steps with it, 1 without)
     options = {"snes_linesearch_type": "basic", **fscene.solver.petsc, "snes_max_it": steps}
