@@ -16,6 +16,8 @@ import subprocess
 import sys
 import tempfile
 
+import numpy as np
+
 ROOT = Path(__file__).resolve().parent.parent
 SCENES = [
     ("demos/scenes/sagging_beam.toml", []),
@@ -42,7 +44,18 @@ def key_numbers(summary: dict) -> dict[str, float]:
         for key in ("displacement", "rest_position"):
             for c, v in enumerate(p.get(key) or []):
                 out[f"{name}.{key}[{c}]"] = float(v)
+    if summary.get("analysis") == "balance":        # its numbers are the design's mass properties
+        for k, v in summary.items():
+            if k in BALANCE_KEYS:
+                for i, x in enumerate(np.ravel(np.asarray(v, dtype=float))):
+                    out[f"{k}[{i}]"] = float(x)
     return out
+
+
+# the numbers a balance design reports (timings, ranks and file names left out)
+BALANCE_KEYS = ("mass", "center_of_mass", "inertia", "principal_moments", "stability_margin", "toppling_angle_deg",
+                "carved_fraction", "spin_ratio", "principal_axis_angle_deg", "waterline", "center_of_buoyancy",
+                "righting_arm", "curvature_center", "rocking_radius")
 
 
 def run(tree: Path, scene: str, sets: list[str], out: Path) -> dict:
