@@ -123,8 +123,9 @@ def load_path(model: Model) -> tuple:
     dynamic analysis), prescribed displacements still scale with lambda, and every history corner is a
     step end."""
     timed = [t for t in model.loads if t.history]
-    model.terms.update(0.0)                   # every load's own factor from its history (1 without one): none
-    if not timed:                             # is left where an earlier run of this model put it
+    for t in model.loads:                     # every load's own factor at 1, as a new model has it (the rest-
+        t.factor.value = 1.0                  # state checks see the full loads): none is left where an earlier
+    if not timed:                             # run of this model put it; set_load moves them along the histories
         return model.load.set, ()
     t_end = max(t.history[-1][0] for t in timed)
 
