@@ -21,7 +21,7 @@ from fem_forms.scene.reader import AXES, Key, Section, Table, Variants, check_nu
 from fem_forms.scene.registry import ANALYSIS_KEY
 from fem_forms.scene.spec import (CELL_TYPES, CORE_SECTIONS, GENERATORS, LOAD_TYPES, TITLE, Discretization,
                                   Fix, Load, MaterialSpec, MeshSpec, OutputSpec, Selector, SolverSpec, fix_names,
-                                  prism_rules)
+                                  prism_rules, quadrature_rules)
 from fem_forms.scene.plasticity import plasticity_rules
 
 __all__ = ["AXES", "CELL_TYPES", "GENERATORS", "LOAD_TYPES", "Discretization", "Fix", "InverseSpec", "Key",
@@ -82,6 +82,7 @@ def _parse_scene(data: dict, base_dir: Path, source: Path | None) -> Scene:
         raise InputError(f"discretization.formulation = {formulation!r}: available for analysis = {able} only")
     fix_names(sc.fix)                                  # repeated support names are refused here
     prism_rules(sc.mesh, sc.discretization, sc.load, sc.analysis)
+    quadrature_rules(sc.mesh, sc.discretization)
     plasticity_rules(sc)
     if any(ld.type == "gravity" for ld in sc.load) and sc.material.rho <= 0:
         raise InputError("material.rho: gravity needs a positive density")
