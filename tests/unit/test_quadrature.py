@@ -87,3 +87,17 @@ def test_under_integration_and_too_high_degrees_are_refused_when_read():
     with pytest.raises(InputError, match=r"quadrature_degree.*8"):
         Scene.from_dict(_scene("tetrahedron", 2, 9))
     Scene.from_dict(_scene("tetrahedron", 2, 3))            # fine: the positive rule
+
+
+def test_q2_hexahedron_at_degree_3_exits_2_naming_degree_4(tmp_path, capsys):
+    from fem_forms import cli
+    d = _scene("hexahedron", 2, 3)
+    path = tmp_path / "scene.toml"
+    path.write_text('analysis = "static"\n[mesh]\ncell = "hexahedron"\ncells = [3, 1, 1]\n'
+                    '[discretization]\ndegree = 2\nquadrature_degree = 3\n'
+                    '[material]\nmodel = "linear"\nE = 1e6\nnu = 0.3\nrho = 1000.0\n'
+                    '[[fix]]\nwhere = {axis = "x", at = 0.0}\n[[load]]\ntype = "gravity"\ng = [0, 0, -9.81]\n')
+    assert d["discretization"]["quadrature_degree"] == 3
+    assert cli.main(["run", str(path), "--out", str(tmp_path / "out"), "-q"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "quadrature_degree = 3" in err[0] and "use 4" in err[0], err
