@@ -16,6 +16,7 @@ from fem_forms.physics.thermoelastic import young_modulus
 from fem_forms.solvers.thermal_step import HeatSolver, max_value, min_value
 from fem_forms.state import State
 from fem_forms.output.quantities import Quantities
+from fem_forms.output.guard import attempt
 from fem_forms.output.reactions import reaction_report
 from fem_forms.physics import rigid_motion
 from fem_forms.scene import Scene
@@ -178,8 +179,9 @@ def solve_static(scene: Scene, material=None, model: Model | None = None) -> Sta
         result.max_displacement = max_norm(model.u)
         result.probes = model.probes.evaluate(model.u)
         result.quantities = Quantities(model)
-        result.probe_stresses = result.quantities.at_probes(model.probes)
-        result.reactions = reaction_report(model, noise=report.residual_norm)
+        result.probe_stresses = attempt(model.warnings, "stress recovery at the probes",
+                                        lambda: result.quantities.at_probes(model.probes), {})
+        result.reactions = attempt(model.warnings, "reactions", lambda: reaction_report(model, noise=report.residual_norm), {})
         if model.temperature is not None:
             for name, value in model.probes.evaluate(model.temperature).items():
                 result.probe_stresses.setdefault(name, {})["temperature"] = value[0]

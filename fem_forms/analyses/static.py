@@ -9,6 +9,7 @@ from mpi4py import MPI
 from fem_forms.equilibrium import StaticResult, solve_static
 from fem_forms.errors import SolveError
 from fem_forms.output import fields, pictures, results
+from fem_forms.output.guard import attempt
 from fem_forms.output.plastic import plastic_fields, plastic_summary, plastic_term
 from fem_forms.output.quantities import output_fields
 from fem_forms.scene import Scene
@@ -28,27 +29,37 @@ def write_static_outputs(result: StaticResult, out: "Path") -> dict:
     if plastic and not result.report.converged:
         summary["collapse"] = {"load_factor": result.report.load_reached}
     if result.report.converged:
-        scene = result.model.scene
-        summary.update(plastic_summary(result.model))
-        T = result.model.temperature
+        scene, warnings = result.model.scene, summary["warnings"]
+        summary.update(attempt(warnings, "plastic summary", lambda: plastic_summary(result.model), {}))
         if scene.output.fields:
-            written = output_fields(result.quantities, scene.output.fields) + plastic_fields(result.model)
-            if T is not None:
-                written.append(fields.p1_interpolant(T, "temperature"))
-            fields.write_fields(out / "fields.xdmf", result.model.mesh, written)
-            files["fields"] = "fields.xdmf"
+            if attempt(warnings, "fields.xdmf", lambda: _write_fields(result, out, scene.output.fields)):
+                files["fields"] = "fields.xdmf"
+            elif attempt(warnings, "fields.xdmf (displacement only)",
+                         lambda: _write_fields(result, out, ["displacement"])):
+                files["fields"] = "fields.xdmf"
         if "von_mises" in scene.output.fields:
-            vm = result.quantities.field("von_mises")
-            summary["max_von_mises"] = comm.allreduce(
-                float(vm.x.array.max()) if vm.x.array.size else 0.0, op=MPI.MAX)
-        if scene.output.picture:
-            pictures.picture(out / "deformed.png", result.u, scene.title, up=pictures.scene_up(scene))
+            vm = attempt(warnings, "von Mises stress", lambda: result.quantities.field("von_mises"))
+            if vm is not None:
+                summary["max_von_mises"] = comm.allreduce(
+                    float(vm.x.array.max()) if vm.x.array.size else 0.0, op=MPI.MAX)
+        if scene.output.picture and attempt(warnings, "deformed.png",
+                                            lambda: pictures.picture(out / "deformed.png", result.u, scene.title,
+                                                                     up=pictures.scene_up(scene)) or True):
             files["picture"] = "deformed.png"
     results.write_newton_history(out / "newton_history.csv", result.report.steps, comm)
     files["newton_history"] = "newton_history.csv"
     summary["files"] = files
     results.write_json_atomic(out / "results.json", summary, comm)
     return summary
+
+
+def _write_fields(result: StaticResult, out: Path, names: list) -> bool:
+    """fields.xdmf with the asked-for fields (the plastic ones and the temperature too, if any)."""
+    written = output_fields(result.quantities, names) + plastic_fields(result.model)
+    if result.model.temperature is not None:
+        written.append(fields.p1_interpolant(result.model.temperature, "temperature"))
+    fields.write_fields(out / "fields.xdmf", result.model.mesh, written)
+    return True
 
 
 def run(scene: Scene, out, echo: bool = False) -> dict:

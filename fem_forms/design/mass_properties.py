@@ -19,6 +19,8 @@ from mpi4py import MPI
 import numpy as np
 import ufl
 
+from fem_forms.physics import quadrature
+
 N_MOMENTS = 10     # V, x, y, z, xx, yy, zz, xy, xz, yz
 _FORMS: dict = {}
 
@@ -44,7 +46,7 @@ def _form(mesh, u: fem.Function | None):
         q = _degree(mesh.topology.cell_name(), p)
         vals = ufl.as_vector([1.0, x[0], x[1], x[2], x[0] * x[0], x[1] * x[1], x[2] * x[2],
                               x[0] * x[1], x[0] * x[2], x[1] * x[2]])
-        form = fem.form(ufl.inner(vals, v) * ufl.dx(metadata={"quadrature_degree": q}))
+        form = fem.form(ufl.inner(vals, v) * ufl.dx(metadata=quadrature.metadata(mesh.topology.cell_name(), q)))
         _FORMS[key] = (form, Q, mesh, u)          # holding mesh and u keeps their ids unique
     return _FORMS[key][:2]
 

@@ -4,7 +4,9 @@ Method: global L2 projection onto the displacement's own continuous Lagrange spa
 tetrahedra, Q1/Q2 on hexahedra), one tensor field per quantity: find s_h in V_k^{3x3} with
     int s_h : t dx = int sigma(u_h) : t dx     for all t in V_k^{3x3},
 the right-hand side integrated at the same quadrature points as the equilibrium forms, so no
-intermediate sampling (no cell midpoints, no quadrature-space copy) enters. The mass matrix is
+intermediate sampling (no cell midpoints, no quadrature-space copy) enters. The mass matrix has its own
+exact rule (2 x degree, positive weights: physics/quadrature.py), so it is positive definite whatever
+rule the energy uses (a P2 tetrahedron mass on the 4-point rule is singular: CG failed). It is
 assembled once per model and solved by CG with a Jacobi preconditioner (its condition number does not
 grow with refinement: a fixed, small number of iterations); one scalar mass matrix serves all nine
 components.
@@ -25,6 +27,7 @@ import numpy as np
 from petsc4py import PETSc
 import ufl
 
+from fem_forms.physics import quadrature
 from fem_forms.solvers.linear import make_ksp
 
 RTOL = 1e-12              # the projection is solved far below the discretisation error
@@ -39,7 +42,9 @@ class Recovery:
     def __init__(self, mesh, degree: int, quadrature_degree: int):
         self.mesh = mesh
         self.degree = degree
-        self.dx = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": quadrature_degree})
+        cell = mesh.topology.cell_name()
+        self.dx = ufl.Measure("dx", domain=mesh, metadata=quadrature.metadata(cell, quadrature_degree))
+        self.mass_dx = ufl.Measure("dx", domain=mesh, metadata=quadrature.mass_metadata(cell, degree))
         self._scalar = None                        # (space, KSP, mass matrix, work vectors)
         self._spaces: dict = {}                    # value shape -> blocked space
 
@@ -60,7 +65,7 @@ class Recovery:
         if self._scalar is None:
             S = self.space(())
             s, t = ufl.TrialFunction(S), ufl.TestFunction(S)
-            M = fpetsc.assemble_matrix(fem.form(ufl.inner(s, t) * self.dx))
+            M = fpetsc.assemble_matrix(fem.form(ufl.inner(s, t) * self.mass_dx))
             M.assemble()
             ksp = make_ksp(M, "mass", "fem_forms_recovery_",
                            {"ksp_rtol": RTOL, "ksp_atol": 0.0, "ksp_max_it": 1000})

@@ -2,15 +2,17 @@
 points of all ranks: compiled once, evaluated after every Newton solve."""
 from __future__ import annotations
 
-import basix
 from dolfinx import fem, mesh as dmesh
 from mpi4py import MPI
 import numpy as np
 
+from fem_forms.physics import quadrature
+
 
 def quadrature_points(mesh: dmesh.Mesh, degree: int) -> tuple[np.ndarray, np.ndarray]:
-    """basix's default quadrature rule (points, weights) of the given degree on the mesh's cell."""
-    return basix.make_quadrature(getattr(basix.CellType, mesh.topology.cell_name()), max(degree, 1))
+    """The rule (points, weights) the forms' dx uses at this degree on the mesh's cell (physics/quadrature.py:
+    basix's default, or Gauss-Jacobi where the default has a non-positive weight)."""
+    return quadrature.points(mesh.topology.cell_name(), degree)
 
 
 class SmallestValue:

@@ -10,13 +10,16 @@ from dataclasses import dataclass
 from dolfinx import fem
 import ufl
 
+from fem_forms.errors import InputError
 from fem_forms.materials import Material, as_material
 from fem_forms.materials.constants import bind_constants
 from fem_forms.meshes import LoadedMesh
 from fem_forms.physics.elastic import ElasticEnergy
 import fem_forms.physics.loads  # noqa: F401 (registers the load terms)
 from fem_forms.physics.parameters import Parameters
+from fem_forms.physics import quadrature
 from fem_forms.physics.plastic import plastic_term
+from fem_forms.physics.quadrature import check_degree
 from fem_forms.physics.supports import LoadFactor, body_regions, load_regions, supports
 from fem_forms.physics.terms import Context, LOAD_TERMS, SCENE_TERMS, Term, TermList
 from fem_forms.scene import Scene
@@ -47,7 +50,10 @@ def scene_physics(scene: Scene, loaded: LoadedMesh, u, bc_space: fem.FunctionSpa
     unknown is rest minus deformed position)."""
     mesh = loaded.mesh
     mat = bind_constants(build_material(scene, material), mesh)
-    dx = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": scene.discretization.quadrature})
+    disc, cell = scene.discretization, mesh.topology.cell_name()
+    if why := check_degree(cell, disc.degree, disc.quadrature_degree, disc.formulation):
+        raise InputError(why)                          # a mesh file's cell, known only now
+    dx = ufl.Measure("dx", domain=mesh, metadata=quadrature.metadata(cell, disc.quadrature))
     parameters = Parameters(mesh, scene.material.rho)
     load = LoadFactor(mesh)
     owners: list = []

@@ -1,12 +1,21 @@
 """Inertia: the kinetic energy 1/2 int rho |u_dot|^2 dX, whose second variation is the mass form.
 Modal analysis assembles its mass matrix from it; transient dynamics adds its time-discrete form, an
-energy in the unknown u_{n+1} (so the implicit step keeps an energy line search)."""
+energy in the unknown u_{n+1} (so the implicit step keeps an energy line search).
+Both integrate on the mass's own exact rule (2 x element degree, positive weights: physics/quadrature.py),
+whatever rule the energy uses, so the mass matrix is positive definite even at a low energy rule."""
 from __future__ import annotations
 
 import ufl
 
+from fem_forms.physics.quadrature import mass_metadata
 from fem_forms.physics.terms import Context, Term
 from fem_forms.physics.time_discrete import TimeDiscrete
+
+
+def mass_measure(ctx: Context, v) -> ufl.Measure:
+    """ctx.dx on the mass rule of v's element degree."""
+    cell = ctx.mesh.topology.cell_name()
+    return ctx.dx.reconstruct(metadata=mass_metadata(cell, v.ufl_element().degree()))
 
 
 class Inertia(Term):
@@ -17,7 +26,7 @@ class Inertia(Term):
 
     def mass(self, ctx: Context, a, v) -> ufl.Form:
         """int rho a . v dX: the mass form with trial `a` and test `v` (or a load form for a fixed a)."""
-        return ctx.volume(ctx.parameters.density * ufl.inner(a, v))
+        return ctx.volume(ctx.parameters.density * ufl.inner(a, v), dx=mass_measure(ctx, v))
 
 
 class DiscreteInertia(Inertia):
@@ -34,4 +43,4 @@ class DiscreteInertia(Inertia):
         d = u - td.predictor()
         rho = ctx.parameters.density
         return ctx.volume(rho * ((1 - td.alpha_m) / (2 * td.beta * td.dt * td.dt) * ufl.inner(d, d)
-                                 + td.alpha_m * ufl.inner(td.a_old, u)))
+                                 + td.alpha_m * ufl.inner(td.a_old, u)), dx=mass_measure(ctx, u))

@@ -22,20 +22,30 @@ from fem_forms.errors import InputError
 from fem_forms.kinematics import green_strain, small_strain
 from fem_forms.materials.constants import bind_constants, set_parameters
 from fem_forms.materials.plasticity import OBrien, VonMises
+from fem_forms.physics import quadrature
 from fem_forms.physics.admissibility import SmallestValue, quadrature_points
 from fem_forms.physics.terms import Context, Solid
 from fem_forms.state import State
 
 
 def quadrature_rule(mesh, degree: int) -> tuple[np.ndarray, np.ndarray]:
-    """basix's default rule of `degree` on the mesh's cell (the one FFCx uses for dx), refused if a weight
-    is not positive (a history variable stored at such a point would count negatively)."""
+    """The rule of `degree` the dx uses on the mesh's cell (physics/quadrature.py: positive Gauss-Jacobi
+    where basix's default has a non-positive weight), refused if a weight is still not positive (a history
+    variable stored at such a point would count negatively; cannot happen with the rules used now)."""
     points, weights = quadrature_points(mesh, degree)
     if np.any(weights <= 0):
-        raise InputError(f"discretization.quadrature_degree = {degree}: basix's rule of that degree on "
-                         f"{mesh.topology.cell_name()} cells has a negative weight; plasticity stores history at "
-                         "the quadrature points: choose another degree (2 or 4)")
+        good = [q for q in range(1, quadrature.MAX_DEGREE + 1)
+                if np.all(quadrature.points(mesh.topology.cell_name(), q)[1] > 0)]
+        raise InputError(f"discretization.quadrature_degree = {degree}: the rule of that degree on "
+                         f"{mesh.topology.cell_name()} cells has a non-positive weight; plasticity stores history "
+                         f"at the quadrature points: choose one of {good}")
     return points, weights
+
+
+def quadrature_scheme(mesh, degree: int) -> str:
+    """The Quadrature element's quad_scheme: it must name the dx rule, else FFCx reports "Mismatch of
+    tabulation points"."""
+    return quadrature.rule_name(mesh.topology.cell_name(), degree)
 
 
 class PlasticSolid(Solid):
@@ -49,9 +59,10 @@ class PlasticSolid(Solid):
         self.name = f"plastic ({model_name}, {plastic.name})"
         self.points, _ = quadrature_rule(mesh, degree)
         cell = mesh.ufl_cell()
-        Qt = fem.FunctionSpace(mesh, ufl.TensorElement("Quadrature", cell, degree, quad_scheme="default",
+        scheme = quadrature_scheme(mesh, degree)
+        Qt = fem.FunctionSpace(mesh, ufl.TensorElement("Quadrature", cell, degree, quad_scheme=scheme,
                                                        shape=(3, 3)))
-        Qs = fem.FunctionSpace(mesh, ufl.FiniteElement("Quadrature", cell, degree, quad_scheme="default"))
+        Qs = fem.FunctionSpace(mesh, ufl.FiniteElement("Quadrature", cell, degree, quad_scheme=scheme))
         self.degree = degree
         self._small = None
         self.eps_p = fem.Function(Qt, name="plastic_strain")          # committed plastic strain

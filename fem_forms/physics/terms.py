@@ -54,9 +54,11 @@ class Context:
             grad_u = grad_u * ufl.inv(self.rest_map)
         return ufl.Identity(len(self.u)) + grad_u
 
-    def volume(self, density, region: int | None = None) -> ufl.Form:
-        """int density dX over the rest shape (or over the cells of one body-load region)."""
-        dx = self.dx if region is None else self.dx_regions(region)
+    def volume(self, density, region: int | None = None, dx: ufl.Measure | None = None) -> ufl.Form:
+        """int density dX over the rest shape (or over the cells of one body-load region; or with the
+        measure `dx`, e.g. a mass matrix's own rule)."""
+        if dx is None:
+            dx = self.dx if region is None else self.dx_regions(region)
         if self.rest_map is None:
             return density * dx
         return density * ufl.det(self.rest_map) * dx

@@ -14,6 +14,7 @@ from petsc4py import PETSc
 import ufl
 
 from fem_forms.meshes import LoadedMesh
+from fem_forms.physics.quadrature import metadata as quadrature_metadata
 from fem_forms.physics.supports import load_regions, locate_facets
 from fem_forms.scene.analyses.thermal_section import ThermalSpec
 from fem_forms.physics.histories import piecewise_linear
@@ -37,9 +38,10 @@ class HeatForms:
         self.k = const(thermal.conductivity)
         self.capacity = const(rho * (thermal.specific_heat or 0.0))
         self.inv_dt = const(0.0)
-        dx = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": quadrature})
+        rule = quadrature_metadata(mesh.topology.cell_name(), quadrature)
+        dx = ufl.Measure("dx", domain=mesh, metadata=rule)
         tags, regions = load_regions(loaded, thermal.boundary)
-        ds = ufl.Measure("ds", domain=mesh, subdomain_data=tags, metadata={"quadrature_degree": quadrature})
+        ds = ufl.Measure("ds", domain=mesh, subdomain_data=tags, metadata=rule)
         w = ufl.TestFunction(V)
         R = self.k * ufl.inner(ufl.grad(T), ufl.grad(w)) * dx
         self.physics = ["conduction"]

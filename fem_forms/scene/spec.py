@@ -12,6 +12,7 @@ from fem_forms.errors import InputError
 from fem_forms.materials import MODELS, Material, make_material
 from fem_forms.materials.hyperelastic import PARAMETER_KEYS
 from fem_forms.materials.plasticity import make_plasticity
+from fem_forms.physics.quadrature import MAX_DEGREE as MAX_QUADRATURE_DEGREE, check_degree
 from fem_forms.scene.plasticity import PLASTICITY, material_plasticity_rules
 from fem_forms.scene.reader import AXES, Key, Section, Table, Variants, brief, check_vector
 
@@ -239,8 +240,10 @@ def _material_rules(s: MaterialSpec, t: Table) -> None:
 DISCRETIZATION_KEYS = (
     Key("degree", "integer", "Lagrange degree of the displacement", default=2, choices=(1, 2),
         note="unsupported element (Lagrange degree 1 or 2)"),
-    Key("quadrature_degree", "integer", "quadrature degree of the forms", exclusive_minimum=0,
-        default_note="2 x degree"),
+    Key("quadrature_degree", "integer", "quadrature degree of the forms (1..8; at least the element's safe "
+        "degree: P1 tetrahedra 1, P2 tetrahedra 2, Q1 hexahedra 2, Q2 hexahedra 4, P1 prisms 2)",
+        exclusive_minimum=0, maximum=MAX_QUADRATURE_DEGREE, default_note="2 x degree",
+        note=f"an integer from 1 to {MAX_QUADRATURE_DEGREE}"),
     Key("formulation", "string", "displacement, or mixed: Taylor-Hood P2 displacement / P1 pressure",
         default="displacement", choices=("displacement", "mixed")),
     Key("tolerance", "number", "relative accuracy asked for: pick the cheapest degree and mesh meeting it",
@@ -266,6 +269,14 @@ def _discretization_rules(d: Discretization, t: Table) -> None:
     if d.formulation == "mixed" and d.degree != 2:
         raise InputError(f"discretization.degree = {d.degree}: the mixed formulation "
                          "is Taylor-Hood, degree 2 displacement with degree 1 pressure")
+
+
+def quadrature_rules(mesh: MeshSpec, disc: Discretization) -> None:
+    """An explicit quadrature_degree below the element's safe degree (singular tangent and mass: hourglass
+    modes) or above 8 is refused when the scene is read (a mesh file's cell is checked again when loaded)."""
+    why = check_degree(mesh.cell, disc.degree, disc.quadrature_degree, disc.formulation)
+    if why:
+        raise InputError(why)
 
 
 # --- supports and loads ---------------------------------------------------------------------

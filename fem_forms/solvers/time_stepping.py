@@ -48,13 +48,15 @@ def march(stepper: Stepper, t0: float, t_end: float, dt: float, on_accept: Calla
           *, adaptive: bool = False, tolerance: float = 1e-3, max_cutbacks: int = 10, step0: int = 0,
           report: MarchReport | None = None, dt_max: float | None = None, stops: tuple = ()) -> MarchReport:
     """Advance from t0 to t_end. After a rejected step dt is halved (at most `max_cutbacks` times in a
-    row: then SolveError); with `adaptive`, a step whose error estimate exceeds 2 x tolerance is redone
+    row, and never below the floor dt / 2^max_cutbacks, `dt` the asked-for step: then SolveError, so a
+    step that keeps being cut gives up in bounded time instead of creeping on); with `adaptive`, a step whose error estimate exceeds 2 x tolerance is redone
     smaller and dt follows 0.9 (tolerance / error)^(1/3) (third-order local error), within [dt/2, 2 dt]
     and below dt_max. Every time in `stops` (the corners of load and temperature histories) is a step end,
     so that no step, cut back or not, steps over a peak. on_accept(t, dt, step) runs after each accepted step."""
     rep = report or MarchReport()
     t, cuts, step = t0, 0, step0
     dt_max = dt_max or dt
+    dt_floor = dt / 2.0 ** max_cutbacks
     eps = 1e-12 * max(t_end, 1.0)
     while t < t_end - eps:
         end = min([t_end] + [s for s in stops if s > t + 1e-9 * dt])
@@ -70,8 +72,11 @@ def march(stepper: Stepper, t0: float, t_end: float, dt: float, on_accept: Calla
             rep.rejected += 1
             cuts += 1
             if cuts > max_cutbacks:
-                raise SolveError(f"time step at t = {t:.6g} failed after {cuts - 1} cut-backs "
-                                 f"(dt = {h:.3g}): {out.why}")
+                raise SolveError(f"time step cut {cuts - 1} times in a row at t = {t:.6g} "
+                                 f"(dt = {h:.3g}; solver.max_cutbacks = {max_cutbacks}): {out.why}")
+            if 0.5 * h < dt_floor and h < end - t:        # a last sliver before a stop may be shorter
+                raise SolveError(f"time step at t = {t:.6g}: dt below its floor ({0.5 * h:.3g} < {dt_floor:.3g} = "
+                                 f"dt / 2^solver.max_cutbacks) after {rep.rejected} rejected steps: {out.why}")
             dt = 0.5 * h
             progress.report("step_rejected", load=t, why=out.why)
             continue

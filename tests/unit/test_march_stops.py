@@ -40,3 +40,33 @@ def test_corners_on_the_grid_make_no_sliver_steps():
     ends, rep = _run(Recorder(), 1e-3, 0.5, history_corners([[0.0, 0.0], [0.01, 1.0], [0.5, 1.0]]))
     assert rep.steps == 500
     assert min(h for _, h in ends) > 0.999e-3
+
+
+class Creeping:
+    """Accepts a step only if it is shorter than the last accepted one: two cuts in a row each time, and
+    dt creeps down without ever reaching max_cutbacks cuts in a row."""
+
+    def __init__(self):
+        self.last = float("inf")
+
+    def step(self, t: float, dt: float) -> StepOutcome:
+        if dt >= self.last * (1 - 1e-12):
+            return StepOutcome(False, 1, "Newton diverged")
+        self.last = dt
+        return StepOutcome(True, 1, "")
+
+    def undo(self) -> None:
+        pass
+
+
+def test_a_step_that_keeps_being_cut_gives_up():
+    import pytest
+    from fem_forms.errors import SolveError
+
+    class Never(Creeping):
+        def step(self, t, dt):
+            return StepOutcome(False, 1, "Newton diverged")
+    with pytest.raises(SolveError, match=r"time step cut 3 times in a row at t = 0 "):
+        march(Never(), 0.0, 1.0, 0.1, lambda *a: None, max_cutbacks=3)
+    with pytest.raises(SolveError, match=r"dt below its floor"):      # cuts never 4 in a row, dt creeps down
+        march(Creeping(), 0.0, 1.0, 0.1, lambda *a: None, max_cutbacks=4)

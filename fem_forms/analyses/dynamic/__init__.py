@@ -11,7 +11,9 @@ from mpi4py import MPI
 
 from fem_forms.analyses.dynamic.output import MotionWriter, write_csvs, write_gif, write_history_png
 from fem_forms.analyses.dynamic.solve import DynamicResult, solve_dynamic
+from fem_forms.errors import SolveError
 from fem_forms.output import results
+from fem_forms.output.guard import attempt
 from fem_forms.output.plastic import plastic_summary
 from fem_forms.output.quantities import Quantities
 from fem_forms.scene import Scene
@@ -43,8 +45,12 @@ def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> d
             writer.close()
     write_csvs(out, result, comm)
     summary = result.summary()
+    warnings = summary.setdefault("warnings", [])
     # final probes: recovered stress and strain of the last state, as the static analysis reports them
-    for name, values in Quantities(result.system.model).at_probes(result.system.model.probes).items():
+    model = result.system.model
+    stresses = attempt(warnings, "stress recovery at the probes",
+                       lambda: Quantities(model).at_probes(model.probes), {})
+    for name, values in stresses.items():
         summary["probes"].setdefault(name, {}).update(values)
     T = result.system.model.temperature
     if T is not None:                              # [thermal]: the temperature at the end
@@ -53,8 +59,8 @@ def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> d
             summary["probes"][name]["temperature"] = value[0]
     summary.update(plastic_summary(result.system.model))
     if "max_plastic_strain" in summary and not result.energy.plastic_accounted:
-        summary["warnings"] = summary.get("warnings", []) + [
-            "plasticity: the plastic work is not in the energy account; energy_balance_error includes it"]
+        warnings.append("plasticity: the plastic work is not in the energy account; energy_balance_error "
+                        "includes it")
     files = {"probes": "probes.csv", "energy": "energy.csv"}
     if scene.output.fields:
         files["motion"] = "motion.xdmf"
@@ -62,8 +68,8 @@ def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> d
         if writer is not None and len(writer.frames) > 1:
             write_gif(out / "motion.gif", writer.frames, scene.title)
             files["animation"] = "motion.gif"
-        write_history_png(out / "history.png", result)
-        files["picture"] = "history.png"
+        if attempt(warnings, "history.png", lambda: write_history_png(out / "history.png", result) or True):
+            files["picture"] = "history.png"
     files = comm.bcast(files, root=0)
     summary["files"] = files
     results.write_json_atomic(out / "results.json", summary, comm)
@@ -71,4 +77,6 @@ def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> d
         print(f"{scene.title}: {summary['dofs']} dofs, {scene.dynamic.scheme}, {summary['steps']} steps to "
               f"t = {summary['time_reached']:.6g} s, {summary['newton_iterations']} Newton iterations, "
               f"energy balance error {summary['energy_balance_error']:.2e}, {summary['wall_time_s']:.2f} s -> {out}")
+    if result.failure is not None:
+        raise SolveError(f"{scene.title}: {result.failure}")
     return summary

@@ -34,6 +34,7 @@ class DynamicResult:
     dt_stable: float | None = None
     wall_time_s: float = 0.0
     solver: dict = field(default_factory=dict)        # the implicit step's linear solver and its totals
+    failure: str | None = None                        # why the march gave up (results.json converged false)
 
     def summary(self) -> dict:
         s, r = self.system, self.report
@@ -41,6 +42,7 @@ class DynamicResult:
         last = self.probe_rows[-1] if self.probe_rows else None
         return {
             "analysis": "dynamic", "title": s.scene.title, "dofs": s.model.dofs,
+            "converged": self.failure is None, "message": self.failure or "reached the end time",
             "scheme": s.scene.dynamic.scheme, "mass": s.scene.dynamic.mass,
             "steps": r.steps, "time_reached": r.time_reached,
             "dt_min": r.dt_min if r.steps else None, "dt_max": r.dt_max if r.steps else None,
@@ -183,9 +185,13 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
         if out is not None and dyn.checkpoint_every and step % dyn.checkpoint_every == 0:
             checkpoint.save(out / "checkpoint", result, t, step, h)
 
-    march(stepper, t_start, dyn.duration, dt, on_accept, adaptive=dyn.adaptive and dyn.scheme != "central-difference",
-          tolerance=dyn.tolerance, max_cutbacks=scene.solver.max_cutbacks, step0=step0, report=result.report,
-          dt_max=10 * dyn.dt if dyn.adaptive else dyn.dt, stops=history_corners(*_histories(scene)))
+    try:
+        march(stepper, t_start, dyn.duration, dt, on_accept,
+              adaptive=dyn.adaptive and dyn.scheme != "central-difference", tolerance=dyn.tolerance,
+              max_cutbacks=scene.solver.max_cutbacks, step0=step0, report=result.report,
+              dt_max=10 * dyn.dt if dyn.adaptive else dyn.dt, stops=history_corners(*_histories(scene)))
+    except SolveError as e:                  # gave up: the steps so far are still written (exit 3 after)
+        result.failure = str(e)
     motion = getattr(stepper, "motion", stepper)              # the staggered heat step wraps the motion
     if isinstance(motion, ImplicitStepper):
         result.solver = motion.summary()

@@ -1,0 +1,139 @@
+"""Every valid scene runs (issue 22, item 1): a seeded sweep of combinations of the scene's options
+(analysis, cell, degree, quadrature degree 1..8 or default, material model, formulation, linear solver,
+output fields, probes) on a 3x1x1 box, each through the CLI in-process under a time limit. Each must give
+its answer (exit 0, finite numbers in results.json) or end with exit 2 (refused when read) or 3 (gave up)
+and one line saying why: never a traceback, never a hang. The same seed draws the same scenes, so the
+forms compiled on a first run are in FFCx's cache on the next ones."""
+from __future__ import annotations
+
+import json
+import math
+import random
+import signal
+import time
+
+import pytest
+
+from fem_forms import cli
+
+N = 100
+SEED = 22
+LIMIT_S = 120                    # per run; a cold compile of the largest forms took ~25 s here (2 shared cores)
+MODELS = ("linear", "stvk", "neo-hookean", "mooney-rivlin", "corotated")
+FIELDS = ("displacement", "von_mises", "cauchy_stress", "pk2_stress", "principal_stresses", "green_strain",
+          "hencky_strain", "deformation_gradient")
+
+
+def draw(rng: random.Random) -> dict:
+    """One scene drawn from the options' ranges (mostly valid; invalid ones must be refused with exit 2)."""
+    analysis = rng.choice(("static", "static", "modal", "dynamic"))
+    cell = rng.choice(("tetrahedron", "hexahedron"))
+    degree = rng.choice((1, 2))
+    formulation = "mixed" if analysis == "static" and degree == 2 and rng.random() < 0.25 else "displacement"
+    q = rng.choice((None, 1, 2, 3, 4, 5, 6, 7, 8))
+    model = rng.choice(MODELS)
+    disc = {"degree": degree, "formulation": formulation}
+    if q is not None:
+        disc["quadrature_degree"] = q
+    scene = {
+        "title": "sweep", "analysis": analysis,
+        "mesh": {"generator": "box", "cell": cell, "size": [1.0, 0.2, 0.2], "cells": [3, 1, 1]},
+        "material": {"model": model, "E": 1e7, "nu": 0.3, "rho": 1000.0},
+        "discretization": disc,
+        "solver": {"linear": rng.choice(("direct", "iterative", "auto"))},
+        "fix": [{"where": {"axis": "x", "at": 0.0}}],
+        "load": [{"type": "gravity", "g": [0.0, 0.0, -9.81]}],
+        "output": {"picture": False, "fields": rng.sample(FIELDS, rng.randint(0, 3)),
+                   "probes": {"tip": [1.0, 0.1, 0.1]} if rng.random() < 0.7 else {}},
+    }
+    if analysis == "modal":
+        scene["modal"] = {"count": rng.choice((2, 4)), "mass": rng.choice(("consistent", "lumped"))}
+    if analysis == "dynamic":
+        scene["dynamic"] = {"duration": 3e-3, "dt": rng.choice((1e-3, 1.5e-3)), "checkpoint_every": 0,
+                            "mass": rng.choice(("consistent", "lumped"))}
+    return scene
+
+
+def toml_value(v) -> str:
+    """A value as TOML (inline tables and arrays; enough for these scenes)."""
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, (int, float)):
+        return repr(v)
+    if isinstance(v, str):
+        return json.dumps(v)
+    if isinstance(v, dict):
+        return "{" + ", ".join(f"{json.dumps(k)} = {toml_value(x)}" for k, x in v.items()) + "}"
+    return "[" + ", ".join(toml_value(x) for x in v) + "]"
+
+
+def to_toml(scene: dict) -> str:
+    """Top-level keys first, then one [section] per table."""
+    top = [f"{k} = {toml_value(v)}" for k, v in scene.items() if not isinstance(v, dict)]
+    sections = [f"[{k}]\n" + "\n".join(f"{json.dumps(n)} = {toml_value(x)}" for n, x in v.items())
+                for k, v in scene.items() if isinstance(v, dict)]
+    return "\n".join(top) + "\n\n" + "\n\n".join(sections) + "\n"
+
+
+class Hang(Exception):
+    pass
+
+
+def _alarm(signum, frame):
+    raise Hang()
+
+
+def finite(obj) -> bool:
+    """Every number in a results.json value is finite (None allowed: not applicable)."""
+    if isinstance(obj, bool) or obj is None or isinstance(obj, str):
+        return True
+    if isinstance(obj, (int, float)):
+        return math.isfinite(obj)
+    if isinstance(obj, dict):
+        return all(finite(v) for v in obj.values())
+    return all(finite(v) for v in obj)
+
+
+SCENES = [draw(random.Random(SEED * 1000 + i)) for i in range(N)]
+
+
+def test_the_sweep_covers_the_options():
+    seen = {k: {repr(f(s)) for s in SCENES} for k, f in {
+        "analysis": lambda s: s["analysis"], "cell": lambda s: s["mesh"]["cell"],
+        "degree": lambda s: s["discretization"]["degree"], "model": lambda s: s["material"]["model"],
+        "q": lambda s: s["discretization"].get("quadrature_degree"),
+        "formulation": lambda s: s["discretization"]["formulation"], "linear": lambda s: s["solver"]["linear"]}.items()}
+    assert len(SCENES) >= 100
+    assert [len(seen[k]) for k in ("analysis", "cell", "degree", "model", "q", "formulation", "linear")] == \
+        [3, 2, 2, 5, 9, 2, 3], seen
+
+
+@pytest.mark.parametrize("i", range(N))
+def test_every_scene_answers_or_says_why(i, tmp_path, capsys):
+    scene = SCENES[i]
+    path = tmp_path / "scene.toml"
+    path.write_text(to_toml(scene))
+    out = tmp_path / "out"
+    previous = signal.signal(signal.SIGALRM, _alarm)
+    signal.alarm(LIMIT_S)
+    t0 = time.perf_counter()
+    try:
+        code = cli.main(["run", str(path), "--out", str(out), "-q"])
+    except Hang:
+        pytest.fail(f"scene {i} ran past {LIMIT_S} s: {json.dumps(scene)}")
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
+    err = capsys.readouterr().err
+    lines = [ln for ln in err.splitlines() if ln.startswith("fem-forms: error:")]
+    assert "Traceback" not in err, err
+    assert code in (0, 2, 3), (code, err, scene)
+    if code == 0:
+        summary = json.loads((out / "results.json").read_text())
+        assert finite({k: v for k, v in summary.items() if k not in ("title", "warnings", "physics")}), summary
+    else:
+        assert len(lines) == 1, (err, scene)
+        if code == 3:
+            assert json.loads((out / "results.json").read_text()).get("converged") is False or \
+                scene["analysis"] != "dynamic", err
+    print(f"sweep {i}: exit {code} in {time.perf_counter() - t0:.1f} s {lines[0] if lines else ''}")
