@@ -19,7 +19,7 @@ import fem_forms.physics.loads  # noqa: F401 (registers the load terms)
 from fem_forms.physics.parameters import Parameters
 from fem_forms.physics import quadrature
 from fem_forms.physics.plastic import plastic_term
-from fem_forms.physics.quadrature import check_degree
+from fem_forms.elements import check_degree
 from fem_forms.physics.supports import LoadFactor, body_regions, load_regions, supports
 from fem_forms.physics.terms import Context, LOAD_TERMS, SCENE_TERMS, Term, TermList
 from fem_forms.scene import Scene

@@ -22,6 +22,7 @@ from fem_forms.errors import InputError
 from fem_forms.kinematics import green_strain, small_strain
 from fem_forms.materials.constants import bind_constants, set_parameters
 from fem_forms.materials.plasticity import OBrien, VonMises
+from fem_forms.elements import MAX_DEGREE
 from fem_forms.physics import quadrature
 from fem_forms.physics.admissibility import SmallestValue, quadrature_points
 from fem_forms.physics.terms import Context, Solid
@@ -34,7 +35,7 @@ def quadrature_rule(mesh, degree: int) -> tuple[np.ndarray, np.ndarray]:
     variable stored at such a point would count negatively; cannot happen with the rules used now)."""
     points, weights = quadrature_points(mesh, degree)
     if np.any(weights <= 0):
-        good = [q for q in range(1, quadrature.MAX_DEGREE + 1)
+        good = [q for q in range(1, MAX_DEGREE + 1)
                 if np.all(quadrature.points(mesh.topology.cell_name(), q)[1] > 0)]
         raise InputError(f"discretization.quadrature_degree = {degree}: the rule of that degree on "
                          f"{mesh.topology.cell_name()} cells has a non-positive weight; plasticity stores history "

@@ -12,7 +12,7 @@ from fem_forms.errors import InputError
 from fem_forms.materials import MODELS, Material, make_material
 from fem_forms.materials.hyperelastic import PARAMETER_KEYS
 from fem_forms.materials.plasticity import make_plasticity
-from fem_forms.physics.quadrature import MAX_DEGREE as MAX_QUADRATURE_DEGREE, check_degree
+from fem_forms.elements import MAX_DEGREE as MAX_QUADRATURE_DEGREE, check_degree
 from fem_forms.scene.plasticity import PLASTICITY, material_plasticity_rules
 from fem_forms.scene.reader import AXES, Key, Section, Table, Variants, brief, check_vector
 

@@ -10,10 +10,11 @@ import pytest
 import ufl
 
 from fem_forms.errors import InputError
+from fem_forms import elements
 from fem_forms.physics import quadrature
 from fem_forms.scene import Scene
 
-DEGREES = range(1, quadrature.MAX_DEGREE + 1)
+DEGREES = range(1, elements.MAX_DEGREE + 1)
 ELEMENTS = [("tetrahedron", 1, False), ("tetrahedron", 2, False), ("tetrahedron", 2, True),
             ("hexahedron", 1, False), ("hexahedron", 2, False), ("hexahedron", 2, True), ("prism", 1, False)]
 
@@ -68,7 +69,7 @@ def zero_modes(cell: str, degree: int, q: int, mixed: bool) -> int:
 
 @pytest.mark.parametrize("cell,degree,mixed", ELEMENTS)
 def test_safe_degree_is_the_smallest_full_rank_rule(cell, degree, mixed):
-    safe = quadrature.safe_degree(cell, degree)
+    safe = elements.safe_degree(cell, degree)
     counts = {q: zero_modes(cell, degree, q, mixed) for q in DEGREES}
     assert all(counts[q] == 6 for q in DEGREES if q >= safe), counts
     assert all(counts[q] > 6 for q in DEGREES if q < safe), counts
