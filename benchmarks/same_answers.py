@@ -93,11 +93,13 @@ def runs(ref_tree: Path, tmp: Path):
         yield (f"{scene} {' '.join(sets)}", run(ref_tree, scene, sets, tmp / "a" / Path(scene).stem),
                run(ROOT, scene, sets, tmp / "b" / Path(scene).stem))
     jobs = [(f"demos/{p.name}", ["demos/" + p.name]) for p in sorted((ROOT / "demos").glob("*.py"))]
-    jobs.append(("verification", ["verification/run.py", "--no-readme", "--out", "out"]))
+    jobs.append(("verification", ["verification/run.py", "--no-readme", "--out"]))
     for name, args in jobs:
         folder = Path(name).stem
-        a = run_folder(ref_tree, [str(ref_tree / args[0]), *args[1:]], tmp / "a" / folder)
-        b = run_folder(ROOT, [str(ROOT / args[0]), *args[1:]], tmp / "b" / folder)
+        here = {side: tmp / side / folder for side in "ab"}       # the runner's --out: absolute (it runs from
+        extra = {side: [str(here[side] / "out")] if args[-1] == "--out" else [] for side in "ab"}   # its root)
+        a = run_folder(ref_tree, [str(ref_tree / args[0]), *args[1:], *extra["a"]], here["a"])
+        b = run_folder(ROOT, [str(ROOT / args[0]), *args[1:], *extra["b"]], here["b"])
         for path in a:
             yield f"{name}: {path}", a[path], b.get(path, {})
 

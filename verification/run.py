@@ -253,7 +253,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"run.py: unknown case in {a.only} (known: {known})", file=sys.stderr)
         return 2
     t0 = time.perf_counter()
-    rows = run_cases(cases, Path(a.out))
+    rows = run_cases(cases, Path(a.out).resolve())    # the cases run from the repository root: absolute
     total = time.perf_counter() - t0
     failed = [r for r in rows if r["status"] != "pass"]
     print(f"{len(rows) - len(failed)} of {len(rows)} rows pass in {total:.0f} s")
