@@ -20,6 +20,11 @@ if [ ! -x .venv/bin/fem-forms ]; then
   /usr/bin/python3 -m venv --system-site-packages .venv
   .venv/bin/python -m pip install -q --no-build-isolation --no-deps -e . >/dev/null
 fi
+# pymeshfix (MeshFix: [mesh] repair = true) from the package index; a 1.4 MB wheel, uses Debian's numpy
+if ! .venv/bin/python -c "import pymeshfix" 2>/dev/null; then
+  .venv/bin/python -m pip install -q --no-warn-script-location "pymeshfix>=0.17" >/dev/null 2>&1 \
+    || { echo "setup: pip could not install pymeshfix" >&2; exit 1; }
+fi
 # byte-compile the package as a regular pip install would (an editable one does not; with
 # PYTHONDONTWRITEBYTECODE set, every run would compile ~100 modules from source: 0.1 s, measured)
 .venv/bin/python -m compileall -q fem_forms >/dev/null

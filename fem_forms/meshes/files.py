@@ -1,6 +1,7 @@
 """Mesh files to MeshArrays: a gmsh .msh (with its named groups of every dimension), any other volume
 mesh meshio reads, and a closed surface (STL, OBJ, PLY, OFF) filled with tetrahedra once it is known
-to be closed and to fit in memory.
+to be closed (or repaired, `repair = true`) and to fit in memory. Coordinates given in other units
+(`scale`, `units`) are multiplied into metres as the file is read.
 """
 from __future__ import annotations
 
@@ -12,21 +13,45 @@ from fem_forms.errors import InputError
 from fem_forms.meshes import resources, surfaces
 from fem_forms.meshes.arrays import MeshArrays, compact
 from fem_forms.meshes.gmsh_models import gmsh_arrays, gmsh_session
+from fem_forms.meshes.repair import repair_surface
 
 
-def read_surface_file(path: Path, h: float | None, limit: float, degree: int) -> MeshArrays:
-    """A closed surface (STL, OBJ, PLY, OFF) filled with tetrahedra of size h (default: the surface's
-    mean edge length), after checking that it is closed and that the mesh will fit in memory."""
+def read_surface_file(path: Path, h: float | None, limit: float, degree: int, repair: bool = False,
+                      scale: float = 1.0) -> MeshArrays:
+    """A closed surface (STL, OBJ, PLY, OFF), its coordinates times `scale`, filled with tetrahedra of
+    size h (default: the surface's mean edge length), after checking that it is closed (or, with
+    `repair`, making it so with MeshFix: results.json `mesh.repair` says what changed) and that the
+    mesh will fit in memory."""
     key = f"mesh.file = {str(path)!r}"
-    points, tris = surfaces.read_surface(path)
+    raw_points, raw_tris = surfaces.read_triangles(path)
+    points, tris = surfaces.merge_points(raw_points, raw_tris)
+    report = None
+    if repair:      # in the file's own units: MeshFix's tolerances failed to close a scan scaled mm -> m
+        points, tris, report = repair_surface(points, tris, len(raw_tris), key, scale)
+    points = points * scale
     surfaces.check_closed(points, tris, key)
     h = h or surfaces.mean_edge(points, tris)
     cells, dofs = resources.tetrahedra_counts(surfaces.enclosed_volume(points, tris), h, degree)
     resources.check_fits(cells, dofs, "tetrahedron", degree, f"{key} at h = {h:.3g}", limit)
     x, tets = surfaces.tetrahedralise(points, tris, h, key)
     arrays = compact(MeshArrays(x, tets, "tetrahedron"))
-    arrays.info = {"source": f"{path.name} (surface, {len(tris)} triangles) meshed by gmsh at h = {h:.4g}",
+    what = "repaired surface" if repair else "surface"
+    arrays.info = {"source": f"{path.name} ({what}, {len(tris)} triangles) meshed by gmsh at h = {h:.4g}",
                    **surfaces.quality(arrays.points, arrays.cells)}
+    if scale != 1.0:
+        arrays.info["scale"] = scale
+    if report is not None:
+        arrays.info["repair"] = report
+    return arrays
+
+
+def scale_arrays(arrays: MeshArrays, scale: float) -> MeshArrays:
+    """Every coordinate of a read volume mesh (points, curve and point groups) times `scale`."""
+    if scale != 1.0:
+        arrays.points = arrays.points * scale
+        arrays.curve_groups = {n: np.asarray(c) * scale for n, c in arrays.curve_groups.items()}
+        arrays.point_groups = {n: np.asarray(c) * scale for n, c in arrays.point_groups.items()}
+        arrays.info["scale"] = scale
     return arrays
 
 

@@ -16,7 +16,7 @@ import ufl
 from fem_forms.errors import InputError
 from fem_forms.meshes import resources, surfaces
 from fem_forms.meshes.arrays import MeshArrays, check_cells
-from fem_forms.meshes.files import read_mesh_file, read_surface_file
+from fem_forms.meshes.files import read_mesh_file, read_surface_file, scale_arrays
 from fem_forms.meshes.gmsh_models import generate_solid
 from fem_forms.meshes.groups import distribute_cell_groups
 from fem_forms.meshes.prisms import create_prism_box
@@ -115,10 +115,11 @@ def load_mesh(spec: MeshSpec, comm: MPI.Comm = MPI.COMM_WORLD, degree: int = 1) 
 
     def build():
         if spec.generator == "file" and spec.file.suffix.lower() in SURFACE_SUFFIXES:
-            arrays = read_surface_file(spec.file, spec.h, limit, degree)
+            arrays = read_surface_file(spec.file, spec.h, limit, degree, spec.repair, spec.length_scale)
         elif spec.generator == "file":
             arrays = read_mesh_file(spec.file)
             arrays.info = {"source": spec.file.name, "cells": len(arrays.cells)}
+            scale_arrays(arrays, spec.length_scale)
         else:
             resources.check_fits(*resources.tetrahedra_counts(resources.solid_volume(spec), spec.h, degree),
                                  "tetrahedron", degree, f"mesh.h = {spec.h}", limit)

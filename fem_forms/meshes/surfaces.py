@@ -1,7 +1,8 @@
 """Surface meshes in (STL, OBJ, PLY, OFF): a closed triangulated surface tetrahedralised with gmsh.
 
 The surface is read with meshio (its warnings kept off the user's terminal), duplicate points
-merged, checked to be closed (every edge shared by exactly two triangles), then handed to gmsh as a
+merged, checked to be closed (every edge shared by exactly two triangles; an open one is refused with
+the hint to set `repair = true`, see repair.py), then handed to gmsh as a
 discrete surface: classifySurfaces, createGeometry, a surface loop and a volume, generate(3). Cell
 quality (radius ratio, 1 for a regular tetrahedron) is reported with the cell count.
 """
@@ -18,6 +19,7 @@ import numpy as np
 
 from fem_forms.errors import InputError
 
+REPAIR_HINT = "set [mesh] repair = true to fill holes and remove bad faces"
 FEATURE_ANGLE = 40.0        # degrees: sharper creases between facets become edges of the geometry
 
 
@@ -49,8 +51,8 @@ def read_meshio(path: Path):
         raise InputError(f"mesh.file = {str(path)!r}: cannot read it ({type(e).__name__}: {why})") from None
 
 
-def read_surface(path: Path) -> tuple[np.ndarray, np.ndarray]:
-    """Points (n, 3) and triangles (m, 3) of a surface file, quads split, duplicate points merged."""
+def read_triangles(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """Points (n, 3) and triangles (m, 3) of a surface file as written, quads split in two."""
     m = read_meshio(path)
     tris = [np.asarray(b.data)[:, :3] for b in m.cells if b.type == "triangle"]
     for b in m.cells:
@@ -63,13 +65,23 @@ def read_surface(path: Path) -> tuple[np.ndarray, np.ndarray]:
     pts = np.asarray(m.points, dtype=float)
     if pts.ndim != 2 or pts.shape[1] != 3:
         raise InputError(f"mesh.file = {str(path)!r}: points must have 3 coordinates")
-    tris = np.vstack(tris).astype(np.int64)
+    return pts, np.vstack(tris).astype(np.int64)
+
+
+def merge_points(pts: np.ndarray, tris: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Points closer than 1e-9 of the surface's size merged (STL repeats every vertex per facet), and
+    the triangles this collapses to an edge or a point dropped."""
     scale = max(float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0))), 1e-300)
     _, first, inverse = np.unique(np.round(pts / (1e-9 * scale)), axis=0, return_index=True,
                                   return_inverse=True)
     tris = inverse.ravel()[tris]
     keep = (tris[:, 0] != tris[:, 1]) & (tris[:, 1] != tris[:, 2]) & (tris[:, 0] != tris[:, 2])
     return pts[first], tris[keep]
+
+
+def read_surface(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """Points (n, 3) and triangles (m, 3) of a surface file, quads split, duplicate points merged."""
+    return merge_points(*read_triangles(path))
 
 
 def check_closed(points: np.ndarray, tris: np.ndarray, key: str) -> None:
@@ -81,7 +93,7 @@ def check_closed(points: np.ndarray, tris: np.ndarray, key: str) -> None:
         if bad.any():
             where = np.round(points[uniq[bad][0]].mean(axis=0), 6).tolist()
             raise InputError(f"{key}: the surface is not closed: {int(bad.sum())} {what} edges, the first "
-                             f"near {where}; a solid needs a watertight surface")
+                             f"near {where}; a solid needs a watertight surface: {REPAIR_HINT}")
 
 
 def enclosed_volume(points: np.ndarray, tris: np.ndarray) -> float:

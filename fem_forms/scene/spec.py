@@ -115,12 +115,22 @@ PROFILE = Key("profile", "points", "closed outline [[r, z], ...] revolved about 
 FILE = Key("file", "file", "mesh file, relative to the scene file: a volume mesh (gmsh .msh or any meshio "
            "format) or a closed surface (.stl, .obj, .ply, .off) that gmsh fills with tetrahedra of size h",
            required=True)
+REPAIR = Key("repair", "boolean", "surface files only: fill holes and remove duplicate, degenerate and "
+             "self-intersecting faces with MeshFix before gmsh meshes the surface (results.json mesh.repair "
+             "says what changed); without it an open surface is refused", default=False)
+SCALE = Key("scale", "number", "every coordinate of the mesh file is multiplied by this (0.001 for a file "
+            "in mm); h and all other lengths of the scene stay in metres", exclusive_minimum=0,
+            default_note="1 (or what units says)")
+UNITS = Key("units", "string", "the length unit of the mesh file's coordinates, instead of scale "
+            "(mm: scale 0.001); h and all other lengths of the scene stay in metres",
+            choices=("m", "mm", "cm", "in"), default_note="m")
+UNIT_SCALES = {"m": 1.0, "mm": 1e-3, "cm": 1e-2, "in": 0.0254}
 MESH_VARIANTS = Variants(GENERATOR, {
     "box": (SIZE, ORIGIN, CELLS),
     "cylinder": (ORIGIN, RADIUS, HEIGHT, H),
     "sphere": (ORIGIN, RADIUS, H),
     "revolve": (ORIGIN, PROFILE, H),
-    "file": (FILE, H),
+    "file": (FILE, H, REPAIR, SCALE, UNITS),
 })
 GENERATORS = GENERATOR.choices
 CELL_TYPES = CELL.choices
@@ -138,6 +148,16 @@ class MeshSpec:
     h: float | None = None
     profile: list | None = None
     file: Path | None = None
+    repair: bool = False
+    scale: float | None = None
+    units: str | None = None
+
+    @property
+    def length_scale(self) -> float:
+        """What every coordinate of the mesh file is multiplied by to be in metres (scale or units)."""
+        if self.scale is not None:
+            return float(self.scale)
+        return UNIT_SCALES[self.units] if self.units is not None else 1.0
 
 
 MAX_CELL_ASPECT = 1e5      # box cells longer than this many times their width defeat point location
@@ -152,6 +172,11 @@ def _mesh_rules(m: MeshSpec, t: Table) -> None:
     if m.generator == "file" and m.h is not None and m.file.suffix.lower() not in SURFACE_SUFFIXES:
         raise InputError(f"{t.key('h')}: only for surface files ({', '.join(SURFACE_SUFFIXES)}); "
                          f"{m.file.name!r} is meshed already")
+    if m.generator == "file" and m.repair and m.file.suffix.lower() not in SURFACE_SUFFIXES:
+        raise InputError(f"{t.key('repair')}: only for surface files ({', '.join(SURFACE_SUFFIXES)}); "
+                         f"{m.file.name!r} is a volume mesh")
+    if m.scale is not None and m.units is not None:
+        raise InputError(f"{t.key('units')}: give scale or units, not both (units = 'mm' is scale = 0.001)")
     if m.generator == "file" and m.file.suffix.lower() in SURFACE_SUFFIXES and m.cell != "tetrahedron":
         raise InputError(f"{t.key('cell')} = {m.cell!r}: a surface file is filled with tetrahedra only")
     if m.cell == "prism" and m.generator != "box":
