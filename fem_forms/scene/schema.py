@@ -9,7 +9,8 @@ import json
 
 from fem_forms.scene import registry
 from fem_forms.scene.reader import Key, Section, Variants
-from fem_forms.scene.spec import CORE_SECTIONS, SELECTOR_KEYS, TITLE
+from fem_forms.scene.selectors import SELECTOR_KEYS
+from fem_forms.scene.spec import CORE_SECTIONS, TITLE
 
 DRAFT = "http://json-schema.org/draft-07/schema#"
 _BOUNDS = (("minimum", "minimum"), ("exclusive_minimum", "exclusiveMinimum"),

@@ -1,12 +1,11 @@
-"""The core scene sections every analysis shares: mesh, material, discretization, fix, load, solver,
-output, and boundary selectors. Each key is declared once (type, range, default, unit, doc); the
-spec dataclasses take their defaults from those declarations. Cross-key rules follow as code.
+"""The core scene sections every analysis shares: mesh, material, discretization, fix, load, solver and
+output (their boundary selectors: scene/selectors.py). Each key is declared once (type, range, default,
+unit, doc); the spec dataclasses take their defaults from those declarations. Cross-key rules follow as code.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 from fem_forms.errors import InputError
 from fem_forms.materials import MODELS, Material, make_material
@@ -14,82 +13,8 @@ from fem_forms.materials.hyperelastic import PARAMETER_KEYS
 from fem_forms.materials.plasticity import make_plasticity
 from fem_forms.elements import MAX_DEGREE as MAX_QUADRATURE_DEGREE, check_degree
 from fem_forms.scene.plasticity import PLASTICITY, material_plasticity_rules
-from fem_forms.scene.reader import AXES, Key, Section, Table, Variants, brief, check_vector
-
-# --- selectors ------------------------------------------------------------------------------
-SEL_AXIS = Key("axis", "string", "normal axis of a plane of boundary facets (with at)", required=True,
-               choices=tuple(AXES))
-SEL_AT = Key("at", "number", "coordinate of that plane along its axis", unit="m", required=True)
-SEL_BOX = Key("box", "points", "boundary facets inside [[x0, y0, z0], [x1, y1, z1]]", unit="m",
-              required=True, length=3, min_items=2, max_items=2)
-SEL_GROUP = Key("group", "string", "a gmsh physical group of the mesh file, by name (volume, surface, curve "
-                "or point)", required=True)
-SEL_POINT = Key("point", "vector", "the mesh node nearest to [x, y, z] (supports only)", unit="m", required=True,
-                length=3)
-SEL_LINE = Key("line", "points", "the mesh nodes on the segment [[x0, y0, z0], [x1, y1, z1]] (supports only)",
-               unit="m", required=True, length=3, min_items=2, max_items=2,
-               note="must be two points [[x0, y0, z0], [x1, y1, z1]]")
-SELECTOR_KEYS = {"plane": (SEL_AXIS, SEL_AT), "box": (SEL_BOX,), "group": (SEL_GROUP,), "point": (SEL_POINT,),
-                 "line": (SEL_LINE,)}
-_SELECTOR_OF = {"axis": "plane", "box": "box", "group": "group", "point": "point", "line": "line"}
-AREA_SELECTORS = ("plane", "box", "group")        # what a traction or pressure may act on
-
-
-@dataclass
-class Selector:
-    """Where: a plane (axis, at), a box [[lo], [hi]] or a gmsh physical group of boundary facets, or (for
-    supports) the mesh node nearest a point or the nodes on a line segment."""
-    kind: str                      # "plane" | "box" | "group" | "point" | "line"
-    axis: int = 0
-    at: float = 0.0
-    lo: tuple = ()
-    hi: tuple = ()
-    group: str = ""
-    point: tuple = ()
-    line: tuple = ()               # (start, end)
-    key: str = "where"             # the scene key, for messages
-
-    @staticmethod
-    def parse(data: Any, key: str, kinds: tuple | None = None) -> "Selector":
-        """A selector from {axis, at}, {box}, {group}, {point} or {line}; `kinds` limits which are allowed."""
-        t = Table(data, key)
-        present = [k for k in _SELECTOR_OF if t.has(k)]
-        if len(present) != 1:
-            raise InputError(f"{key}: give exactly one of axis/at, box, group, point or line")
-        kind = _SELECTOR_OF[present[0]]
-        if kinds is not None and kind not in kinds:
-            if kinds == ("box",):
-                raise InputError(f"{key}: must be a box = [[x0, y0, z0], [x1, y1, z1]]")
-            if kind in ("point", "line") and kinds == AREA_SELECTORS:
-                raise InputError(f"{key}: a {kind} has no area to carry a traction or pressure; "
-                                 "select facets with axis/at, box or group")
-            raise InputError(f"{key}: must be one of {', '.join(kinds)}")
-        if kind == "plane":
-            sel = Selector("plane", axis=AXES[t.read(SEL_AXIS)], at=t.read(SEL_AT), key=key)
-        elif kind == "box":
-            box = t.raw("box")
-            if not (isinstance(box, list) and len(box) == 2):
-                raise InputError(f"{key}.box = {brief(box)}: must be [[x0, y0, z0], [x1, y1, z1]]")
-            lo, hi = (check_vector(b, f"{key}.box[{i}]") for i, b in enumerate(box))
-            if any(a > b for a, b in zip(lo, hi)):
-                raise InputError(f"{key}.box: lower corner {lo} exceeds upper corner {hi}")
-            sel = Selector("box", lo=tuple(lo), hi=tuple(hi), key=key)
-        elif kind == "point":
-            sel = Selector("point", point=tuple(t.read(SEL_POINT)), key=key)
-        elif kind == "line":
-            a, b = t.read(SEL_LINE)
-            if a == b:
-                raise InputError(f"{key}.line: its two ends coincide; use point = {a}")
-            sel = Selector("line", line=(tuple(a), tuple(b)), key=key)
-        else:
-            sel = Selector("group", group=t.read(SEL_GROUP), key=key)
-        t.done()
-        return sel
-
-
-def where(doc: str, required: bool = True, kinds: tuple | None = None) -> Key:
-    return Key("where", "selector", doc, required=required, parse=Selector.parse, choices=kinds)
-
+from fem_forms.scene.reader import Key, Section, Table, Variants
+from fem_forms.scene.selectors import AREA_SELECTORS, Selector, where
 
 # --- mesh -----------------------------------------------------------------------------------
 SURFACE_SUFFIXES = (".stl", ".obj", ".ply", ".off")    # closed surfaces the loader fills with tetrahedra

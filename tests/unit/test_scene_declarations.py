@@ -13,7 +13,8 @@ from fem_forms.errors import InputError
 from fem_forms.scene import Scene, registry
 from fem_forms.scene.reader import Key, Section
 from fem_forms.scene.schema import scene_schema, schema_json
-from fem_forms.scene.spec import CORE_SECTIONS, SELECTOR_KEYS
+from fem_forms.scene.selectors import SELECTOR_KEYS
+from fem_forms.scene.spec import CORE_SECTIONS
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENE_FILES = sorted([*ROOT.glob("demos/scenes/*.toml"), *ROOT.glob("benchmarks/scenes/*.toml")])

@@ -7,7 +7,7 @@ from pathlib import Path
 from fem_forms.errors import InputError
 from fem_forms.scene.analyses import Analysis
 from fem_forms.scene.reader import Key, Section, Table, Variants
-from fem_forms.scene.spec import Selector
+from fem_forms.scene.selectors import Selector
 
 METHOD = Key("method", "string", "how the rest shape is found", default="direct",
              choices=("direct", "adjoint", "fixed-point"))

@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 from fem_forms.errors import InputError
 from fem_forms.scene.reader import Key, Section, Table
-from fem_forms.scene.spec import AREA_SELECTORS, Selector, where
+from fem_forms.scene.selectors import AREA_SELECTORS, Selector, where
 
 BOUNDARY_KINDS = ("temperature", "convection", "radiation")
 BOUNDARY_KEYS = (
