@@ -76,7 +76,13 @@ def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> d
     if echo and comm.rank == 0:
         print(f"{scene.title}: {summary['dofs']} dofs, {scene.dynamic.scheme}, {summary['steps']} steps to "
               f"t = {summary['time_reached']:.6g} s, {summary['newton_iterations']} Newton iterations, "
-              f"energy balance error {summary['energy_balance_error']:.2e}, {summary['wall_time_s']:.2f} s -> {out}")
+              f"energy balance {_balance(summary)}, {summary['wall_time_s']:.2f} s -> {out}")
     if result.failure is not None:
         raise SolveError(f"{scene.title}: {result.failure}")
     return summary
+
+
+def _balance(summary: dict) -> str:
+    """The energy balance as the summary line says it: relative, or absolute when the energies are round-off."""
+    rel = summary["energy_balance_error"]
+    return f"error {rel:.2e}" if rel is not None else f"{summary['energy_imbalance']:.2e} J (energies at round-off)"

@@ -28,13 +28,17 @@ from dataclasses import dataclass, field, replace
 from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
+import numpy as np
 from petsc4py import PETSc
 import ufl
 from ufl.algorithms import expand_derivatives
 
 from fem_forms.analyses.dynamic.system import DynamicSystem, damping_terms
 from fem_forms.physics.assemble import total_energy, virtual_work
+from fem_forms.errors import InputError
+from fem_forms.meshes import bounding_box
 from fem_forms.physics.terms import Context
+from fem_forms.physics.thermoelastic import young_modulus
 
 
 @dataclass
@@ -57,6 +61,9 @@ class Energies:
                 + self.plastic_work)
 
 
+# energies below that of the whole part strained this much are round-off: a balance relative to them would be
+# a ratio of two noises (strains of 1e-8 are sqrt(machine epsilon), far below any motion a run is asked for)
+ENERGY_FLOOR_STRAIN = 1e-8
 COLUMNS = ("kinetic", "elastic", "external_work", "dissipated", "thermal_work", "plastic_work")
 
 
@@ -228,11 +235,26 @@ class EnergyAccount:
         return COLUMNS[:4] + (("thermal_work",) if self.thermal else ()) + \
             (("plastic_work",) if self.plastic_accounted else ())
 
-    def balance_error(self) -> float:
-        """max over time of |E_kin + E_el - W_ext - W_th + D - (E_kin0 + E_el0)| over the largest of those."""
+    def imbalance(self) -> float:
+        """max over time of |E_kin + E_el - W_ext - W_th + D + W_p - (its start value)| in J."""
         start = self.history[0][1].balance()
-        worst = scale = 0.0
-        for _, e in self.history:
-            worst = max(worst, abs(e.balance() - start))
-            scale = max(scale, *(abs(x) for x in e.row()))
-        return worst / scale if scale > 0 else 0.0
+        return max(abs(e.balance() - start) for _, e in self.history)
+
+    def balance_error(self, floor: float = 0.0) -> float | None:
+        """imbalance() over the largest energy of the run; None when that largest energy is at most `floor`
+        (J): a run in which (almost) nothing moved has a ratio of two round-off numbers, no error."""
+        scale = max(abs(x) for _, e in self.history for x in e.row())
+        if scale <= floor:
+            return None if scale > 0 or floor > 0 else 0.0
+        return self.imbalance() / scale
+
+    def round_off_floor(self) -> float:
+        """ENERGY_FLOOR_STRAIN^2 x E x the part's bounding-box volume: about the elastic energy of the whole
+        part at a strain round-off cannot tell from zero (0 for a user psi(F), which has no E)."""
+        m = self.system.model
+        try:
+            E = young_modulus(m.material)
+        except InputError:
+            return 0.0
+        lo, hi = bounding_box(m.mesh)
+        return ENERGY_FLOOR_STRAIN**2 * E * float(np.prod(hi - lo))
