@@ -27,6 +27,7 @@ from fem_forms.meshes import bounding_box
 from fem_forms.model import Model, build_model
 from fem_forms.physics.inertia import Inertia
 from fem_forms.output import fields, probes, results, sound
+from fem_forms.output.guard import attempt
 from fem_forms.scene import Scene
 from fem_forms.solvers import eigen, linear
 
@@ -314,6 +315,7 @@ def write_modal_outputs(result: ModalResult, out: Path) -> dict:
     comm.barrier()
     scene = result.model.scene
     summary = result.summary()
+    warnings = summary.setdefault("warnings", [])   # an output that fails must not lose the frequencies
     files = {}
     if scene.output.fields and result.modes:
         shapes = []
@@ -321,15 +323,17 @@ def write_modal_outputs(result: ModalResult, out: Path) -> dict:
             g = fields.p1_interpolant(f, f.name)
             g.x.array[:] /= max(max_norm(f), 1e-300)
             shapes.append(g)
-        fields.write_fields(out / "modes.xdmf", result.model.mesh, shapes)
-        files["modes"] = "modes.xdmf"
-    if scene.output.picture and result.modes:
-        modes_picture(out / "modes.png", result)
+        if attempt(warnings, "modes.xdmf", lambda: fields.write_fields(out / "modes.xdmf", result.model.mesh,
+                                                                         shapes) or True):
+            files["modes"] = "modes.xdmf"
+    if scene.output.picture and result.modes and attempt(
+            warnings, "modes.png", lambda: modes_picture(out / "modes.png", result) or True):
         files["picture"] = "modes.png"
     if scene.sound is not None:
-        summary["sound"] = sound.modal_sound(result, scene.sound, out)
-        files["sound"] = summary["sound"]["wav"]
-        files["spectrogram"] = summary["sound"]["spectrogram"]
+        heard = attempt(warnings, "sound", lambda: sound.modal_sound(result, scene.sound, out))
+        if heard is not None:
+            summary["sound"] = heard
+            files["sound"], files["spectrogram"] = heard["wav"], heard["spectrogram"]
     summary["files"] = files
     results.write_json_atomic(out / "results.json", summary, comm)
     return summary

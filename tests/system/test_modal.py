@@ -161,3 +161,20 @@ def test_two_ranks_give_the_same_frequencies(tmp_path):
     assert runs[2]["effective_mass_fraction_sum"] == pytest.approx(runs[1]["effective_mass_fraction_sum"],
                                                                    rel=1e-6)
     assert runs[2]["sound"]["peaks_hz"] == pytest.approx(runs[1]["sound"]["peaks_hz"], rel=1e-6)
+
+
+def test_a_failing_picture_never_loses_the_frequencies(tmp_path, monkeypatch):
+    """After the eigen solve an output that fails (here the picture) becomes one warning line; the
+    frequencies and results.json are written, the same as without the failure."""
+    import fem_forms.analyses.modal as modal
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("no canvas")
+    import fem_forms as ff
+    scene = ff.Scene.from_dict(beam(count=2))
+    good = modal.write_modal_outputs(modal.solve_modal(scene), tmp_path / "good")
+    monkeypatch.setattr(modal, "modes_picture", broken)
+    bad = modal.write_modal_outputs(modal.solve_modal(scene), tmp_path / "bad")
+    assert bad["frequencies_hz"] == pytest.approx(good["frequencies_hz"], rel=1e-12)
+    assert any("modes.png failed after the converged solve" in w for w in bad["warnings"])
+    assert "picture" not in bad["files"] and (tmp_path / "bad" / "results.json").exists()
