@@ -15,6 +15,7 @@ import time
 import pytest
 
 from fem_forms import cli
+from helpers import to_toml
 
 N = 100
 SEED = 22
@@ -52,27 +53,6 @@ def draw(rng: random.Random) -> dict:
         scene["dynamic"] = {"duration": 3e-3, "dt": rng.choice((1e-3, 1.5e-3)), "checkpoint_every": 0,
                             "mass": rng.choice(("consistent", "lumped"))}
     return scene
-
-
-def toml_value(v) -> str:
-    """A value as TOML (inline tables and arrays; enough for these scenes)."""
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, (int, float)):
-        return repr(v)
-    if isinstance(v, str):
-        return json.dumps(v)
-    if isinstance(v, dict):
-        return "{" + ", ".join(f"{json.dumps(k)} = {toml_value(x)}" for k, x in v.items()) + "}"
-    return "[" + ", ".join(toml_value(x) for x in v) + "]"
-
-
-def to_toml(scene: dict) -> str:
-    """Top-level keys first, then one [section] per table."""
-    top = [f"{k} = {toml_value(v)}" for k, v in scene.items() if not isinstance(v, dict)]
-    sections = [f"[{k}]\n" + "\n".join(f"{json.dumps(n)} = {toml_value(x)}" for n, x in v.items())
-                for k, v in scene.items() if isinstance(v, dict)]
-    return "\n".join(top) + "\n\n" + "\n\n".join(sections) + "\n"
 
 
 class Hang(Exception):
