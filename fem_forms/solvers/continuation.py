@@ -58,7 +58,7 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
         trial = min([1.0, lam + dlam] + [s for s in stops if s > lam + 1e-12])
         set_load(trial)
         corner = any(abs(lam - s) < 1e-12 for s in stops)     # the load path turns: no extrapolation across
-        if predictor and last_step is not None and last_dlam > 0 and not corner:
+        if predictor and last_step is not None and last_dlam > 0 and not corner:   # secant extrapolation
             u.x.array[:] = old.x.array + ((trial - lam) / last_dlam) * last_step
             u.x.scatter_forward()
         drv.load_factor = trial
@@ -68,17 +68,7 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
         why = acceptance.why_rejected(drv, rec, load_scale=r_full)   # SNES, finite, admissible, residual
         same_step = False
         if not rec.accepted:
-            if rec.reason == "DIVERGED_LINEAR_SOLVE" and drv.stale_preconditioner_failed():
-                pass                                 # the retry (fresh SNES) rebuilds the preconditioner
-            elif (rec.reason == "DIVERGED_LINEAR_SOLVE" and drv.linear_kind == "iterative"
-                  and linear_kind in linear.FALLBACK_TO_DIRECT):
-                drv.linear_kind = "direct"           # indefinite tangent: fall back to LU
-                report.linear_solver = "iterative->direct"
-            elif drv.reuse_factor == "chord":
-                drv.reuse_factor = True              # the chord stalled: Newton (the stale LU preconditions)
-                same_step = True                     # retries this step at its size
-            elif rec.reason == "DIVERGED_LINEAR_SOLVE" and drv.reuse_factor:
-                drv.reuse_factor = False             # stale LU too far off: factor every iteration
+            same_step = _adjust_solver(drv, rec, linear_kind, report)
         elif why is None:
             report.residual_norm = rec.checked_residual     # the independently re-assembled residual
         rec.accepted = why is None
@@ -100,22 +90,47 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
                 dlam *= 0.5
             drv.rebuild()                        # fresh solver state after a failure
             if cuts > max_cutbacks or dlam < min_step:
-                report.message = (f"no convergence: load factor {lam:.6g} reached, the step to "
-                                  f"{trial:.6g} failed after {cuts - 1} cut-backs"
-                                  f"{' (the step fell below its smallest size)' if cuts <= max_cutbacks else ''}"
-                                  f" (failures seen: "
-                                  f"{'; '.join(_distinct(s.note for s in report.steps if s.note))})")
+                report.message = _gave_up(report, lam, trial, cuts, cuts > max_cutbacks)
                 break
             report.message = why
     else:
-        report.converged = True
-        report.message = "converged"
+        report.converged, report.message = True, "converged"
+    return _finish(report, drv, assembly0, t0, own_driver=driver is None)
+
+
+def _finish(report: SolveReport, drv: SNESDriver, assembly0: float, t0: float, own_driver: bool) -> SolveReport:
+    """Timings into the report; a driver built for this solve is destroyed."""
     report.assembly_time = drv.assembly_time - assembly0
     report.solve_time = time.perf_counter() - t0 - report.assembly_time
-    if driver is None:
+    if own_driver:
         drv.snes.destroy()
     progress.report("solve_done", converged=report.converged)
     return report
+
+
+def _adjust_solver(drv: SNESDriver, rec, linear_kind: str, report: SolveReport) -> bool:
+    """After SNES failed a step: change what the retry solves with (a fresh preconditioner, LU instead of an
+    indefinite iterative solve, Newton instead of a stalled chord, a factor per iteration instead of a stale
+    one). Returns whether the step is retried at its size (the chord's fallback) rather than halved."""
+    if rec.reason == "DIVERGED_LINEAR_SOLVE" and drv.stale_preconditioner_failed():
+        return False                             # the retry (fresh SNES) rebuilds the preconditioner
+    if (rec.reason == "DIVERGED_LINEAR_SOLVE" and drv.linear_kind == "iterative"
+            and linear_kind in linear.FALLBACK_TO_DIRECT):
+        drv.linear_kind = "direct"               # indefinite tangent: fall back to LU
+        report.linear_solver = "iterative->direct"
+    elif drv.reuse_factor == "chord":
+        drv.reuse_factor = True                  # the chord stalled: Newton (the stale LU preconditions)
+        return True                              # retries this step at its size
+    elif rec.reason == "DIVERGED_LINEAR_SOLVE" and drv.reuse_factor:
+        drv.reuse_factor = False                 # stale LU too far off: factor every iteration
+    return False
+
+
+def _gave_up(report: SolveReport, lam: float, trial: float, cuts: int, too_many: bool) -> str:
+    """The message of a continuation that stopped: where it got, and every kind of failure it saw."""
+    return (f"no convergence: load factor {lam:.6g} reached, the step to {trial:.6g} failed after "
+            f"{cuts - 1} cut-backs{'' if too_many else ' (the step fell below its smallest size)'} (failures "
+            f"seen: {'; '.join(_distinct(s.note for s in report.steps if s.note))})")
 
 
 def _distinct(notes) -> list:

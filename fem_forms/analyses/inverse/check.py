@@ -55,6 +55,35 @@ def _matched_vertices(spec, pts_target: np.ndarray, size: float) -> np.ndarray |
     return mask
 
 
+def _write_and_inspect(scene: Scene, out: Path, gathered, target, groups, size: float) -> tuple[list, tuple]:
+    """On rank 0: write the rest shape (volume .msh and STL) and look at it as built: does it cross a support
+    plane or intersect itself? Returns (problems, what the picture draws)."""
+    problems = []
+    points, cells, ctype = gathered
+    faces = rest_shape.boundary_faces(cells, ctype)
+    drawn = (target[0], points, faces)
+    write_ok = True
+    try:
+        rest_shape.write_volume_mesh(out / "rest_shape.msh", points, cells, ctype, groups)
+        tris = rest_shape.triangles(faces)
+        rest_shape.write_stl(out / "rest_shape.stl", points, tris)
+    except OSError as e:
+        write_ok = False
+        problems.append(f"cannot write the rest shape: {e}")
+    if write_ok:
+        for f in scene.fix:
+            if f.where.kind == "plane":
+                depth = rest_shape.crosses_support_plane(points, target[0], f.where.axis, f.where.at,
+                                                         1e-6 * size)
+                if depth > 0:
+                    problems.append(f"the rest shape crosses the support plane {'xyz'[f.where.axis]} = "
+                                    f"{f.where.at} by {depth:.3g} m")
+        hits = rest_shape.self_intersections(points, tris)
+        if hits:
+            problems.append(f"the rest shape's surface intersects itself ({hits} crossing triangle pairs)")
+    return problems, drawn
+
+
 def check_rest_shape(scene: Scene, res: InverseResult, out: Path) -> ForwardCheck:
     """Write the rest shape (volume .msh + STL), check it crosses no support plane and does not
     intersect itself, then load the written arrays as a mesh, solve the forward problem on it (from the
@@ -69,30 +98,8 @@ def check_rest_shape(scene: Scene, res: InverseResult, out: Path) -> ForwardChec
     designed = fields.gather_mesh(mesh, fields.node_values(res.deformed_offset)) \
         if res.deformed_offset is not None else target
     groups = fields.gather_facet_groups(res.loaded)
-    problems, drawn = [], None
-    if comm.rank == 0:
-        points, cells, ctype = gathered
-        faces = rest_shape.boundary_faces(cells, ctype)
-        drawn = (target[0], points, faces)
-        write_ok = True
-        try:
-            rest_shape.write_volume_mesh(out / "rest_shape.msh", points, cells, ctype, groups)
-            tris = rest_shape.triangles(faces)
-            rest_shape.write_stl(out / "rest_shape.stl", points, tris)
-        except OSError as e:
-            write_ok = False
-            problems.append(f"cannot write the rest shape: {e}")
-        if write_ok:
-            for f in scene.fix:
-                if f.where.kind == "plane":
-                    depth = rest_shape.crosses_support_plane(points, target[0], f.where.axis, f.where.at,
-                                                             1e-6 * size)
-                    if depth > 0:
-                        problems.append(f"the rest shape crosses the support plane {'xyz'[f.where.axis]} = "
-                                        f"{f.where.at} by {depth:.3g} m")
-            hits = rest_shape.self_intersections(points, tris)
-            if hits:
-                problems.append(f"the rest shape's surface intersects itself ({hits} crossing triangle pairs)")
+    problems, drawn = _write_and_inspect(scene, out, gathered, target, groups, size) if comm.rank == 0 \
+        else ([], None)
     problems = comm.bcast(problems, root=0)
     pts_rest = comm.bcast(gathered[0] if comm.rank == 0 else None, root=0)
     pts_target = comm.bcast(target[0] if comm.rank == 0 else None, root=0)
@@ -104,7 +111,8 @@ def check_rest_shape(scene: Scene, res: InverseResult, out: Path) -> ForwardChec
     vmap = res.v.function_space.dofmap
     fscene = forward.forward_scene(scene, out / "rest_shape.msh", vmap.index_map.size_global * vmap.index_map_bs)
 
-    def written():
+    def written():                               # called on rank 0, where the gathered arrays are
+        points, cells, ctype = gathered
         arrays = MeshArrays(points, cells, ctype, groups or {}, info={"source": "rest_shape.msh"})
         check_cells(arrays, "rest_shape.msh")
         return arrays
