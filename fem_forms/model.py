@@ -56,6 +56,7 @@ class Model:
         self._det_F: SmallestValue | None = None
         self._compiled: dict = {}
         self._probes: ProbeSet | None = None
+        self._scalars: list | None = None
 
     @property
     def probes(self) -> ProbeSet:
@@ -125,11 +126,19 @@ class Model:
 
     def problem(self, set_load=None, state: State | None = None) -> NonlinearProblem:
         """The model's equilibrium as the one SNES driver takes it: the compiled residual, tangent and (for a
-        conservative model) energy, the supports, the admissibility check, the State and every array term."""
+        conservative model) energy, the supports, the admissibility check, the State, every array term and
+        every global scalar."""
         return NonlinearProblem(self.unknown, self.compiled("residual"), self.compiled("jacobian"), self.bcs,
                                 energy=self.compiled("energy") if self.conservative else None, set_load=set_load,
                                 inadmissible=self.inadmissible, state=state or self.state,
-                                array_terms=self.terms.arrays)
+                                array_terms=self.terms.arrays, scalars=self.global_scalars())
+
+    def global_scalars(self) -> list:
+        """The scalar unknowns the terms add to the Newton solve (a volume-controlled cavity's pressure), made
+        once per model: their forms compile once."""
+        if self._scalars is None:
+            self._scalars = [s for t in self.terms for s in t.global_scalars(self)]
+        return self._scalars
 
     def only_ufl_terms(self, analysis: str) -> None:
         """InputError if a term computed as arrays (ArrayTerm) is in a model whose `analysis` assembles UFL

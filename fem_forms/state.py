@@ -4,7 +4,7 @@ State changes only through two doors: `commit()` after an accepted step (history
 brought up to date from the accepted fields, then everything becomes the new old values) and
 `rollback()` on a cut-back (every field and history variable returns to the last committed values), so a
 rejected step leaves no trace. Old values are fem.Functions, so forms (inertia, plastic flow) can use them.
-Global scalar unknowns (fem.Constants, solvers/scalars.py) are committed and rolled back with the fields.
+Global scalar unknowns (fem.Constants, physics/scalars.py) are committed and rolled back with the fields.
 """
 from __future__ import annotations
 

@@ -26,7 +26,7 @@ def solve_direct(scene: Scene, material=None, loaded: LoadedMesh | None = None) 
     w = fem.Function(V)                                  # the variation: d/dw, then w = 0 (u = -v)
 
     def build(sc: Scene):
-        physics = scene_physics(sc, loaded, w - v, V, material, rest_map=G, bc_sign=-1.0)
+        physics = scene_physics(sc, loaded, w - v, V, material, rest_map=G, bc_sign=-1.0, rest_offset=v)
         physics.terms.only_ufl("inverse design")
         physics.context.deformation = ufl.inv(G) + ufl.grad(w) * ufl.inv(G)
         return inverse_forms(physics.terms, physics.context, v, w), physics, sc.discretization.quadrature

@@ -24,7 +24,7 @@ class ForwardOnRest:
         self.d = fem.Function(V, name="rest_minus_target")
         self.u = fem.Function(V, name="displacement")
         G = ufl.Identity(3) + ufl.grad(self.d)
-        physics = scene_physics(scene, loaded, self.u, V, material, rest_map=G)
+        physics = scene_physics(scene, loaded, self.u, V, material, rest_map=G, rest_offset=self.d)
         physics.terms.only_ufl("inverse design")
         self.load, self.bcs = physics.load, physics.bcs
         ctx, terms = physics.context, physics.terms

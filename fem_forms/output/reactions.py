@@ -56,8 +56,9 @@ def applied_load(model) -> np.ndarray:
     parts = []
     for term in loads:
         energy = term.energy(ctx)
-        if energy is not None:
-            parts.append(ufl.derivative(energy, model.unknown, direction))
+        if energy is not None:           # a first variation by hand where there is one (UFL 2022.2 cannot take
+            by_hand = term.first_variation(ctx, v)   # d det F along a Constant in a mixed space)
+            parts.append(by_hand if by_hand is not None else ufl.derivative(energy, model.unknown, direction))
         work = term.virtual_work(ctx, v)
         if work is not None:
             parts.append(work)

@@ -16,6 +16,7 @@ from fem_forms.materials.constants import bind_constants
 from fem_forms.meshes import LoadedMesh
 from fem_forms.physics.elastic import ElasticEnergy
 import fem_forms.physics.loads  # noqa: F401 (registers the load terms)
+import fem_forms.physics.cavities  # noqa: F401 (registers the inflation load)
 from fem_forms.physics.parameters import Parameters
 from fem_forms.physics import quadrature
 from fem_forms.physics.plastic import plastic_term
@@ -43,11 +44,11 @@ class Physics:
 
 
 def scene_physics(scene: Scene, loaded: LoadedMesh, u, bc_space: fem.FunctionSpace, material=None,
-                  rest_map=None, pressure=None, bc_sign: float = 1.0) -> Physics:
+                  rest_map=None, pressure=None, bc_sign: float = 1.0, rest_offset=None) -> Physics:
     """The one recipe every model follows (forward, on a designed rest shape, inverse): the Context
-    (measures, density field, load factor, kinematics of `u` and the rest map), the scene's terms with the
-    material's parameters as Constants, and the supports on `bc_space` (sign -1: the inverse problem's
-    unknown is rest minus deformed position)."""
+    (measures, density field, load factor, kinematics of `u` and the rest map G = I + grad `rest_offset`), the
+    scene's terms with the material's parameters as Constants, each prepared on the Context, and the supports
+    on `bc_space` (sign -1: the inverse problem's unknown is rest minus deformed position)."""
     mesh = loaded.mesh
     mat = bind_constants(build_material(scene, material), mesh)
     disc, cell = scene.discretization, mesh.topology.cell_name()
@@ -59,9 +60,13 @@ def scene_physics(scene: Scene, loaded: LoadedMesh, u, bc_space: fem.FunctionSpa
     owners: list = []
     bcs = supports(bc_space, loaded, scene.fix, load, sign=bc_sign, owners=owners)
     ctx = make_context(loaded, scene, u, dx, parameters, load, rest_map, pressure)
+    ctx.rest_offset = rest_offset
     name = scene.material.model if material is None else getattr(as_material(material), "name",
                                                                    type(material).__name__)
-    return Physics(ctx, declare_terms(scene, mat, mesh, name), load, bcs, owners)
+    terms = declare_terms(scene, mat, mesh, name)
+    for t in terms:
+        t.prepare(ctx)
+    return Physics(ctx, terms, load, bcs, owners)
 
 
 def declare_terms(scene: Scene, material: Material, mesh, model_name: str | None = None) -> TermList:
@@ -121,12 +126,11 @@ def equilibrium_forms(terms: list[Term], ctx: Context, unknown: fem.Function, v)
     test, trial = ufl.TestFunction(unknown.function_space), ufl.TrialFunction(unknown.function_space)
     energy = total_energy(terms, ctx)
     extra = virtual_work(terms, ctx, v)
-    if energy is None:                               # no conservative term (a plastic solid under pressure)
-        residual = extra
-    else:
-        residual = ufl.derivative(energy, unknown, test)
-        if extra is not None:
-            residual = residual + extra
+    by_hand = [t.first_variation(ctx, v) for t in terms if t.residual_by_hand]
+    derived = total_energy([t for t in terms if not t.residual_by_hand], ctx)
+    parts = ([] if derived is None else [ufl.derivative(derived, unknown, test)]) + by_hand + \
+        ([] if extra is None else [extra])
+    residual = sum(parts[1:], parts[0])
     jacobian = ufl.derivative(residual, unknown, trial)
     return EquilibriumForms(energy, residual, jacobian, extra is None)
 

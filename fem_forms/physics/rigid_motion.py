@@ -45,8 +45,8 @@ def prescribes_motion(scene) -> bool:
 
 def nothing_to_solve(model, r0: PETSc.Vec) -> bool:
     """No loads (or loads that vanish) and no prescribed displacement: u = 0 is the answer."""
-    if model.terms.arrays:                   # an array term's forces are not in r0: let Newton look
-        return False
+    if model.terms.arrays or model.global_scalars():   # an array term's forces and a scalar's equation (a
+        return False                                     # prescribed cavity volume) are not in r0: let Newton look
     loaded = bool(model.scene.load) or model.context.thermal_strain is not None   # a temperature change loads
     return not prescribes_motion(model.scene) and (not loaded or r0.norm() == 0.0)
 

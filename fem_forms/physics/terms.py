@@ -43,6 +43,7 @@ class Context:
     dx_regions: ufl.Measure | None = None  # dx tagged with the body loads' volume groups
     body_regions: dict = field(default_factory=dict)   # load index -> the dx ids of its cells
     thermal_strain: object = None          # alpha (T - T_ref), a UFL scalar, when temperature is coupled in
+    rest_offset: object = None             # rest shape minus mesh (None: the mesh is the rest shape)
 
     @property
     def F(self):
@@ -53,6 +54,17 @@ class Context:
         if self.rest_map is not None:
             grad_u = grad_u * ufl.inv(self.rest_map)
         return ufl.Identity(len(self.u)) + grad_u
+
+    @property
+    def rest_position(self):
+        """X, the rest position of each mesh point (UFL vector)."""
+        x = ufl.SpatialCoordinate(self.mesh)
+        return x if self.rest_offset is None else x + self.rest_offset
+
+    @property
+    def position(self):
+        """x = X + u, the deformed position of each mesh point (UFL vector)."""
+        return self.rest_position + self.u
 
     def volume(self, density, region: int | None = None, dx: ufl.Measure | None = None) -> ufl.Form:
         """int density dX over the rest shape (or over the cells of one body-load region; or with the
@@ -92,6 +104,9 @@ class Term:
     pseudo-time) t."""
     name: str = "term"
     role: str = "term"
+    # the residual takes `first_variation` instead of ufl.derivative of `energy`: for an energy that is exact
+    # only where the supports hold (a cavity closed by symmetry planes), so that reactions see the true load
+    residual_by_hand: bool = False
     keys: tuple = ()
     fields: tuple = ("displacement",)
 
@@ -107,6 +122,20 @@ class Term:
 
     def set_values(self, scene) -> None:
         """Take this term's values from `scene` (same kinds of terms): Constants change, nothing compiles."""
+
+    def prepare(self, ctx: Context) -> None:
+        """Check the term against the mesh and compute what it needs once (a cavity: that its walls enclose a
+        volume, and that volume); called when the model's Context is made. InputError for what cannot work."""
+
+    def global_scalars(self, model) -> list:
+        """The scalar unknowns (physics.scalars.GlobalScalar) this term adds to the model's Newton solve (a
+        volume-controlled cavity's pressure); none by default."""
+        return []
+
+    def record(self) -> dict:
+        """Numbers this term reports at the current state ({column: value}, the same on every rank), for
+        results.json and one row per load step of probes.csv; none by default."""
+        return {}
 
     def update(self, t: float) -> None:
         """Move to time (or pseudo-time) t; a term without a history has nothing to do."""

@@ -126,7 +126,7 @@ def prism_rules(mesh: MeshSpec, disc: "Discretization", loads: list, analysis: s
         raise InputError(f"discretization.degree = {disc.degree}: prisms take degree 1 only (FFCx 0.5.0: "
                          "\"Elements with different numbers of DOFs on subentities of the same dimension are "
                          "not yet supported\"); set degree = 1")
-    surface = [f"load[{i}]" for i, ld in enumerate(loads) if ld.type in ("traction", "pressure")]
+    surface = [f"load[{i}]" for i, ld in enumerate(loads) if ld.type in ("traction", "pressure", "inflation")]
     if surface:
         raise InputError(f"{surface[0]}: surface loads cannot be applied on a prism mesh (FFCx 0.5.0 cannot "
                          "integrate over prism facets); use tetrahedra or hexahedra")
@@ -271,6 +271,14 @@ LOAD_TYPES = {
                                  required=True, length=3)),
     "pressure": (LOAD_WHERE, Key("value", "number", "follower pressure on the deformed surface", unit="Pa",
                                  required=True, attr="pressure")),
+    # a closed cavity's pressure as an energy, -p (V - V0): pressure or volume control (physics/cavities.py)
+    "inflation": (where("the cavity's walls: a closed surface, or one closed by symmetry planes through the origin",
+                        kinds=AREA_SELECTORS),
+                  Key("name", "string", "the cavity's name in results.json cavities and probes.csv",
+                      default_note="cavity0, cavity1, ... in scene order"),
+                  Key("pressure", "number", "cavity pressure (pressure control)", unit="Pa"),
+                  Key("volume", "number", "volume added to the cavity (volume control: its pressure is solved "
+                      "with the displacement)", unit="m^3")),
 }
 # one key every load type shares: the load's factor over time (dynamic analysis), piecewise linear
 LOAD_HISTORY = Key("history", "points", "[time, factor] pairs, piecewise linear in time, held after the last "
@@ -286,11 +294,16 @@ class Load:
     g: list | None = None
     where: Selector | None = None
     value: list | None = None      # traction vector
-    pressure: float | None = None  # follower pressure
+    pressure: float | None = None  # follower pressure; an inflated cavity's pressure
+    volume: float | None = None    # volume added to an inflated cavity (volume control)
+    name: str | None = None        # an inflated cavity's name
     history: list | None = None    # [[t, factor], ...] piecewise linear; None: constant 1
 
 
 def _load_rules(ld: Load, t: Table) -> None:
+    if ld.type == "inflation" and (ld.pressure is None) == (ld.volume is None):
+        raise InputError(f"{t.key('pressure')}: an inflation load gives either pressure (pressure control) or "
+                         "volume (volume control), not both, not neither")
     if ld.history is not None and any(b[0] <= a[0] for a, b in zip(ld.history, ld.history[1:])):
         raise InputError(f"{t.key('history')}: times must increase")
 
@@ -301,6 +314,9 @@ SOLVER_KEYS = (
     Key("max_cutbacks", "integer", "how often a failed load step may be halved", default=12, minimum=0),
     Key("linear", "string", "linear solver: auto, direct (MUMPS) or iterative (CG + GAMG)", default="auto",
         choices=("auto", "direct", "iterative")),
+    Key("control", "string", "what the continuation steps: the load factor (load), or the arc length along "
+        "the load-displacement path (arc-length: passes limit points, the load factor may fall)", default="load",
+        choices=("load", "arc-length")),
     Key("petsc", "options", "PETSc options (name without dash = value), applied last", default={}),
 )
 _SOLVER = {k.name: k for k in SOLVER_KEYS}
@@ -311,6 +327,7 @@ class SolverSpec:
     steps: int = _SOLVER["steps"].field()
     max_cutbacks: int = _SOLVER["max_cutbacks"].field()
     linear: str = _SOLVER["linear"].field()
+    control: str = _SOLVER["control"].field()
     petsc: dict = _SOLVER["petsc"].field()
 
 

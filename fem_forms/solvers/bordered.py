@@ -1,4 +1,4 @@
-"""The augmented Newton system of a problem with global scalars (solvers/scalars.py), inside the one SNES:
+"""The augmented Newton system of a problem with global scalars (physics/scalars.py), inside the one SNES:
 
     [K    R_p] [du]     [R]
     [c_u  c_p] [dp] = - [c]
@@ -19,7 +19,7 @@ from mpi4py import MPI
 import numpy as np
 from petsc4py import PETSc
 
-from fem_forms.solvers.scalars import GlobalScalar, coupling_forms
+from fem_forms.physics.scalars import GlobalScalar, coupling_forms
 
 # the inner K solve's options prefix (under the driver's) and the option families it takes from the driver
 INNER = "K_"

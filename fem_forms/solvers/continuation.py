@@ -11,6 +11,7 @@ from petsc4py import PETSc
 
 from fem_forms import progress
 from fem_forms.solvers import acceptance, linear
+from fem_forms.solvers.limit import NEAR_LIMIT, PathStiffness
 from fem_forms.solvers.reports import SolveReport
 from fem_forms.solvers.snes import NonlinearProblem, SNESDriver
 from fem_forms.state import State
@@ -33,7 +34,7 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
     a path-dependent material sees the peak load). `min_step`: give up once a halved increment is smaller
     (a limit load such as plastic collapse is otherwise approached for ever: steps of shrinking size pass,
     each failure between them resetting the count of cut-backs in a row; measured: 25,000 steps in 2
-    minutes on a perfectly plastic bar). Hyperelastic runs keep 0: their tiny steps do make progress."""
+    minutes on a perfectly plastic bar; a neo-Hookean sphere past its pressure maximum)."""
     t0 = time.perf_counter()
     drv = driver or SNESDriver(problem, options, linear_kind, prefix, near_nullspace, reuse_factor)
     assembly0 = drv.assembly_time
@@ -54,6 +55,7 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
     if problem.set_load is None:                     # nothing to continue in: one attempt
         lam, dlam, max_cutbacks = 0.0, 1.0, 0
     last_step, last_dlam = None, 0.0                # secant: u_k - u_{k-1} over lambda_k - lambda_{k-1}
+    path = PathStiffness(u)
     while lam < 1.0 - 1e-12:
         trial = min([1.0, lam + dlam] + [s for s in stops if s > lam + 1e-12])
         set_load(trial)
@@ -79,6 +81,8 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
                         iterations=rec.iterations, why=why or "")
         if rec.accepted:
             last_step, last_dlam = u.x.array - old.x.array, trial - lam
+            path.accepted(last_dlam, last_step, rec.iterations)
+            drv.newton_cap = path.newton_cap()   # near a limit point no step is worth the full Newton limit
             state.commit()
             lam, cuts = trial, 0
             dlam = min(1.0 - lam, 1.5 * dlam) if lam < 1.0 else dlam
@@ -89,8 +93,9 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
                 cuts += 1
                 dlam *= 0.5
             drv.rebuild()                        # fresh solver state after a failure
+            drv.newton_cap = path.newton_cap()
             if cuts > max_cutbacks or dlam < min_step:
-                report.message = _gave_up(report, lam, trial, cuts, cuts > max_cutbacks)
+                report.message = _gave_up(report, lam, trial, cuts, cuts > max_cutbacks, path.stiffness)
                 break
             report.message = why
     else:
@@ -126,9 +131,14 @@ def _adjust_solver(drv: SNESDriver, rec, linear_kind: str, report: SolveReport) 
     return False
 
 
-def _gave_up(report: SolveReport, lam: float, trial: float, cuts: int, too_many: bool) -> str:
-    """The message of a continuation that stopped: where it got, and every kind of failure it saw."""
-    return (f"no convergence: load factor {lam:.6g} reached, the step to {trial:.6g} failed after "
+def _gave_up(report: SolveReport, lam: float, trial: float, cuts: int, too_many: bool,
+             stiffness: float | None) -> str:
+    """The message of a continuation that stopped: where it got, how stiff the path still was (a limit point
+    when it had flattened out), and every kind of failure it saw."""
+    flat = stiffness is not None and stiffness < NEAR_LIMIT
+    how = (f"limit point: the load-displacement path flattened to {stiffness:.2g} of its initial stiffness; "
+           if flat else "no convergence: ")
+    return (f"{how}load factor {lam:.6g} reached, the step to {trial:.6g} failed after "
             f"{cuts - 1} cut-backs{'' if too_many else ' (the step fell below its smallest size)'} (failures "
             f"seen: {'; '.join(_distinct(s.note for s in report.steps if s.note))})")
 

@@ -43,7 +43,7 @@ class NonlinearProblem:
     state: State | None = None         # fields and history committed/rolled back with the steps (default: u)
     array_terms: list = field(default_factory=list)   # physics.terms.ArrayTerm: energies as arrays (lumped mass)
     bounds: tuple | None = None        # (lower, upper): fem.Function (e.g. State.old["damage"]), float or None
-    scalars: list = field(default_factory=list)   # solvers.scalars.GlobalScalar: solved with u (bordered.py)
+    scalars: list = field(default_factory=list)   # physics.scalars.GlobalScalar: solved with u (bordered.py)
 
 
 def as_compiled(form) -> fem.Form:
@@ -94,6 +94,7 @@ class SNESDriver:
         # polish also after a failed line search near the answer (staggered sub-solves); off for continuation:
         # at a limit load it would accept a state just past the limit (measured: 1.0e-5 over StVK's)
         self.polish_stuck = False
+        self.newton_cap: int | None = None   # fewer Newton iterations than the options allow (near a limit point)
         self.rebuild()
 
     # -- PETSc objects -------------------------------------------------------------------------
@@ -131,6 +132,7 @@ class SNESDriver:
             snes.setObjective(self._objective)
         snes.setMonitor(self._monitor)
         snes.setFromOptions()
+        self.max_it = snes.getTolerances()[3]      # the options' Newton limit; newton_cap may lower it per step
         if self.bordered is not None:
             self.bordered.install(snes, self.prefix)    # augmented residual, bordered Jacobian and inverse
         self.arrays.install(snes)                # the array terms' step cap, if any
@@ -305,7 +307,7 @@ class SNESDriver:
             if not self._finite_residual(self.x):
                 self._linear_extension(x_old)
             x_old.destroy()
-        self.snes.setTolerances(atol=self.base_atol())
+        self.snes.setTolerances(atol=self.base_atol(), max_it=min(self.max_it, self.newton_cap or self.max_it))
         if self.bounds is not None:
             self.bounds.install(self.snes)           # refreshed: a bound may be a committed old value
         builds0 = 0

@@ -17,7 +17,7 @@ from petsc4py import PETSc
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from fem_forms.solvers.scalars import GlobalScalar  # noqa: E402
+from fem_forms.physics.scalars import GlobalScalar  # noqa: E402
 from fem_forms.solvers.snes import NonlinearProblem  # noqa: E402
 from system.array_spring import by_coordinates  # noqa: E402
 

@@ -1,4 +1,4 @@
-"""Global scalar unknowns solved monolithically with the field (solvers/scalars.py, solvers/bordered.py), on
+"""Global scalar unknowns solved monolithically with the field (physics/scalars.py, solvers/bordered.py), on
 the block of tests/system/scalar_block.py (mean x-displacement of the far face prescribed, the traction
 resultant its multiplier): against a scipy solve of the assembled system (linear), against load control
 with the resultant found by a secant iteration (neo-Hookean), under continuation with a rejected step
