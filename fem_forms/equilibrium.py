@@ -21,7 +21,8 @@ from fem_forms.output.guard import attempt
 from fem_forms.output.reactions import reaction_report
 from fem_forms.physics import rigid_motion
 from fem_forms.scene import Scene
-from fem_forms.solvers import continuation, snes
+from fem_forms.physics.path_constraint import ArcLength
+from fem_forms.solvers import arc_length, continuation, snes
 from fem_forms.solvers.linear import rigid_body_modes
 
 
@@ -55,6 +56,7 @@ class StaticResult:
             "newton_iterations": r.newton_iterations,
             "load_steps": r.load_steps,
             "load_reached": r.load_reached,
+            **({"peak_load_factor": r.peak_load_factor} if r.peak_load_factor is not None else {}),
             "residual_norm": r.residual_norm,
             "energy": self.energy,
             "max_displacement": self.max_displacement,
@@ -142,12 +144,38 @@ def load_path(model: Model) -> tuple:
 
 
 def min_load_step(model: Model) -> float:
-    """The smallest load increment: max_cutbacks halvings of the first. Near a limit point (a balloon's pressure
-    maximum, plastic collapse) steps of shrinking size keep passing, each success resetting the count of
-    cut-backs in a row, so without a floor the limit is approached for ever (measured: 25,000 steps in 2 minutes
-    on a perfectly plastic bar; a neo-Hookean sphere inflated past its pressure maximum ran 10 minutes)."""
+    """The smallest load increment: max_cutbacks halvings of the first. Near a limit point (plastic collapse, a
+    balloon's pressure maximum) steps of shrinking size keep passing, each success resetting the count of
+    cut-backs in a row, so without a floor the limit is approached for ever (measured: 25,000 steps in 2
+    minutes on a perfectly plastic bar). A plastic solid has the floor always, an elastic one once its path
+    has flattened (continuation's limit_step)."""
     solver = model.scene.solver
     return 1.0 / solver.steps / 2**solver.max_cutbacks
+
+
+def follow_path(model: Model, load_scale: float, linear_kind: str) -> snes.SolveReport:
+    """Arc-length continuation of the model's loads (solver.control = "arc-length"): the load factor solved
+    with the displacement, limit points passed. Loads must scale with one factor: no histories, no prescribed
+    displacement (InputError)."""
+    scene = model.scene
+    if any(t.history for t in model.loads) or rigid_motion.prescribes_motion(scene):
+        raise InputError("solver.control = 'arc-length': the loads must scale with one load factor (no [[load]] "
+                         "history, no prescribed displacement in [[fix]] value); use control = 'load'")
+    constraint = ArcLength(model)
+    problem = model.problem()
+    problem.scalars = problem.scalars + [constraint.scalar]
+    problem.set_load = None
+
+    def displacement():
+        model.sync_displacement()
+        return model.u.x.array.copy()
+    moves = model.unknown is model.u                     # the predictor moves u in the displacement formulation
+
+    def set_displacement(a):
+        model.u.x.array[:] = a
+    return arc_length.solve(problem, constraint, displacement, set_displacement if moves else None, load_scale,
+                            scene.solver.petsc, scene.solver.steps, scene.solver.max_cutbacks, linear_kind,
+                            near_nullspace=lambda: rigid_body_modes(model.V))
 
 
 def solve_static(scene: Scene, material=None, model: Model | None = None) -> StaticResult:
@@ -168,10 +196,14 @@ def solve_static(scene: Scene, material=None, model: Model | None = None) -> Sta
                                   message="converged: nothing to solve (no loads, no prescribed displacement): u = 0")
     else:
         rigid_motion.check_supports_hold_loads(model, r0)
-        report = continuation.solve(problem, scene.solver.petsc, steps=scene.solver.steps,
-                                    max_cutbacks=scene.solver.max_cutbacks, linear_kind=linear_kind,
-                                    near_nullspace=lambda: rigid_body_modes(model.V), stops=stops,
-                                    min_step=min_load_step(model))
+        if scene.solver.control == "arc-length":
+            report = follow_path(model, r0.norm(), linear_kind)
+        else:
+            report = continuation.solve(problem, scene.solver.petsc, steps=scene.solver.steps,
+                                        max_cutbacks=scene.solver.max_cutbacks, linear_kind=linear_kind,
+                                        near_nullspace=lambda: rigid_body_modes(model.V), stops=stops,
+                                        min_step=min_load_step(model) if model.solid.is_plastic else 0.0,
+                                        limit_step=min_load_step(model))
     r0.destroy()
     result = StaticResult(model, report)
     if report.converged:

@@ -5,6 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 import math
 
+from fem_forms import progress
+
 
 @dataclass
 class StepRecord:
@@ -31,6 +33,15 @@ class SolveReport:
     solve_time: float = 0.0
     message: str = ""
     load_scale: float = 0.0         # the residual of the starting state under the full load (tolerances' scale)
+    peak_load_factor: float | None = None   # arc length: the largest load factor on the path followed
+
+    def add_step(self, rec: StepRecord, why: str | None) -> None:
+        """Book a finished step: accepted when `why` (the reason to reject it) is None; progress reported."""
+        rec.accepted, rec.note = why is None, why or ""
+        self.steps.append(rec)
+        self.newton_iterations += rec.iterations
+        progress.report("step_accepted" if rec.accepted else "step_rejected", load=rec.load,
+                        iterations=rec.iterations, why=why or "")
 
     @property
     def load_steps(self) -> int:

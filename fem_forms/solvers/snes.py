@@ -274,6 +274,10 @@ class SNESDriver:
             u.x.array[:] = saved
         return self._load_scale
 
+    def use_load_scale(self, value: float) -> None:
+        """Measure convergence against `value` (a caller that knows the full load's scale: arc length)."""
+        self._load_scale = value
+
     def base_atol(self) -> float:
         """SNES's absolute tolerance: the user's snes_atol, else 1e-10 of the load scale once known
         (a close first guess must not be asked for 1e-9 of its own tiny residual)."""

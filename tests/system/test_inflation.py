@@ -125,3 +125,25 @@ def test_volume_control_on_two_ranks_gives_the_serial_answer(sphere_mesh, tmp_pa
         assert two["cavities"]["inside"][key] == pytest.approx(serial["cavities"]["inside"][key], rel=1e-8)
     assert np.allclose(two["probes"]["inner"]["displacement"], serial["probes"]["inner"]["displacement"],
                        rtol=1e-8, atol=1e-12)
+
+
+def test_arc_length_passes_the_stvk_compression_limit(tmp_path, capsys):
+    """A St. Venant-Kirchhoff block (nu = 0) crushed by a dead traction of 2E carries at most |P| = E / (3 sqrt 3)
+    (P = E (l^3 - l) / 2 is extremal at stretch l = 1/sqrt 3): arc length climbs to that load factor, 1 / (6 sqrt 3),
+    passes it with the load falling and the block compressed past l = 1/sqrt 3, and stops: a limit point."""
+    E = 1.0e6
+    d = {"title": "StVK limit", "analysis": "static", "mesh": {"size": [1.0, 1.0, 1.0], "cells": [2, 2, 2]},
+         "material": {"model": "stvk", "E": E, "nu": 0.0}, "discretization": {"degree": 1},
+         "fix": [{"where": {"axis": a, "at": 0.0}, "components": [a]} for a in "xyz"],
+         "load": [{"type": "traction", "where": {"axis": "x", "at": 1.0}, "value": [-2 * E, 0.0, 0.0]}],
+         "solver": {"steps": 20, "max_cutbacks": 8, "control": "arc-length"},
+         "output": {"picture": False, "fields": False, "probes": {"corner": [1.0, 1.0, 1.0]}}}
+    code, res, err, out = run_scene(tmp_path, d, capsys)
+    assert code == 3 and res["converged"] is False, err
+    assert res["message"].startswith("limit point")
+    assert res["peak_load_factor"] == pytest.approx(1 / (6 * np.sqrt(3)), rel=0.005)
+    accepted = [ln.split(",") for ln in (out / "newton_history.csv").read_text().splitlines()[1:]]
+    loads = [float(row[1]) for row in accepted if row[2] == "1"]
+    peak_at = int(np.argmax(loads))
+    assert peak_at < len(loads) - 1 and min(loads[peak_at:]) < 0.5 * max(loads)      # on, past the limit
+    assert res["load_reached"] < 0.5 * res["peak_load_factor"]

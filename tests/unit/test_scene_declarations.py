@@ -51,6 +51,7 @@ def sample(k: Key, tmp: Path):
 
 
 CROSS_KEY_NEEDS = {"material": {"E": 1e6, "nu": 0.3}}      # what the rules after the declarations ask
+CASE_NEEDS = {("load", "inflation"): {"pressure": 1e3}}      # one of pressure or volume (neither is required alone)
 
 
 def minimal_cases(section: Section, tmp: Path):
@@ -61,6 +62,7 @@ def minimal_cases(section: Section, tmp: Path):
         data = {k.name: sample(k, tmp) for k in keys if k.required} | CROSS_KEY_NEEDS.get(section.name, {})
         if case is not None:
             data[section.variants.key.name] = case
+            data |= CASE_NEEDS.get((section.name, case), {})
         yield data, keys
 
 

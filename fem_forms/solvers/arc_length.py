@@ -1,0 +1,127 @@
+"""Arc-length continuation on the one SNES driver: the load factor is solved with the displacement (a global
+scalar, bordered Newton) under the constraint of physics/path_constraint.py, so the path is followed through
+limit points, where the load factor turns back, and on. The first step is load-controlled (it sets the
+displacement scale); each later step goes a distance ds along the last step's direction, grown 1.5x after a
+success and halved after a failure. A step that would pass lambda = 1 is replaced by a load-controlled step
+onto 1 (the run's answer); a path that falls back to lambda <= 0, or runs out of steps or of step size, ends
+without it: a limit point whose largest load factor the report gives."""
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+from typing import Callable
+
+from fem_forms import progress
+from fem_forms.solvers import acceptance
+from fem_forms.solvers.reports import SolveReport
+from fem_forms.solvers.snes import NonlinearProblem, SNESDriver
+
+MAX_STEPS = 200          # steps (times solver.steps) before the run ends without reaching full load
+MAX_GROWTH = 2.0         # the arc length of a step at most this many times the first step's: a limit point
+                         # is sampled, not jumped (StVK's peak: 2 points on the rising branch with unbounded growth)
+
+
+class _Path:
+    """The accepted points: (u, lambda) now and the increment that led there."""
+
+    def __init__(self, u0, lam0: float = 0.0):
+        self.u, self.lam = u0.copy(), lam0
+        self.du, self.dlam = None, 0.0
+        self.points = [(0.0, lam0)]              # (arc length so far, lambda) of every accepted point
+
+    def advance(self, u, lam: float, ds: float) -> None:
+        self.du, self.dlam = u - self.u, lam - self.lam
+        self.u, self.lam = u.copy(), lam
+        self.points.append((self.points[-1][0] + ds, lam))
+
+    @property
+    def peak(self) -> float:
+        """The largest load factor on the path: the vertex of the parabola through the highest accepted point
+        and its neighbours when it lies between them (the steps sample the curve; the vertex is nearer the
+        true maximum), else the highest point."""
+        s, lam = np.array(self.points).T
+        i = int(np.argmax(lam))
+        if 0 < i < len(lam) - 1:
+            a, b, c = np.polyfit(s[i - 1: i + 2], lam[i - 1: i + 2], 2)
+            if a < 0 and s[i - 1] <= -b / (2 * a) <= s[i + 1]:
+                return float(c - b * b / (4 * a))
+        return float(lam[i])
+
+
+def solve(problem: NonlinearProblem, path_constraint, displacement: Callable, set_displacement: Callable | None,
+          load_scale: float, options: dict | None = None, steps: int = 1, max_cutbacks: int = 12,
+          linear_kind: str = "auto", near_nullspace=None, on_step: Callable | None = None) -> SolveReport:
+    """Follow the path from lambda = 0 to 1 (or as far as it goes). `path_constraint`: an ArcLength whose scalar
+    is in problem.scalars; `displacement()` the displacement's local array, `set_displacement(a)` sets it (None:
+    the predictor moves only lambda); `load_scale` the full load's residual at rest (N). `on_step(lam)` is
+    called after each accepted step."""
+    t0 = time.perf_counter()
+    drv = SNESDriver(problem, options, linear_kind, "fem_forms_arc_", near_nullspace)
+    drv.use_load_scale(load_scale)
+    pc, state, lam_const = path_constraint, problem.state, path_constraint.scalar.value
+    state.commit()
+    path = _Path(displacement(), 0.0)
+    report = SolveReport(False, 0.0, 0, math.nan, linear_solver=drv.linear_kind, load_scale=load_scale)
+    ds, ds_first, cuts, final = 1.0 / steps, None, 0, False
+    while len(report.steps) < MAX_STEPS * max(steps, 1):
+        if path.du is None or final:
+            pc.load_control(path.lam, (1.0 - path.lam) if final else ds)
+        else:
+            pc.along(path.u, path.lam, path.du, path.dlam, ds)
+        u_pred, lam_pred = pc.predictor()
+        lam_const.value = lam_pred
+        if set_displacement is not None and path.du is not None and not final:
+            set_displacement(u_pred)
+        drv.load_factor = lam_pred
+        progress.report("load_step", load=lam_pred, step=len(report.steps) + 1)
+        rec = drv.solve_step()
+        lam = float(lam_const.value)
+        rec.load = lam
+        why = acceptance.why_rejected(drv, rec, load_scale=load_scale)
+        if why is None and lam > 1.0 + 1e-9 and not final:
+            why = "passes full load: a load-controlled step onto it instead"
+            final = True
+        report.add_step(rec, why)
+        if not rec.accepted:
+            state.rollback()
+            drv.rebuild()
+            if not rec.note.startswith("passes"):
+                cuts, ds, final = cuts + 1, 0.5 * ds, False    # a failed step onto full load: walk on, shorter
+            if cuts > max_cutbacks:
+                report.message = _ended(report, path, "the step could not be made smaller", ds)
+                break
+            continue
+        report.residual_norm = rec.checked_residual
+        path.advance(displacement(), lam, ds if path.du is not None else 0.0)
+        state.commit()
+        report.load_reached = lam
+        if on_step is not None:
+            on_step(lam)
+        if ds_first is None:
+            ds_first = ds = pc.first_step_done(path.du, path.dlam)
+            path.points[-1] = (ds, lam)
+        cuts = 0
+        ds = min(ds * (1.5 if rec.iterations <= 5 else 1.0), MAX_GROWTH * ds_first)
+        if final or abs(lam - 1.0) < 1e-12:
+            report.converged, report.message = True, "converged"
+            break
+        if lam <= 0.0 < path.peak:
+            report.message = _ended(report, path, "the load factor fell back to 0", ds)
+            break
+    else:
+        report.message = _ended(report, path, f"{len(report.steps)} steps taken", ds)
+    report.peak_load_factor = path.peak
+    report.assembly_time = drv.assembly_time
+    report.solve_time = time.perf_counter() - t0 - report.assembly_time
+    drv.destroy()
+    progress.report("solve_done", converged=report.converged)
+    return report
+
+
+def _ended(report: SolveReport, path: _Path, why: str, ds: float) -> str:
+    """The message of an arc-length run that did not reach full load."""
+    return (f"limit point: the load factor peaked at {path.peak:.6g} and full load lies beyond the path "
+            f"followed ({why}; load factor {path.lam:.6g} at the last of {len([s for s in report.steps if s.accepted])} "
+            f"accepted steps)")
