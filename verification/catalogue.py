@@ -11,6 +11,7 @@ from time_histories import (cantilever_tip_static, damped_fit, first_mode_share,
                             rayleigh_decay_per_cycle, rayleigh_zeta)
 import targets
 from targets import uniaxial_neo_hookean, hydrostatic_neo_hookean, cantilever_gravity_sag, cantilever_frequency, bar_conduction, thick_sphere_outer_displacement
+from targets import ogden_sphere_maximum, ogden_sphere_pressure
 
 
 class NotAvailable(Exception):
@@ -44,6 +45,19 @@ class Case:
     reference: str | None = None                     # script in verification/reference/ printing JSON
     notes: str = ""
     side_check: str | None = None                    # script whose output is reported, not compared
+
+
+MU_SPHERE = 3.0 / (2 * 1.499)          # E = 3, nu = 0.499 in the inflated sphere cases
+OGDEN = ("closed form for the incompressible neo-Hookean thick sphere (Ogden, Non-linear Elastic Deformations, "
+         "1984, section 5.2.6)")
+
+
+def cavity_stretch(res: dict) -> float:
+    """The inner hoop stretch l_a = (V / V0)^(1/3) from results.json cavities.inside."""
+    cav = (res.get("cavities") or {}).get("inside")
+    if cav is None:
+        raise NotAvailable("results.json has no cavities.inside")
+    return (cav["volume"] / (cav["volume"] - cav["volume_change"])) ** (1 / 3)
 
 
 def probe(name: str, key: str, *index):
@@ -172,6 +186,33 @@ CASES = [
          exit_status=3,
          notes="Asks for 2 E: the run must fail (exit 3, `converged` false) and report the load reached by "
                "its cut-backs (8 halvings: the limit is bracketed from below within a few %)."),
+    Case("stvk_limit_arc_length", "StVK compression limit passed by arc length",
+         "closed form as stvk_limit_load", "stvk_limit_arc_length.toml",
+         [Row("largest load on the path |P|", E_BLOCK / (3 * math.sqrt(3)),
+              lambda r, ref: float(r["peak_load_factor"]) * 2 * E_BLOCK, 0.005, "Pa")],
+         exit_status=3,
+         notes="control = \"arc-length\": the load factor is solved with the displacement and falls after the "
+               "limit; the path ends at load factor 0 (exit 3) with peak_load_factor."),
+    Case("inflated_sphere", "Thick neo-Hookean sphere b/a = 2 inflated to 0.6 mu (pressure control)", OGDEN,
+         "inflated_sphere.toml",
+         [Row("pressure at the stretch the cavity volume gives", lambda r: ogden_sphere_pressure(cavity_stretch(r), MU_SPHERE),
+              lambda r, ref: float(r["cavities"]["inside"]["pressure"]), 0.01, "Pa")],
+         fast=False, mesh=("thick_sphere", {"h": 0.3}),
+         notes="The cavity's pressure as an energy -p (V - V0) with V = -1/3 int x . n da over the inner wall (the "
+               "symmetry planes close it). nu = 0.499 (mixed P2/P1) stands in for incompressibility."),
+    Case("inflated_sphere_limit", "Thick neo-Hookean sphere asked for 1.0 mu: the pressure maximum 0.8164 mu",
+         OGDEN, "inflated_sphere_limit.toml",
+         [Row("largest pressure carried", ogden_sphere_maximum(MU_SPHERE),
+              lambda r, ref: float(r["load_reached"]) * 1.0007, 0.02, "Pa")],
+         fast=False, exit_status=3, mesh=("thick_sphere", {"h": 0.3}),
+         notes="Pressure control cannot pass the maximum: the run stops with \"limit point\" (exit 3); the flat "
+               "facets of the coarse mesh make it 0.7 % stiffer."),
+    Case("inflated_sphere_volume", "Thick neo-Hookean sphere past its maximum by volume control (l_a = 2.3)",
+         OGDEN, "inflated_sphere_volume.toml",
+         [Row("pressure on the falling branch", lambda r: ogden_sphere_pressure(cavity_stretch(r), MU_SPHERE),
+              lambda r, ref: float(r["cavities"]["inside"]["pressure"]), 0.02, "Pa")],
+         fast=False, mesh=("thick_sphere", {"h": 0.3}),
+         notes="volume = 5.7 m^3 added: the pressure is a Lagrange multiplier solved with the displacement."),
     Case("thick_sphere_yield", "Thick sphere b/a = 2, perfectly plastic, P = 250 MPa (front c = 1.33 a)", HILL,
          "thick_sphere_yield.toml",
          [Row("outer displacement u(b)", thick_sphere_outer_displacement(250e6),

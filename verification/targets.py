@@ -96,3 +96,17 @@ def floating_cylinder(R: float, H: float, T: float) -> dict:
     """Vertical cylinder (uniform, KG = H/2) floating at draught T: V = pi R^2 T, KB = T/2,
     BM = I / V = (pi R^4 / 4) / V = R^2 / (4 T), GM = KB + BM - KG (Rawson & Tupper, Basic Ship Theory)."""
     return {"volume": math.pi * R * R * T, "KB": T / 2, "GM": T / 2 + R * R / (4 * T) - H / 2}
+
+
+def ogden_sphere_pressure(stretch: float, mu: float, ratio: float = 2.0) -> float:
+    """Internal pressure of the incompressible neo-Hookean thick sphere (outer / inner radius `ratio`) at inner hoop
+    stretch `stretch` (Ogden, Non-linear Elastic Deformations, 1984, 5.2.6):
+    p / mu = (2 / l_b + 1 / (2 l_b^4)) - (2 / l_a + 1 / (2 l_a^4)), l_b^3 = 1 + (l_a^3 - 1) / ratio^3."""
+    outer = (1 + (stretch**3 - 1) / ratio**3) ** (1 / 3)
+    return mu * ((2 / outer + 1 / (2 * outer**4)) - (2 / stretch + 1 / (2 * stretch**4)))
+
+
+def ogden_sphere_maximum(mu: float, ratio: float = 2.0) -> float:
+    """The largest pressure the sphere carries (0.8164 mu for ratio 2)."""
+    from scipy.optimize import minimize_scalar
+    return float(-minimize_scalar(lambda s: -ogden_sphere_pressure(s, mu, ratio), bounds=(1, 5), method="bounded").fun)
