@@ -14,7 +14,7 @@ from fem_forms.analyses.modal import ModalResult, solve_modal, write_modal_outpu
 from fem_forms.analyses.static import write_static_outputs
 from fem_forms.equilibrium import StaticResult, solve_static
 from fem_forms.errors import InputError, SolveError
-from fem_forms.logs import quiet_jit
+from fem_forms.logs import patient_jit, quiet_jit
 from fem_forms.materials import (Corotated, LinearElastic, MooneyRivlin, NeoHookean, StVenantKirchhoff,
                                  UserMaterial)
 from fem_forms.materials.hyperelastic import make_material
@@ -29,3 +29,4 @@ __all__ = ["quiet_jit", "show_progress", "InputError", "SolveError", "Scene", "L
 __version__ = "0.1.0"
 
 quiet_jit()
+patient_jit()

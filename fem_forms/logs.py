@@ -34,3 +34,17 @@ def quiet_jit(verbose: bool = False) -> None:
         root.removeFilter(_FILTER)
     else:
         root.addFilter(_FILTER)          # a no-op if already there
+
+
+# How long FFCx waits for a form another process is compiling into the same cache before it gives up with
+# TimeoutError. dolfinx's default, 10 s, is shorter than the largest forms take to compile here (25-35 s cold
+# for a Q2 hexahedron at quadrature degree 8 on 2 shared cores): two runs sharing a cold cache (two scenes
+# started together, the test suite on two workers) would fail on the first such form.
+JIT_WAIT_S = 900
+
+
+def patient_jit(seconds: int = JIT_WAIT_S) -> None:
+    """Wait up to `seconds` for a form another process is compiling (``import fem_forms`` sets it)."""
+    import dolfinx.jit
+    doc = dolfinx.jit.DOLFINX_DEFAULT_JIT_PARAMETERS["timeout"][1]
+    dolfinx.jit.DOLFINX_DEFAULT_JIT_PARAMETERS["timeout"] = (int(seconds), doc)

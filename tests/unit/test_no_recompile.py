@@ -172,3 +172,42 @@ def test_new_thermal_values_compile_nothing(compilations):
     assert a.report.converged and b.report.converged, (a.report.message, b.report.message)
     assert not np.allclose(a.probes["tip"], b.probes["tip"])
     assert ha.probe_rows[-1][1] != hb.probe_rows[-1][1]
+
+
+def test_a_run_waits_for_a_form_another_process_is_compiling(tmp_path):
+    """Two processes sharing a cold JIT cache: the second waits for the first's compile instead of failing after
+    dolfinx's 10 s (the largest forms here take 25-35 s). A stand-in compile holds the cache entry for 12 s."""
+    import subprocess
+    import sys
+    import textwrap
+    import dolfinx.jit
+    assert dolfinx.jit.DOLFINX_DEFAULT_JIT_PARAMETERS["timeout"][0] >= 600
+    script = textwrap.dedent(f"""
+        import sys, threading, time
+        sys.path.insert(0, {str(ROOT)!r})
+        import fem_forms, dolfinx.jit, ffcx.codegeneration.jit as fj
+        from dolfinx import fem, mesh
+        from mpi4py import MPI
+        import ufl
+        dolfinx.jit.DOLFINX_DEFAULT_JIT_PARAMETERS["cache_dir"] = ({str(tmp_path / 'jit')!r}, "")
+        slow = sys.argv[1] == "slow"
+        original = fj._compile_objects
+        def compile_slowly(*a, **k):
+            time.sleep(12 if slow else 0)
+            return original(*a, **k)
+        fj._compile_objects = compile_slowly
+        if not slow:
+            time.sleep(3)
+        m = mesh.create_unit_cube(MPI.COMM_SELF, 1, 1, 1)
+        V = fem.FunctionSpace(m, ("Lagrange", 1))
+        u = fem.Function(V)
+        fem.form(u * u * ufl.dx)
+        print("ok")
+    """)
+    path = tmp_path / "jit_twice.py"
+    path.write_text(script)
+    procs = [subprocess.Popen([sys.executable, str(path), kind], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                              text=True) for kind in ("slow", "fast")]
+    for p in procs:
+        out, err = p.communicate(timeout=120)
+        assert p.returncode == 0 and out.strip() == "ok", err[-2000:]
