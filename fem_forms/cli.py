@@ -19,6 +19,7 @@ from mpi4py import MPI
 from fem_forms.analyses import run_analysis
 from fem_forms.errors import InputError, SolveError
 from fem_forms.logs import quiet_jit
+from fem_forms.output.interrupts import Terminated
 from fem_forms.output.progress_line import show_progress
 from fem_forms.output.results import forget_results
 from fem_forms.scene import Scene, parse_assignment
@@ -137,18 +138,13 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt as e:
         if reporter:
             reporter.close()
-        if rank == 0:
+        if rank == 0 and not getattr(e, "announced", False):     # under MPI a handler may have said it
             print("fem-forms: interrupted", file=sys.stderr, flush=True)
         return getattr(e, "exit_status", 130)
     finally:
         show_progress(False)
         for signum, handler in previous.items():
             signal.signal(signum, handler)
-
-
-class Terminated(KeyboardInterrupt):
-    """SIGTERM (e.g. from mpirun, a batch system or `kill`), handled like Ctrl-C with its own status."""
-    exit_status = 143
 
 
 def _raise_terminated(signum, frame) -> None:
