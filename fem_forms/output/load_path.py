@@ -172,6 +172,6 @@ class LoadPath:
                               for n, v in last["probes"].items()},
                    **({"records": last["records"]} if last["records"] else {}),
                    "message": f"interrupted: load factor {last['load_factor']:.6g} reached in {last['steps']} "
-                              "accepted load steps; the files hold that state",
+                              f"accepted load step{'' if last['steps'] == 1 else 's'}; the files hold that state",
                    "files": last["files"] if self.stepping else {}}
         results.write_json_atomic(self.out / "results.json", summary, MPI.COMM_SELF)
