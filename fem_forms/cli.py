@@ -1,8 +1,10 @@
 """Command line: `fem-forms run SCENE.toml [--out DIR] [-q] [-snes_monitor ...]`, `fem-forms study SCENE.toml`,
 `fem-forms schema [--out FILE]`.
 
-Exit status: 0 solved, 2 bad input (one line on stderr naming the key), 3 no convergence, 130 interrupted
-(Ctrl-C), 143 terminated (SIGTERM); an interrupt prints one line, "fem-forms: interrupted", no traceback.
+Exit status: 0 solved, 2 bad input (one line on stderr naming the key), 3 no convergence (a static limit
+point included), 130 interrupted (Ctrl-C), 143 terminated (SIGTERM); an interrupt prints one line,
+"fem-forms: interrupted", no traceback, and a static run leaves its last accepted load step and a results.json
+with "interrupted": true (output/interrupts.py, also under mpirun).
 Progress (load step, Newton iteration, residual, elapsed time) goes to stderr on rank 0 unless --quiet.
 Results: results.json is written last and atomically, and a run removes an old results.json from its
 output folder before it solves, so after an interrupted or failed rerun no results.json from an earlier
@@ -53,7 +55,8 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("scene", help="scene file (TOML)")
     run.add_argument("--out", help="output folder (created; default out/<scene file stem>/ in the current folder)")
     run.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                     help="override a scene key, e.g. --set mesh.cells=[8,1,1] (TOML value)")
+                     help="override a scene key, e.g. --set mesh.cells=[8,1,1] or --set load.0.value=[0,0,-5] "
+                          "(TOML value; an integer part indexes an array)")
     run.add_argument("--no-adapt", action="store_true",
                      help="solve the discretization as given, ignoring [discretization] tolerance")
     run.add_argument("--restart", metavar="DIR", help="continue the stopped dynamic run in DIR from its checkpoint")

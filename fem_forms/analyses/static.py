@@ -35,15 +35,17 @@ def limit_point(result: StaticResult) -> bool:
 def write_static_outputs(result: StaticResult, out: "Path", path: LoadPath | None = None) -> dict:
     """Fields (XDMF), picture (PNG), Newton history (CSV), then results.json last and atomically. With the
     load path of a stepped run (`path`), its files and load_path.png; at a limit point, the last accepted
-    state's outputs (its answer numbers must already be in `result`: see `run`)."""
+    state's answer numbers and outputs."""
     out = Path(out)
     comm = result.model.mesh.comm
     if comm.rank == 0:
         out.mkdir(parents=True, exist_ok=True)
     comm.barrier()
+    limit = limit_point(result)
+    if limit and result.quantities is None:
+        last_accepted_state(result)
     summary = result.summary()
     files = {}
-    limit = limit_point(result)
     if limit:
         summary["message"] = "limit point: " + result.report.message[len(GAVE_UP):]
     if plastic_term(result.model) is not None and not result.report.converged:
@@ -98,11 +100,8 @@ def last_accepted_state(result: StaticResult) -> None:
 def solve_and_write(scene: Scene, out: Path) -> dict:
     """Solve with the load path written step by step, then the outputs; an interrupt anywhere leaves the
     last accepted state and an interrupted results.json, then propagates (exit 130 / 143)."""
-    comm = MPI.COMM_WORLD
-    if comm.rank == 0:
-        out.mkdir(parents=True, exist_ok=True)
-    comm.barrier()
-    path = LoadPath(scene, out, comm)
+    comm = MPI.COMM_WORLD                             # the folder is made when there is something to write:
+    path = LoadPath(scene, out, comm)                 # bad input found while building leaves nothing
     with Interrupts(comm, path.write_interrupted) as interrupts:
         try:
             model = build_model(scene)
@@ -110,8 +109,6 @@ def solve_and_write(scene: Scene, out: Path) -> dict:
             result = solve_static(scene, model=model, on_step=path)
             interrupts.check()
             with interrupts.critical():
-                if limit_point(result):
-                    last_accepted_state(result)
                 summary = write_static_outputs(result, out, path)
             interrupts.check()
         except KeyboardInterrupt:

@@ -79,7 +79,11 @@ class LoadPath:
             self.record_names = list(recorded)
         self.rows.append([lam, lam * self.span] + [x for n in model.probes.names for x in values[n]]
                          + [recorded.get(k, math.nan) for k in self.record_names])
-        self.stepping = self.stepping or lam < 1.0 - 1e-12
+        if not self.stepping and lam < 1.0 - 1e-12:  # the first of several steps: the folder is needed now
+            self.stepping = True
+            if self.comm.rank == 0:
+                self.out.mkdir(parents=True, exist_ok=True)
+            self.comm.barrier()
         if self.stepping:
             self._write_fields(lam * self.span)
             probes.write_table(self.out / "probes.csv", self.head(), self.rows, self.comm)
