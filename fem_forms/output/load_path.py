@@ -153,7 +153,7 @@ class LoadPath:
             ax = axes[1 + k, 0]
             ax.plot(rows[:, 0], rows[:, first + k], "o-", ms=3)
             ax.set_ylabel(name.replace("_", " "))
-        axes[-1, 0].set_xlabel("load factor")
+        axes[-1, 0].set_xlabel("load factor" + (f" (time = {self.span:g} x load factor)" if self.span != 1.0 else ""))
         fig.suptitle(f"{self.scene.title}: load path")
         fig.tight_layout()
         fig.savefig(path, dpi=100)
