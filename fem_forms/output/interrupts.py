@@ -70,7 +70,10 @@ class Interrupts:
         if not first or (self.comm.size == 1 and not self._critical):
             raise interrupt(self.signum)
         if self.comm.size > 1 and self.comm.rank == 0:
-            self.save()
+            try:
+                self.save()
+            except Exception:        # noqa: BLE001 (raised here it would strand the other ranks; the run
+                pass                 # writes it again when every rank stops at the next check)
             clear_line()
             print("fem-forms: interrupted", file=sys.stderr, flush=True)
             self.announced = True
