@@ -1,8 +1,10 @@
 """Command line: `fem-forms run SCENE.toml [--out DIR] [-q] [-snes_monitor ...]`, `fem-forms study SCENE.toml`,
 `fem-forms schema [--out FILE]`.
 
-Exit status: 0 solved, 2 bad input (one line on stderr naming the key), 3 no convergence, 130 interrupted
-(Ctrl-C), 143 terminated (SIGTERM); an interrupt prints one line, "fem-forms: interrupted", no traceback.
+Exit status: 0 solved, 2 bad input (one line on stderr naming the key), 3 no convergence (a static limit
+point included), 130 interrupted (Ctrl-C), 143 terminated (SIGTERM); an interrupt prints one line,
+"fem-forms: interrupted", no traceback, and a static run leaves its last accepted load step and a results.json
+with "interrupted": true (output/interrupts.py, also under mpirun).
 Progress (load step, Newton iteration, residual, elapsed time) goes to stderr on rank 0 unless --quiet.
 Results: results.json is written last and atomically, and a run removes an old results.json from its
 output folder before it solves, so after an interrupted or failed rerun no results.json from an earlier
@@ -19,6 +21,7 @@ from mpi4py import MPI
 from fem_forms.analyses import run_analysis
 from fem_forms.errors import InputError, SolveError
 from fem_forms.logs import quiet_jit
+from fem_forms.output.interrupts import Terminated
 from fem_forms.output.progress_line import show_progress
 from fem_forms.output.results import forget_results
 from fem_forms.scene import Scene, parse_assignment
@@ -52,7 +55,8 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("scene", help="scene file (TOML)")
     run.add_argument("--out", help="output folder (created; default out/<scene file stem>/ in the current folder)")
     run.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                     help="override a scene key, e.g. --set mesh.cells=[8,1,1] (TOML value)")
+                     help="override a scene key, e.g. --set mesh.cells=[8,1,1] or --set load.0.value=[0,0,-5] "
+                          "(TOML value; an integer part indexes an array)")
     run.add_argument("--no-adapt", action="store_true",
                      help="solve the discretization as given, ignoring [discretization] tolerance")
     run.add_argument("--restart", metavar="DIR", help="continue the stopped dynamic run in DIR from its checkpoint")
@@ -137,18 +141,13 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt as e:
         if reporter:
             reporter.close()
-        if rank == 0:
+        if rank == 0 and not getattr(e, "announced", False):     # under MPI a handler may have said it
             print("fem-forms: interrupted", file=sys.stderr, flush=True)
         return getattr(e, "exit_status", 130)
     finally:
         show_progress(False)
         for signum, handler in previous.items():
             signal.signal(signum, handler)
-
-
-class Terminated(KeyboardInterrupt):
-    """SIGTERM (e.g. from mpirun, a batch system or `kill`), handled like Ctrl-C with its own status."""
-    exit_status = 143
 
 
 def _raise_terminated(signum, frame) -> None:

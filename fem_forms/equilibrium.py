@@ -4,6 +4,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 import resource
 import time
+from typing import Callable
 
 from dolfinx import fem
 from mpi4py import MPI
@@ -153,7 +154,8 @@ def min_load_step(model: Model) -> float:
     return 1.0 / solver.steps / 2**solver.max_cutbacks
 
 
-def follow_path(model: Model, load_scale: float, linear_kind: str) -> snes.SolveReport:
+def follow_path(model: Model, load_scale: float, linear_kind: str,
+                on_step: Callable[[float], None]) -> snes.SolveReport:
     """Arc-length continuation of the model's loads (solver.control = "arc-length"): the load factor solved
     with the displacement, limit points passed. Loads must scale with one factor: no histories, no prescribed
     displacement (InputError)."""
@@ -175,12 +177,22 @@ def follow_path(model: Model, load_scale: float, linear_kind: str) -> snes.Solve
         model.u.x.array[:] = a
     return arc_length.solve(problem, constraint, displacement, set_displacement if moves else None, load_scale,
                             scene.solver.petsc, scene.solver.steps, scene.solver.max_cutbacks, linear_kind,
-                            near_nullspace=lambda: rigid_body_modes(model.V))
+                            near_nullspace=lambda: rigid_body_modes(model.V), on_step=on_step)
 
 
-def solve_static(scene: Scene, material=None, model: Model | None = None) -> StaticResult:
+def load_span(model: Model) -> float:
+    """The pseudo-time at load factor 1: the span of the [[load]] histories (time = lambda x span, as
+    `load_path` moves the loads), 1 without any history (time = the load factor)."""
+    timed = [t for t in model.loads if t.history]
+    return max(t.history[-1][0] for t in timed) if timed else 1.0
+
+
+def solve_static(scene: Scene, material=None, model: Model | None = None,
+                 on_step: Callable[[float], None] | None = None) -> StaticResult:
     """Solve the scene's equilibrium. `material` may be a Material or a user's psi(F) function.
-    Raises InputError for bad input; a failed solve is returned with report.converged False."""
+    `on_step(lam)` is called after each accepted load step (the state committed): the static analysis
+    writes its load path there. Raises InputError for bad input; a failed solve is returned with
+    report.converged False and no answer numbers (see `post_process` for the last accepted state)."""
     t0 = time.perf_counter()
     model = model or build_model(scene, material)
     model.probes                                           # located now: a probe outside the mesh is bad input
@@ -197,30 +209,37 @@ def solve_static(scene: Scene, material=None, model: Model | None = None) -> Sta
     else:
         rigid_motion.check_supports_hold_loads(model, r0)
         if scene.solver.control == "arc-length":
-            report = follow_path(model, r0.norm(), linear_kind)
+            report = follow_path(model, r0.norm(), linear_kind, on_step or (lambda lam: None))
         else:
             report = continuation.solve(problem, scene.solver.petsc, steps=scene.solver.steps,
                                         max_cutbacks=scene.solver.max_cutbacks, linear_kind=linear_kind,
                                         near_nullspace=lambda: rigid_body_modes(model.V), stops=stops,
                                         min_step=min_load_step(model) if model.solid.is_plastic else 0.0,
-                                        limit_step=min_load_step(model))
+                                        limit_step=min_load_step(model), on_step=on_step or (lambda lam: None))
     r0.destroy()
     result = StaticResult(model, report)
     if report.converged:
-        model.sync_displacement()
-        if model.energy is not None and model.solid.energy(model.context) is not None:   # von Mises: none
-            result.energy = model.mesh.comm.allreduce(fem.assemble_scalar(model.compiled("energy")), op=MPI.SUM) \
-                + sum(t.energy_value(model.unknown.vector) for t in model.terms.arrays)
-        result.max_displacement = max_norm(model.u)
-        result.cavities = cavity_report(model.terms)
-        result.probes = model.probes.evaluate(model.u)
-        result.quantities = Quantities(model)
-        result.probe_stresses = attempt(model.warnings, "stress recovery at the probes",
-                                        lambda: result.quantities.at_probes(model.probes), {})
-        result.reactions = attempt(model.warnings, "reactions", lambda: reaction_report(model, noise=report.residual_norm), {})
-        if model.temperature is not None:
-            for name, value in model.probes.evaluate(model.temperature).items():
-                result.probe_stresses.setdefault(name, {})["temperature"] = value[0]
+        post_process(result)
     result.wall_time_s = time.perf_counter() - t0
     return result
 
+
+def post_process(result: StaticResult) -> None:
+    """The answer numbers of the model's current state (energy, largest displacement, probes, recovered
+    stresses, reactions) into `result`. A solve that converged calls it at full load; the static analysis
+    calls it for a continuation stopped at a limit point, its loads set back to the last accepted factor."""
+    model, report = result.model, result.report
+    model.sync_displacement()
+    if model.energy is not None and model.solid.energy(model.context) is not None:   # von Mises: none
+        result.energy = model.mesh.comm.allreduce(fem.assemble_scalar(model.compiled("energy")), op=MPI.SUM) \
+            + sum(t.energy_value(model.unknown.vector) for t in model.terms.arrays)
+    result.max_displacement = max_norm(model.u)
+    result.cavities = cavity_report(model.terms)
+    result.probes = model.probes.evaluate(model.u)
+    result.quantities = Quantities(model)
+    result.probe_stresses = attempt(model.warnings, "stress recovery at the probes",
+                                    lambda: result.quantities.at_probes(model.probes), {})
+    result.reactions = attempt(model.warnings, "reactions", lambda: reaction_report(model, noise=report.residual_norm), {})
+    if model.temperature is not None:
+        for name, value in model.probes.evaluate(model.temperature).items():
+            result.probe_stresses.setdefault(name, {})["temperature"] = value[0]

@@ -1,4 +1,10 @@
-"""Static analysis: equilibrium under the scene's loads, then fields, picture and results.json."""
+"""Static analysis: equilibrium under the scene's loads, then fields, pictures and results.json.
+
+A run with more than one load step writes its load path as it goes (output/load_path.py: probes.csv and
+fields.xdmf at every accepted step, then load_path.png). A continuation that stops because its cut-backs
+reached their floor has found a limit point: exit 3, with the last accepted state written and reported
+(results.json "limit point: ..."). An interrupt (Ctrl-C, SIGTERM) leaves the last accepted state too, and
+results.json with "interrupted": true (output/interrupts.py says how, also under MPI)."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -6,32 +12,53 @@ import sys
 
 from mpi4py import MPI
 
-from fem_forms.equilibrium import StaticResult, solve_static
+from fem_forms.equilibrium import StaticResult, load_path, load_span, post_process, solve_static
 from fem_forms.errors import SolveError
-from fem_forms.output import fields, pictures, results
+from fem_forms.model import build_model
+from fem_forms.output import pictures, results
 from fem_forms.output.guard import attempt
-from fem_forms.output.plastic import plastic_fields, plastic_summary, plastic_term
-from fem_forms.output.quantities import output_fields
+from fem_forms.output.interrupts import Interrupts
+from fem_forms.output.load_path import LoadPath, field_functions
+from fem_forms.output.plastic import plastic_summary, plastic_term
+from fem_forms.output import fields
 from fem_forms.scene import Scene
 
+GAVE_UP = "no convergence: "        # how continuation._gave_up starts the message of a continuation that stopped
+LIMIT = "limit point: "             # ... or, once the path had flattened (and arc length's end), this
 
-def write_static_outputs(result: StaticResult, out: "Path") -> dict:
-    """Fields (XDMF), picture (PNG), Newton history (CSV), then results.json last and atomically."""
 
+def limit_point(result: StaticResult) -> bool:
+    """The continuation stopped past an accepted step because its cut-backs reached their floor (or an arc-
+    length path ended short of full load)."""
+    r = result.report
+    return not r.converged and r.load_reached > 0 and r.message.startswith((GAVE_UP, LIMIT))
+
+
+def write_static_outputs(result: StaticResult, out: "Path", path: LoadPath | None = None) -> dict:
+    """Fields (XDMF), picture (PNG), Newton history (CSV), then results.json last and atomically. With the
+    load path of a stepped run (`path`), its files and load_path.png; at a limit point, the last accepted
+    state's answer numbers and outputs."""
     out = Path(out)
     comm = result.model.mesh.comm
     if comm.rank == 0:
         out.mkdir(parents=True, exist_ok=True)
     comm.barrier()
+    limit = limit_point(result)
+    if limit and result.quantities is None:
+        last_accepted_state(result)
     summary = result.summary()
     files = {}
-    plastic = plastic_term(result.model) is not None
-    if plastic and not result.report.converged:
+    if limit and result.report.message.startswith(GAVE_UP):
+        summary["message"] = LIMIT + result.report.message[len(GAVE_UP):]
+    if plastic_term(result.model) is not None and not result.report.converged:
         summary["collapse"] = {"load_factor": result.report.load_reached}
-    if result.report.converged:
+    stepped = path is not None and path.stepping
+    if result.report.converged or limit:
         scene, warnings = result.model.scene, summary["warnings"]
         summary.update(attempt(warnings, "plastic summary", lambda: plastic_summary(result.model), {}))
-        if scene.output.fields:
+        if stepped:
+            files.update(path.files)                  # fields.xdmf holds every accepted step already
+        elif scene.output.fields:
             if attempt(warnings, "fields.xdmf", lambda: _write_fields(result, out, scene.output.fields)):
                 files["fields"] = "fields.xdmf"
             elif attempt(warnings, "fields.xdmf (displacement only)",
@@ -46,30 +73,59 @@ def write_static_outputs(result: StaticResult, out: "Path") -> dict:
                                             lambda: pictures.picture(out / "deformed.png", result.u, scene.title,
                                                                      up=pictures.scene_up(scene)) or True):
             files["picture"] = "deformed.png"
+    if stepped:
+        files.update(path.finish(summary))
     results.write_newton_history(out / "newton_history.csv", result.report.steps, comm)
     files["newton_history"] = "newton_history.csv"
     summary["files"] = files
+    if path is not None:
+        path.finished = True                          # from here an interrupt leaves this results.json
     results.write_json_atomic(out / "results.json", summary, comm)
     return summary
 
 
 def _write_fields(result: StaticResult, out: Path, names: list) -> bool:
     """fields.xdmf with the asked-for fields (the plastic ones and the temperature too, if any)."""
-    written = output_fields(result.quantities, names) + plastic_fields(result.model)
-    if result.model.temperature is not None:
-        written.append(fields.p1_interpolant(result.model.temperature, "temperature"))
-    fields.write_fields(out / "fields.xdmf", result.model.mesh, written)
+    fields.write_fields(out / "fields.xdmf", result.model.mesh, field_functions(result.model, result.quantities,
+                                                                               names))
     return True
 
 
+def last_accepted_state(result: StaticResult) -> None:
+    """A limit point's answer numbers: the loads set back to the last accepted factor (the continuation
+    left them at the step that failed; the state was rolled back), then the usual post-processing."""
+    set_load, _ = load_path(result.model)
+    set_load(result.report.load_reached)
+    post_process(result)
+
+
+def solve_and_write(scene: Scene, out: Path) -> dict:
+    """Solve with the load path written step by step, then the outputs; an interrupt anywhere leaves the
+    last accepted state and an interrupted results.json, then propagates (exit 130 / 143)."""
+    comm = MPI.COMM_WORLD                             # the folder is made when there is something to write:
+    path = LoadPath(scene, out, comm)                 # bad input found while building leaves nothing
+    with Interrupts(comm, path.write_interrupted) as interrupts:
+        try:
+            model = build_model(scene)
+            path.attach(model, load_span(model), interrupts)
+            result = solve_static(scene, model=model, on_step=path)
+            interrupts.check()
+            with interrupts.critical():
+                summary = write_static_outputs(result, out, path)
+            interrupts.check()
+        except KeyboardInterrupt:
+            path.write_interrupted()
+            raise
+    return summary
+
+
 def run(scene: Scene, out, echo: bool = False) -> dict:
-    """CLI entry: solve, write outputs, print a summary; SolveError if not converged."""
-    result = solve_static(scene)
-    summary = write_static_outputs(result, out)
-    if echo and result.model.mesh.comm.rank == 0:
+    """CLI entry: solve, write outputs, print a summary; SolveError (exit 3) if not converged."""
+    summary = solve_and_write(scene, Path(out))
+    if echo and MPI.COMM_WORLD.rank == 0:
         for w in summary["warnings"]:
             print(f"fem-forms: warning: {w}", file=sys.stderr)
-    if echo and result.model.mesh.comm.rank == 0 and summary["converged"]:
+    if echo and MPI.COMM_WORLD.rank == 0 and summary["converged"]:
         print(f"{scene.title}: {summary['dofs']} dofs, {summary['newton_iterations']} Newton iterations "
               f"in {summary['load_steps']} load steps, max |u| = {summary['max_displacement']:.6g} m, "
               f"{summary['wall_time_s']:.2f} s -> {out}")
@@ -79,6 +135,6 @@ def run(scene: Scene, out, echo: bool = False) -> dict:
         raise SolveError(f"{scene.title}: plastic collapse: no equilibrium beyond load factor "
                          f"{summary['collapse']['load_factor']:.6g} ({summary['message']})")
     if not summary["converged"]:
-        raise SolveError(f"{scene.title}: did not converge: {summary['message']}")
+        raise SolveError(f"{scene.title}: " + (summary["message"] if summary["message"].startswith("limit point")
+                                               else f"did not converge: {summary['message']}"))
     return summary
-

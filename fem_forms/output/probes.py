@@ -1,5 +1,9 @@
-"""Point evaluation of fields at points of the undeformed configuration, correct under MPI."""
+"""Point evaluation of fields at points of the undeformed configuration, correct under MPI, and the one CSV
+writer of per-step records (probes.csv and energy.csv of a dynamic run, probes.csv of a static load path)."""
 from __future__ import annotations
+
+import os
+from pathlib import Path
 
 from dolfinx import fem, geometry, mesh as dmesh
 from mpi4py import MPI
@@ -52,3 +56,23 @@ class ProbeSet:
 def evaluate(f: fem.Function, points: dict[str, list]) -> dict[str, list]:
     """{name: value} of f at each named point (located afresh; keep a ProbeSet to evaluate often)."""
     return ProbeSet(f.function_space.mesh, points).evaluate(f)
+
+
+DISPLACEMENT = ("ux", "uy", "uz")
+
+
+def columns(names: list[str], components: tuple = DISPLACEMENT) -> list[str]:
+    """Column names of probe values: NAME_ux, NAME_uy, ... for each probe in order."""
+    return [f"{n}_{c}" for n in names for c in components]
+
+
+def write_table(path: Path, head: list[str], rows: list, comm: MPI.Comm = MPI.COMM_WORLD) -> None:
+    """A CSV (header, then one line of numbers per row, 10 significant digits) written by rank 0 only (no
+    collective call: it may run where other ranks have stopped) through a temporary file renamed over
+    `path`, so a reader or an interrupt never sees half a table."""
+    if comm.rank != 0:
+        return
+    lines = [",".join(head)] + [",".join(f"{x:.10g}" for x in row) for row in rows]
+    tmp = path.with_name(f".{path.name}.tmp")
+    tmp.write_text("\n".join(lines) + "\n")
+    os.replace(tmp, path)

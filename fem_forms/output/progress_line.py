@@ -129,3 +129,10 @@ def show_progress(enabled: bool = True, stream: TextIO | None = None,
     reporter = ProgressLine(stream) if enabled and comm.rank == 0 else None
     progress.set_reporter(reporter)
     return reporter
+
+
+def clear_line() -> None:
+    """Erase the installed reporter's terminal line, if any, before a line is printed out of turn (an
+    interrupt announced from a signal handler)."""
+    if isinstance(progress._reporter, ProgressLine):
+        progress._reporter.close()

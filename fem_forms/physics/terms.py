@@ -101,7 +101,9 @@ class Term:
     `role` (what it is to the analyses: "solid", "load", "damping", "inertia", ...), `keys` (the scene
     keys that created it, e.g. ("load", 2)), `fields` (the unknown fields it acts on). `set_values(scene)`
     takes new values of its Constants from a scene (nothing compiles); `update(t)` moves it to time (or
-    pseudo-time) t."""
+    pseudo-time) t. Optional: `record()` returns the scalars the term wants on a load path's record (e.g. a
+    cavity's {"chambers_pressure": ..., "chambers_volume": ...}), the same on every rank; a static run
+    writes them as columns of probes.csv after every accepted load step."""
     name: str = "term"
     role: str = "term"
     # the residual takes `first_variation` instead of ufl.derivative of `energy`: for an energy that is exact
@@ -139,6 +141,10 @@ class Term:
 
     def update(self, t: float) -> None:
         """Move to time (or pseudo-time) t; a term without a history has nothing to do."""
+
+    def record(self) -> dict[str, float]:
+        """Named scalars of the current (accepted) state for the load path's record: none by default."""
+        return {}
 
     @property
     def conservative(self) -> bool:

@@ -23,14 +23,37 @@ def read_toml(path: str | Path, overrides: dict | None = None) -> dict:
 
 
 def set_key(data: dict, dotted: str, value: Any) -> None:
-    """data["a"]["b"] = value for dotted = "a.b" (tables are created as needed)."""
-    node = data
+    """data["a"]["b"] = value for dotted = "a.b" (tables are created as needed). An integer part indexes an
+    array, e.g. "load.0.value" (the first [[load]]) or "mesh.cells.0"; an index out of range, a word into
+    an array or a part below a plain value is refused in one line (InputError) naming the key."""
+    node: Any = data
     parts = dotted.split(".")
-    for k in parts[:-1]:
-        node = node.setdefault(k, {})
-        if not isinstance(node, dict):
-            raise InputError(f"--set {dotted}: {k!r} is not a table")
-    node[parts[-1]] = value
+    for depth, k in enumerate(parts):
+        last = depth == len(parts) - 1
+        where = ".".join(parts[:depth]) or "the scene"
+        if isinstance(node, list):
+            k = _index(node, k, dotted, where)
+        elif not isinstance(node, dict):
+            raise InputError(f"--set {dotted}: {where!r} is a {type(node).__name__}, not a table or an array")
+        elif not last and k not in node and parts[depth + 1].lstrip("-").isdigit():
+            raise InputError(f"--set {dotted}: the scene has no {'.'.join(parts[:depth + 1])!r} array to index")
+        if last:
+            node[k] = value
+        elif isinstance(node, dict):
+            node = node.setdefault(k, {})
+        else:
+            node = node[k]
+
+
+def _index(array: list, part: str, dotted: str, where: str) -> int:
+    """The integer `part` as an index into `array` (the value at key `where`), or a one-line InputError."""
+    valid = f"0..{len(array) - 1}" if array else "none: it is empty"
+    if not part.isdigit():
+        raise InputError(f"--set {dotted}: {where!r} is an array: index it with an integer ({valid}), not {part!r}")
+    if int(part) >= len(array):
+        raise InputError(f"--set {dotted}: index {part} is out of range: {where!r} has {len(array)} "
+                         f"entr{'y' if len(array) == 1 else 'ies'} ({valid})")
+    return int(part)
 
 
 def parse_assignment(text: str) -> tuple[str, Any]:

@@ -22,7 +22,7 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
           near_nullspace: Callable[[], PETSc.NullSpace] | None = None,
           prefix: str = "fem_forms_", predictor: bool = True, reuse_factor: bool | str = False,
           driver: SNESDriver | None = None, stops: tuple = (), min_step: float = 0.0,
-          limit_step: float = 0.0) -> SolveReport:
+          limit_step: float = 0.0, on_step: Callable[[float], None] = lambda lam: None) -> SolveReport:
     """Continuation lambda: 0 -> 1 in `steps` increments, the increment grown 1.5x after a success and
     halved after a failure (at most `max_cutbacks` halvings in a row). A step is accepted only when
     SNES converged AND an independent re-assembly of the residual is small AND the state is finite
@@ -37,7 +37,8 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
     each failure between them resetting the count of cut-backs in a row; measured: 25,000 steps in 2
     minutes on a perfectly plastic bar). `limit_step`: the same, but only once the path has flattened (near a
     limit point: a neo-Hookean sphere past its pressure maximum ran 10 minutes); elsewhere tiny steps of a
-    hyperelastic solid do make progress (a rope-like beam at E = 100 Pa takes 1,000+ of them)."""
+    hyperelastic solid do make progress (a rope-like beam at E = 100 Pa takes 1,000+ of them).
+    `on_step(lam)` runs after each accepted step, its state committed (per-step output, interrupts)."""
     t0 = time.perf_counter()
     drv = driver or SNESDriver(problem, options, linear_kind, prefix, near_nullspace, reuse_factor)
     assembly0 = drv.assembly_time
@@ -48,11 +49,8 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
         state.add_scalar(s.name, s.value)
     old = state.old[next(k for k, f in state.fields.items() if f is u)]
     state.commit()                                   # the starting point is what a cut-back returns to
-
-    # reference scale: residual of the undeformed state under full load
-    set_load(1.0)
+    set_load(1.0)                                    # reference scale: the rest state's residual at full load
     r_full = drv.load_scale(refresh=True)            # a reused driver's loads or rest shape may have changed
-
     report = SolveReport(False, 0.0, 0, math.nan, linear_solver=drv.linear_kind, load_scale=r_full)
     lam, dlam, cuts = 0.0, 1.0 / steps, 0
     if problem.set_load is None:                     # nothing to continue in: one attempt
@@ -85,6 +83,7 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
             lam, cuts = trial, 0
             dlam = min(1.0 - lam, 1.5 * dlam) if lam < 1.0 else dlam
             report.load_reached = lam
+            on_step(lam)
         else:
             state.rollback()                         # back to the last accepted state, history included
             if not same_step:

@@ -1,6 +1,7 @@
 """What a user sees: default output folder, progress on stderr, Ctrl-C, a silent Python API, the study table.
 
-Interrupts and the JIT log are tested in real subprocesses: a signal during a real solve, an empty FFCx cache.
+Interrupts and the JIT log are tested in real subprocesses: a signal during a real solve (the last accepted
+state must be left on disk), an empty FFCx cache.
 """
 import io
 import json
@@ -12,7 +13,11 @@ import signal
 import subprocess
 import sys
 import textwrap
+import time
+import xml.etree.ElementTree as ET
 
+from dolfinx import io as dolfinx_io
+from mpi4py import MPI
 import pytest
 
 import fem_forms as ff
@@ -53,7 +58,7 @@ probes = { tip = [1.0, 0.05, 0.05] }
 # a soft P2 beam with 6,027 dofs and several load steps: a solve of a few seconds to interrupt
 SLOW = (SMALL.replace("cells = [10, 2, 2]", "cells = [20, 3, 3]").replace("E = 1e6", "E = 1e5")
         .replace("degree = 1", "degree = 2").replace("steps = 2", "steps = 8")
-        + "fields = false\npicture = false\n")
+        + "fields = [\"displacement\"]\npicture = false\n")
 
 
 def scene(tmp_path: Path, text: str = SMALL, name: str = "beam.toml") -> Path:
@@ -149,27 +154,48 @@ def test_cli_shows_progress_unless_quiet_and_the_api_stays_silent(tmp_path, caps
 
 # -- interrupts --------------------------------------------------------------------------------------------
 
-def start_and_interrupt(cmd: list, sig: int) -> tuple[subprocess.CompletedProcess, str]:
-    """Start a run, wait for its first progress line (a load step was solved: we are mid-solve), send sig."""
+def start_and_interrupt(cmd: list, sig: int, out: Path) -> tuple[subprocess.CompletedProcess, str]:
+    """Start a run, wait for its first progress line (a load step was solved: we are mid-solve) and for that
+    step's row in probes.csv (written just after the line), then send sig."""
     p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV, cwd=ROOT)
     first = p.stderr.readline()
+    deadline = time.monotonic() + 60
+    while not (out / "probes.csv").exists() and p.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.02)
     p.send_signal(sig)
-    out, err = p.communicate(timeout=120)
-    return subprocess.CompletedProcess(cmd, p.returncode, out, err), first
+    out_text, err = p.communicate(timeout=120)
+    return subprocess.CompletedProcess(cmd, p.returncode, out_text, err), first
+
+
+def check_interrupted_outputs(out: Path) -> dict:
+    """results.json says interrupted at the last accepted step, which probes.csv and fields.xdmf end with."""
+    res = json.loads((out / "results.json").read_text())
+    assert res["interrupted"] is True and res["converged"] is False
+    rows = (out / "probes.csv").read_text().splitlines()
+    assert rows[0] == "load_factor,time,tip_ux,tip_uy,tip_uz" and len(rows) - 1 == res["load_steps"] >= 1
+    last = [float(x) for x in rows[-1].split(",")]
+    assert last[0] == pytest.approx(res["load_reached"], rel=1e-9) and 0 < last[0] < 1
+    assert last[2:] == pytest.approx(res["probes"]["tip"]["displacement"], rel=1e-9)
+    times = [float(t.get("Value")) for t in ET.parse(out / "fields.xdmf").getroot().iter("Time")]
+    assert len(times) == res["load_steps"] and times[-1] == pytest.approx(res["load_reached"], rel=1e-9)
+    with dolfinx_io.XDMFFile(MPI.COMM_SELF, str(out / "fields.xdmf"), "r") as f:
+        assert f.read_mesh(name="mesh").topology.index_map(3).size_global == 20 * 3 * 3 * 6
+    assert res["files"] == {"fields": "fields.xdmf", "probes": "probes.csv"}
+    assert not list(out.glob(".results-*")) and not list(out.glob(".*.tmp"))
+    return res
 
 
 @pytest.mark.parametrize("sig, status", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
-def test_interrupt_exits_with_one_line_and_leaves_no_results(tmp_path, sig, status):
+def test_interrupt_exits_with_one_line_and_leaves_the_last_accepted_state(tmp_path, sig, status):
     out = tmp_path / "out"
     out.mkdir()
     (out / "results.json").write_text('{"converged": true, "from": "an earlier run"}')
     p, first = start_and_interrupt([PYTHON, "-m", "fem_forms", "run", str(scene(tmp_path, SLOW)), "--out", str(out)],
-                                   sig)
+                                   sig, out)
     assert "accepted" in first, first + p.stderr
     assert p.returncode == status, p.stderr
     assert p.stderr == "fem-forms: interrupted\n" and p.stdout == ""
-    assert not (out / "results.json").exists()         # neither a partial one nor the earlier run's
-    assert not list(out.glob(".results-*"))
+    assert "from" not in check_interrupted_outputs(out)        # this run's, not the earlier run's
 
 
 def test_interrupted_write_leaves_old_results_and_no_temporary_file(tmp_path, monkeypatch):
@@ -191,17 +217,19 @@ def test_interrupted_write_leaves_old_results_and_no_temporary_file(tmp_path, mo
 
 @pytest.mark.mpi
 def test_two_ranks_show_progress_once_and_stop_on_interrupt(tmp_path):
-    """Under mpirun, progress comes from rank 0 only; mpirun forwards the interrupt to every rank, each stops
-    at its next Python bytecode, rank 0 prints the one line. Exit status is mpirun's own (1 here, not 130)."""
+    """Under mpirun, progress comes from rank 0 only. mpirun turns Ctrl-C into SIGTERM to every rank (1 s
+    later, then SIGKILL 1 s after that); rank 0 writes the interrupted results.json at once, without any
+    collective call, and prints the one line; the ranks stop together at the next accepted step if they get
+    that far. Exit status is mpirun's own (1 here, not 130)."""
     out = tmp_path / "out"
     cmd = [shutil.which("mpirun"), "-n", "2", "--bind-to", "none", "--oversubscribe", PYTHON, "-m", "fem_forms",
            "run", str(scene(tmp_path, SLOW)), "--out", str(out)]
-    p, first = start_and_interrupt(cmd, signal.SIGINT)
+    p, first = start_and_interrupt(cmd, signal.SIGINT, out)
     assert first.startswith("fem-forms: load step 1 ") and "accepted" in first, first + p.stderr
     assert "load step 1 " not in p.stderr              # the second rank printed no copy of it
     assert p.returncode != 0 and p.stderr.count("fem-forms: interrupted") == 1, p.stderr
     assert "Traceback" not in p.stderr
-    assert not (out / "results.json").exists()
+    check_interrupted_outputs(out)
 
 
 # -- compilation log ---------------------------------------------------------------------------------------

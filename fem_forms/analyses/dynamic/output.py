@@ -7,24 +7,23 @@ from pathlib import Path
 from dolfinx import io
 import numpy as np
 
-from fem_forms.output import fields
+from fem_forms.output import fields, probes
 from fem_forms.output.plastic import plastic_fields
 
 COMPONENTS = ("ux", "uy", "uz", "vx", "vy", "vz")
 
 
 def write_csvs(out: Path, result, comm) -> None:
-    if comm.rank == 0:
-        names = list(result.system.scene.output.probes)
-        head = ["time"] + [f"{n}_{c}" for n in names for c in COMPONENTS]
-        if result.system.model.temperature is not None:
-            head += [f"{n}_T" for n in names]
-        lines = [",".join(head)] + [",".join(f"{x:.10g}" for x in row) for row in result.probe_rows]
-        (out / "probes.csv").write_text("\n".join(lines) + "\n")
-        cols = result.energy.columns()
-        lines = [",".join(("time",) + cols)] + \
-            [",".join(f"{x:.10g}" for x in [t] + [getattr(e, c) for c in cols]) for t, e in result.energy.history]
-        (out / "energy.csv").write_text("\n".join(lines) + "\n")
+    """probes.csv (time, then NAME_ux .. NAME_vz per probe, NAME_T if heat) and energy.csv, by the CSV
+    writer the static load path shares (output/probes.write_table)."""
+    names = list(result.system.scene.output.probes)
+    head = ["time"] + probes.columns(names, COMPONENTS)
+    if result.system.model.temperature is not None:
+        head += [f"{n}_T" for n in names]
+    probes.write_table(out / "probes.csv", head, result.probe_rows, comm)
+    cols = result.energy.columns()
+    probes.write_table(out / "energy.csv", ["time", *cols],
+                       [[t] + [getattr(e, c) for c in cols] for t, e in result.energy.history], comm)
     comm.barrier()
 
 
