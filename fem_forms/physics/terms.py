@@ -134,11 +134,6 @@ class Term:
         volume-controlled cavity's pressure); none by default."""
         return []
 
-    def record(self) -> dict:
-        """Numbers this term reports at the current state ({column: value}, the same on every rank), for
-        results.json and one row per load step of probes.csv; none by default."""
-        return {}
-
     def update(self, t: float) -> None:
         """Move to time (or pseudo-time) t; a term without a history has nothing to do."""
 

@@ -86,9 +86,7 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
             on_step(lam)
         else:
             state.rollback()                         # back to the last accepted state, history included
-            if not same_step:
-                cuts += 1
-                dlam *= 0.5
+            cuts, dlam = (cuts, dlam) if same_step else (cuts + 1, 0.5 * dlam)
             drv.rebuild()                        # fresh solver state after a failure
             drv.newton_cap = path.newton_cap()
             if cuts > max_cutbacks or dlam < min_step or (dlam < limit_step and path.near_limit()):
