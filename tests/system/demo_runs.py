@@ -25,7 +25,8 @@ CHECKS = {"loaded_vs_unloaded_modes": "test_loaded_vs_unloaded_modes_demo",    #
           "heated_strip": "test_heated_strip_demo",
           "silicone_swing": "test_silicone_swing_demo",
           "struck_bar_in_time": "test_struck_bar_in_time_demo",
-          "bent_spoon": "test_bent_spoon_demo"}
+          "bent_spoon": "test_bent_spoon_demo",
+          "pneunet_actuator": "test_pneunet_actuator_demo"}
 NUMBER = r"[-+]?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?"
 
 

@@ -1,0 +1,80 @@
+"""PneuNet-style bending actuator: gmsh geometry and tetrahedral mesh (metres).
+
+A silicone body L x W x H (x along the length, z up) with six chambers in its upper part, joined by a
+channel along x at the chambers' floor; chambers and channel are cut out of the body as one closed cavity
+(no inlet: the cavity never opens to the outside). Below the chambers a solid layer of thickness `base` is
+the stiff side that does not stretch: inflating the chambers lengthens the top, and the actuator curls
+down towards its base. Named groups: surfaces "cavity" (every chamber and channel wall), "clamp" (x = 0),
+"outer" (the rest of the outside), volume "body".
+
+    python demos/geometry/pneunet.py [--h 0.003] [--out pneunet.msh]
+"""
+import argparse
+from pathlib import Path
+
+import gmsh
+
+# body (m): 100 x 20 x 15 mm
+L, W, H = 0.100, 0.020, 0.015
+# chambers: 6 of 10 mm along x, 4 mm walls between them, 3 mm side and 2.5 mm top walls, a 6 mm base layer
+# (2 mm side and top walls with a 4 mm base balloon past their pressure maximum at 11.7 kPa and 73 degrees)
+CHAMBERS, CHAMBER_X, PITCH, FIRST_X = 6, 0.010, 0.014, 0.010
+SIDE, TOP, BASE = 0.003, 0.0025, 0.006
+# channel joining the chambers: 4 mm wide, 2 mm high, on the chambers' floor, from the first to the last
+CHANNEL_W, CHANNEL_H = 0.004, 0.002
+
+
+def chamber_boxes(occ, side: float = SIDE, top: float = TOP, base: float = BASE) -> list:
+    """The six chambers and the channel as OCC boxes (dim-tags)."""
+    SIDE, TOP, BASE = side, top, base      # noqa: N806 (the walls: the module's defaults or the caller's)
+    boxes = [(3, occ.addBox(FIRST_X + k * PITCH, SIDE, BASE, CHAMBER_X, W - 2 * SIDE, H - BASE - TOP))
+             for k in range(CHAMBERS)]
+    x0, x1 = FIRST_X + 0.5 * CHAMBER_X, FIRST_X + (CHAMBERS - 1) * PITCH + 0.5 * CHAMBER_X
+    boxes.append((3, occ.addBox(x0, 0.5 * (W - CHANNEL_W), BASE, x1 - x0, CHANNEL_W, CHANNEL_H)))
+    return boxes
+
+
+def build(out: Path, h: float = 0.003, **walls: float) -> Path:
+    """Write the actuator's tetrahedral mesh (cell size about h, metres) to `out`; `walls`: side, top, base
+    thicknesses other than the defaults."""
+    gmsh.initialize()
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add("pneunet")
+        occ = gmsh.model.occ
+        boxes = chamber_boxes(occ, **walls)
+        cavity, _ = occ.fuse(boxes[:1], boxes[1:])          # one cavity: chambers joined by the channel
+        body, _ = occ.cut([(3, occ.addBox(0, 0, 0, L, W, H))], cavity)
+        occ.synchronize()
+        assert len(body) == 1, f"expected one solid, got {body}"
+        volume = body[0][1]
+        gmsh.model.addPhysicalGroup(3, [volume], 1)
+        gmsh.model.setPhysicalName(3, 1, "body")
+        names = {}
+        eps = 1e-5                                   # OCC pads bounding boxes by about 1e-7
+        for _, s in gmsh.model.getBoundary([(3, volume)], oriented=False):
+            x0, y0, z0, x1, y1, z1 = gmsh.model.getBoundingBox(2, s)
+            if x1 < eps:
+                names[s] = "clamp"
+            elif x0 > L - eps or y1 < eps or y0 > W - eps or z1 < eps or z0 > H - eps:
+                names[s] = "outer"
+            else:
+                names[s] = "cavity"
+        for i, name in enumerate(("cavity", "clamp", "outer")):
+            tag = gmsh.model.addPhysicalGroup(2, [s for s, n in names.items() if n == name], 10 + i)
+            gmsh.model.setPhysicalName(2, tag, name)
+        gmsh.option.setNumber("Mesh.CharacteristicLengthMax", h)
+        gmsh.option.setNumber("Mesh.CharacteristicLengthMin", 0.3 * h)
+        gmsh.model.mesh.generate(3)
+        gmsh.write(str(out))
+    finally:
+        gmsh.finalize()
+    return out
+
+
+if __name__ == "__main__":
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--h", type=float, default=0.003)
+    ap.add_argument("--out", type=Path, default=Path("pneunet.msh"))
+    args = ap.parse_args()
+    print(build(args.out, args.h))

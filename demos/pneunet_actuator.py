@@ -1,0 +1,107 @@
+"""# A PneuNet bending actuator inflated by volume control
+
+A silicone body 100 x 20 x 15 mm (neo-Hookean, E = 100 kPa, nu = 0.49) with six chambers joined by a channel
+(one closed cavity, demos/geometry/pneunet.py) is clamped at x = 0 and inflated by injecting air: the scene
+prescribes the injected volume and the solver finds the chamber pressure with the displacement. The upper
+part lengthens, the solid base layer does not: the actuator curls down. The tip angle is the rotation about
+y of the end face, from two probes at its top and bottom edges.
+
+One point per accepted load step: from probes.csv when the static run writes it (`<probe>_ux..`, `chambers_
+pressure`, `chambers_volume`), else recorded here after each accepted step. Run:
+`.venv/bin/python demos/pneunet_actuator.py [OUT_DIR] [H]` (H the cell size in m, default 0.006). Writes
+the mesh, results.json, fields.xdmf, curve.csv and curve.png (tip angle and pressure against injected volume).
+No GIF of the stroke: per-step deformed shapes are not kept by the static run on this branch.
+"""
+import csv
+import math
+import sys
+from pathlib import Path
+
+from mpi4py import MPI
+import numpy as np
+
+import fem_forms as ff
+from fem_forms import progress
+from fem_forms.analyses.static import write_static_outputs
+from fem_forms.equilibrium import solve_static
+from fem_forms.model import build_model
+from fem_forms.physics.cavities import cavity_report
+
+here = Path(__file__).parent
+sys.path.insert(0, str(here / "geometry"))
+import pneunet  # noqa: E402
+
+out = Path(sys.argv[1]) if len(sys.argv) > 1 else Path("out/pneunet_actuator")
+h = float(sys.argv[2]) if len(sys.argv) > 2 else 0.006
+comm = MPI.COMM_WORLD
+
+
+def tip_angle(top, bottom) -> float:
+    """Rotation (degrees) about y of the end face: the segment bottom -> top starts along +z."""
+    return math.degrees(math.atan2(top[0] - bottom[0], pneunet.H + top[2] - bottom[2]))
+
+
+def recorder(model, rows: list):
+    """A progress reporter appending (injected volume, pressure, tip angle) after each accepted step."""
+    def report(event, **fields):
+        if event == "step_accepted":
+            model.sync_displacement()
+            cav = cavity_report(model.terms)["chambers"]
+            u = model.probes.evaluate(model.u)
+            rows.append((cav["volume_change"], cav["pressure"], tip_angle(u["tip_top"], u["tip_bottom"])))
+    return report
+
+
+def from_probes_csv(path: Path, v0: float) -> list:
+    """The same rows from the run's probes.csv (one per accepted load step), if it has the columns."""
+    with open(path) as f:
+        rows = list(csv.DictReader(f))
+    return [(float(r["chambers_volume"]) - v0, float(r["chambers_pressure"]),
+             tip_angle([float(r[f"tip_top_u{c}"]) for c in "xyz"], [float(r[f"tip_bottom_u{c}"]) for c in "xyz"]))
+            for r in rows]
+
+
+ff.quiet_jit()
+if comm.rank == 0:
+    out.mkdir(parents=True, exist_ok=True)
+    pneunet.build(out / "pneunet.msh", h)
+comm.barrier()
+scene = ff.Scene.from_file(here / "scenes" / "pneunet.toml", overrides={"mesh.file": str(out / "pneunet.msh")})
+model, rows = build_model(scene), []
+progress.set_reporter(recorder(model, rows))
+result = solve_static(scene, model=model)
+progress.set_reporter(None)
+s = write_static_outputs(result, out)
+
+if comm.rank == 0:
+    cav = s.get("cavities", {}).get("chambers")
+    try:
+        rows = from_probes_csv(out / "probes.csv", cav["volume"] - cav["volume_change"])
+        source = "probes.csv"
+    except (OSError, KeyError, TypeError):
+        source = "recorded per step"
+    curve = np.array([(0.0, 0.0, 0.0)] + rows)
+    np.savetxt(out / "curve.csv", curve, delimiter=",", header="injected_volume_m3,pressure_pa,tip_angle_deg",
+               comments="")
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6, 4))
+    ax.plot(curve[:, 0] * 1e6, curve[:, 2], "o-", color="C0")
+    ax.set_xlabel("injected volume [ml]")
+    ax.set_ylabel("tip angle [deg]", color="C0")
+    ax2 = ax.twinx()
+    ax2.plot(curve[:, 0] * 1e6, curve[:, 1] / 1e3, "s--", color="C3")
+    ax2.set_ylabel("chamber pressure [kPa]", color="C3")
+    ax.set_title(scene.title, fontsize=9)
+    fig.tight_layout()
+    fig.savefig(out / "curve.png", dpi=120)
+    print(f"{scene.title}: {s['dofs']} dofs, {s['load_steps']} load steps, {s['newton_iterations']} Newton "
+          f"iterations, {s['wall_time_s']:.1f} s, converged {s['converged']}")
+    print(f"  curve ({source}): injected volume [ml], pressure [kPa], tip angle [deg]")
+    for v, p, a in curve[1:]:
+        print(f"    {v * 1e6:8.4f} {p / 1e3:8.3f} {a:8.2f}")
+    if cav:
+        print(f"  at {cav['volume_change'] * 1e6:.4f} ml injected: pressure {cav['pressure'] / 1e3:.4f} kPa, "
+              f"tip angle {curve[-1, 2]:.2f} deg")
+    print(f"  wrote {out}/results.json, fields.xdmf, curve.csv, curve.png")

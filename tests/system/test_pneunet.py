@@ -1,0 +1,64 @@
+"""The PneuNet actuator demo (demos/pneunet_actuator.py): six chambers and a channel, one closed cavity,
+inflated by volume control to a tip angle of 90 degrees or more. Checked against what does not come from the
+solve's own bookkeeping:
+- the injected volume the run reports is measured on the deformed walls (V = -1/3 int x . n da) and must
+  equal the prescribed one, which only the volume equation enforces;
+- no gravity, so the clamp carries no net force: the chamber pressure is an internal load whose resultant over
+  the closed deformed walls is zero (a wall missing from the cavity, or a pressure acting on the undeformed
+  walls, leaves a net force of order p x chamber section, about 1 N);
+- energy: the work of the injected air, int p dV along the accepted steps (trapezoid), is the elastic energy
+  stored (results.json energy is the total potential W - p (V - V0), so W = energy + p dV);
+- 2 MPI ranks give the serial answer."""
+import json
+
+import numpy as np
+import pytest
+
+from helpers import ROOT, mpirun
+from system.demo_runs import NUMBER, demo, grab, scene_dict  # noqa: F401 (demo: fixture)
+
+
+def read_curve(out):
+    return np.loadtxt(out / "curve.csv", delimiter=",", skiprows=1)
+
+
+@pytest.fixture(scope="module")
+def two_ranks(tmp_path_factory):
+    out = tmp_path_factory.mktemp("pneunet2")
+    p = mpirun([str(ROOT / "demos" / "pneunet_actuator.py"), str(out)])
+    assert p.returncode == 0, p.stdout + p.stderr
+    return out
+
+
+def test_pneunet_actuator_demo(demo):
+    text, out = demo("pneunet_actuator")
+    res = json.loads((out / "results.json").read_text())
+    assert res["converged"], res["message"]
+    added = scene_dict("pneunet")["load"][0]["volume"]
+    cav = res["cavities"]["chambers"]
+    assert cav["volume_change"] == pytest.approx(added, rel=1e-8)
+    v, p, angle = read_curve(out).T
+    assert np.all(np.diff(v) > 0) and v[-1] == pytest.approx(added, rel=1e-8)
+    assert np.all(p[1:] > 0) and cav["pressure"] == pytest.approx(p[-1], rel=1e-12)
+    assert np.all(np.diff(angle) > 0), angle                  # the actuator curls on with every step
+    assert angle[-1] >= 90.0
+    assert grab(rf"tip angle ({NUMBER}) deg", text)[0] == pytest.approx(angle[-1], abs=0.01)
+    # no net force at the clamp: the pressure's resultant over the closed walls vanishes
+    force = np.linalg.norm(res["reactions"]["clamp"])
+    chamber_section = 0.014 * 0.0065                          # m^2: one chamber's cross-section
+    assert force < 1e-6 * p.max() * chamber_section
+    # the air's work int p dV is the elastic energy stored
+    work = np.trapz(p, v)
+    stored = res["energy"] + cav["pressure"] * cav["volume_change"]
+    assert work == pytest.approx(stored, rel=0.005)          # measured 0.11 % (trapezoid on 34 steps)
+
+
+def test_pneunet_on_two_ranks_gives_the_serial_answer(demo, two_ranks):
+    _, out = demo("pneunet_actuator")
+    one = json.loads((out / "results.json").read_text())
+    two = json.loads((two_ranks / "results.json").read_text())
+    assert two["mpi_ranks"] == 2
+    for key in ("pressure", "volume", "volume_change"):
+        assert two["cavities"]["chambers"][key] == pytest.approx(one["cavities"]["chambers"][key], rel=1e-6)
+    a1, a2 = read_curve(out)[-1, 2], read_curve(two_ranks)[-1, 2]
+    assert a2 == pytest.approx(a1, rel=1e-6) and a2 >= 90.0
