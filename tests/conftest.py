@@ -13,6 +13,13 @@ from pathlib import Path
 import pytest
 from mpi4py import MPI
 
+# A pytest-xdist worker inherits the environment of the pytest process that started it, and that process has
+# initialised MPI as a singleton (OMPI_MCA_ess, PMIX_* naming its PMIx server): a worker's mpirun then failed at
+# once, with no output. A worker forgets them before it initialises MPI itself, as the first process did.
+if "PYTEST_XDIST_WORKER" in os.environ:
+    for key in [k for k in os.environ if k.startswith(("OMPI_MCA_", "PMIX_", "OMPI_APP_CTX_"))]:
+        del os.environ[key]
+
 TESTS = Path(__file__).resolve().parent
 ROOT = TESTS.parent
 for p in (str(ROOT), str(TESTS)):       # fem_forms and helpers importable from any working directory
