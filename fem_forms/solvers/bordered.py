@@ -132,6 +132,8 @@ class Bordered:
                 drv.P = drv.A.convert("aij", PETSc.Mat())
                 drv.P.setNearNullSpace(drv.near_nullspace())
             drv.P = drv.A.convert("aij", drv.P if drv.P is not None else PETSc.Mat())
+            if drv.pmg is not None:
+                drv.pmg.refresh(self.ksp, drv.P)
         self.ksp.setOperators(drv.A, drv.P if drv.multigrid else drv.A)
         self.ksp.setUp()
         self.Cp = np.array([[0.0 if f is None else float(f) if isinstance(f, (int, float))

@@ -19,6 +19,16 @@ ITERATIVE = {"ksp_type": "cg", "ksp_rtol": 1e-8, "ksp_max_it": 1000, "pc_type": 
              "pc_gamg_type": "agg", "pc_gamg_square_graph": 2, "pc_gamg_threshold": 0.02,
              "mg_levels_ksp_type": "chebyshev", "mg_levels_pc_type": "jacobi",
              "mg_levels_esteig_ksp_type": "cg"}
+# P2 and higher: two-level p-multigrid (solvers/pmultigrid.py): Chebyshev/Jacobi on the P_k tangent, one GAMG
+# cycle on its Galerkin restriction to P1 below. Measured on the P2 beam at 265,923 dofs (static_beam problem,
+# serial, CPU s of the solve, 2 runs each on a shared machine): GAMG on P2 14.6-15.9 s (multigrid set-up 5.8 s,
+# 80 CG its in 3 Newton steps); p-multigrid 9.7-10.6 s (set-up 0.4 s, 81 its); with the P1 graph squared on
+# one level instead of two (coarse GAMG less aggressive) 7.5-10.4 s, 55 its; squared on none 9.3-9.6 s, 37 its
+# but 2.5 s set-up; a threshold of 0.05, point-block Jacobi or Chebyshev degree 3 changed nothing measurable.
+# ITERATIVE's own GAMG options stay in (unused by PCMG): a scene's `pc_type = "gamg"` gets GAMG on P_k as before.
+P_MULTIGRID = {**ITERATIVE, "pc_type": "mg", "pc_mg_levels": 2, "mg_coarse_ksp_type": "preonly",
+               **{"mg_coarse_" + k: v for k, v in ITERATIVE.items() if k.startswith(("pc_", "mg_"))},
+               "mg_coarse_pc_gamg_square_graph": 1}
 # Direct LU factored once per load step and reused by GMRES for the later Newton iterations: the
 # assembled tangent stays the operator (still Newton), the stale factor only preconditions. On the
 # Chen-size inverse design (27,675 dofs, 4 Newton its) this cut 4.0 s to 2.5 s (benchmarks/inverse_methods.md).
@@ -50,11 +60,12 @@ def choose(kind: str, dofs: int) -> str:
     return "iterative" if dofs > ITERATIVE_ABOVE_DOFS else "direct"
 
 
-def options(kind: str, symmetric: bool = True, reuse_factor: bool | str = False) -> dict:
+def options(kind: str, symmetric: bool = True, reuse_factor: bool | str = False, degree: int = 1) -> dict:
     """PETSc KSP/PC defaults for a Newton step; GMRES replaces CG for non-symmetric tangents
     (inverse elastostatics, follower pressure). `reuse_factor` keeps one LU per load step: True as
-    GMRES's preconditioner (Newton on the fresh tangent), "chord" as the operator itself."""
-    opts = dict(DIRECT if kind == "direct" else ITERATIVE)
+    GMRES's preconditioner (Newton on the fresh tangent), "chord" as the operator itself. `degree`: the
+    unknown's polynomial degree; from 2 on the iterative path is the P1 p-multigrid (P_MULTIGRID)."""
+    opts = dict(DIRECT if kind == "direct" else P_MULTIGRID if degree >= 2 else ITERATIVE)
     if kind == "direct" and reuse_factor:
         opts.update(CHORD if reuse_factor == "chord" else REUSED_FACTOR)
     if kind != "direct" and not symmetric:

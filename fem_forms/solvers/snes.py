@@ -18,7 +18,7 @@ from petsc4py import PETSc
 import ufl
 
 from fem_forms import progress
-from fem_forms.solvers import bounds as vi, linear
+from fem_forms.solvers import bounds as vi, linear, pmultigrid
 from fem_forms.solvers.array_terms import ArrayTerms
 from fem_forms.solvers.bordered import Bordered
 from fem_forms.solvers.preconditioner_reuse import PreconditionerReuse
@@ -105,14 +105,18 @@ class SNESDriver:
         `reuse_factor` or `user_options`, and when the operator changes under a kept factor (a new dt)."""
         merged = dict(self.DEFAULTS)
         merged["snes_linesearch_type"] = "bt" if self.E is not None else "basic"
+        V = self.p.u.function_space
         merged.update(linear.options(self.linear_kind, symmetric=self.E is not None,
-                                     reuse_factor=self.reuse_factor))
+                                     reuse_factor=self.reuse_factor, degree=pmultigrid.degree(V)))
         merged.update(self.user_options)
+        pmultigrid.drop_unused(merged, self.user_options)
         vi.options(merged, self.user_options, self.bounds)     # bounded: vinewtonrsls and its line search
-        # block (BAIJ) matrices assemble 2.5-3x faster and MUMPS takes them; multigrid (GAMG, hypre) needs
-        # AIJ and builds from an AIJ copy (self.P, made when it rebuilds); other solvers get AIJ
+        # block (BAIJ) matrices assemble 2.5-3x faster and MUMPS takes them; multigrid (GAMG, hypre, and the
+        # p-multigrid's Galerkin product: PETSc 3.18 has no BAIJ PtAP) needs AIJ and builds from an AIJ copy
+        # (self.P, made when it rebuilds); other solvers get AIJ
         mumps = merged.get("pc_type") in ("lu", "cholesky") and merged.get("pc_factor_mat_solver_type") == "mumps"
-        self.multigrid = merged.get("pc_type") in ("gamg", "hypre")
+        self.multigrid = merged.get("pc_type") in ("gamg", "hypre", "mg")
+        self.pmg = pmultigrid.for_driver(getattr(self, "pmg", None), V, merged)
         if getattr(self, "P", None) is not None:
             self.P.destroy()
         self.P = None
@@ -154,7 +158,7 @@ class SNESDriver:
 
     def destroy(self) -> None:
         """Free the PETSc objects and this driver's options now (a driver built for one solve)."""
-        for obj in (self.snes, self.A, getattr(self, "P", None), self.b, self.x):
+        for obj in (self.snes, self.A, getattr(self, "P", None), getattr(self, "pmg", None), self.b, self.x):
             if obj is not None:
                 obj.destroy()
         self._clear_options()
@@ -205,6 +209,8 @@ class SNESDriver:
             snes.setJacobian(self._jacobian, A, self.P)
         else:
             A.convert("aij", self.P)
+        if self.pmg is not None:
+            self.pmg.refresh(snes.getKSP(), self.P)
 
     def _objective(self, snes, x) -> float:
         t = time.perf_counter()
