@@ -222,7 +222,10 @@ def test_two_ranks_show_progress_once_and_stop_on_interrupt(tmp_path):
     collective call, and prints the one line; the ranks stop together at the next accepted step if they get
     that far. Exit status is mpirun's own (1 here, not 130)."""
     out = tmp_path / "out"
-    cmd = [shutil.which("mpirun"), "-n", "2", "--bind-to", "none", "--oversubscribe", PYTHON, "-m", "fem_forms",
+    # mpirun's SIGKILL 10 s (not 1 s) after its SIGTERM: on a loaded machine (the suite on two workers) rank 0 could
+    # still be inside one C call (a factorisation) when the default second ran out, and died without a word
+    cmd = [shutil.which("mpirun"), "-n", "2", "--bind-to", "none", "--oversubscribe",
+           "--mca", "odls_base_sigkill_timeout", "10", PYTHON, "-m", "fem_forms",
            "run", str(scene(tmp_path, SLOW)), "--out", str(out)]
     p, first = start_and_interrupt(cmd, signal.SIGINT, out)
     assert first.startswith("fem-forms: load step 1 ") and "accepted" in first, first + p.stderr
