@@ -23,8 +23,8 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
           prefix: str = "fem_forms_", predictor: bool = True, reuse_factor: bool | str = False,
           driver: SNESDriver | None = None, stops: tuple = (), min_step: float = 0.0,
           limit_step: float = 0.0, on_step: Callable[[float], None] = lambda lam: None) -> SolveReport:
-    """Continuation lambda: 0 -> 1 in `steps` increments, the increment grown 1.5x after a success (held after
-    a success that followed a cut-back) and halved after a failure (at most `max_cutbacks` halvings in a row). A step is accepted only when
+    """Continuation lambda: 0 -> 1 in `steps` increments, the increment grown 1.5x after a success and
+    halved after a failure (at most `max_cutbacks` halvings in a row). A step is accepted only when
     SNES converged AND an independent re-assembly of the residual is small AND the state is finite
     and admissible (no inverted elements). With `predictor`, each step starts from the secant
     extrapolation of the last two accepted states (a better first guess, fewer Newton steps).
@@ -80,9 +80,8 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
             path.accepted(last_dlam, last_step, rec.iterations)
             drv.newton_cap = path.newton_cap()   # near a limit point no step is worth the full Newton limit
             state.commit()
-            grow = 1.5 if cuts == 0 else 1.0     # right after a cut-back the larger step failed: hold the size
             lam, cuts = trial, 0
-            dlam = min(1.0 - lam, grow * dlam) if lam < 1.0 else dlam
+            dlam = min(1.0 - lam, 1.5 * dlam) if lam < 1.0 else dlam
             report.load_reached = lam
             on_step(lam)
         else:
