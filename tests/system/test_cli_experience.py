@@ -167,8 +167,9 @@ def start_and_interrupt(cmd: list, sig: int, out: Path) -> tuple[subprocess.Comp
     return subprocess.CompletedProcess(cmd, p.returncode, out_text, err), first
 
 
-def check_interrupted_outputs(out: Path) -> dict:
-    """results.json says interrupted at the last accepted step, which probes.csv and fields.xdmf end with."""
+def check_interrupted_outputs(out: Path, tets: int = 20 * 3 * 3 * 6) -> dict:
+    """results.json says interrupted at the last accepted step, which probes.csv and fields.xdmf (a mesh of
+    `tets` tetrahedra) end with."""
     res = json.loads((out / "results.json").read_text())
     assert res["interrupted"] is True and res["converged"] is False
     rows = (out / "probes.csv").read_text().splitlines()
@@ -179,7 +180,7 @@ def check_interrupted_outputs(out: Path) -> dict:
     times = [float(t.get("Value")) for t in ET.parse(out / "fields.xdmf").getroot().iter("Time")]
     assert len(times) == res["load_steps"] and times[-1] == pytest.approx(res["load_reached"], rel=1e-9)
     with dolfinx_io.XDMFFile(MPI.COMM_SELF, str(out / "fields.xdmf"), "r") as f:
-        assert f.read_mesh(name="mesh").topology.index_map(3).size_global == 20 * 3 * 3 * 6
+        assert f.read_mesh(name="mesh").topology.index_map(3).size_global == tets
     assert res["files"] == {"fields": "fields.xdmf", "probes": "probes.csv"}
     assert not list(out.glob(".results-*")) and not list(out.glob(".*.tmp"))
     return res
@@ -223,16 +224,17 @@ def test_two_ranks_show_progress_once_and_stop_on_interrupt(tmp_path):
     that far. Exit status is mpirun's own (1 here, not 130)."""
     out = tmp_path / "out"
     # mpirun's SIGKILL 10 s (not 1 s) after its SIGTERM: on a loaded machine (the suite on two workers) rank 0 could
-    # still be inside one C call (a factorisation) when the default second ran out, and died without a word
+    # still be inside one C call (a factorisation) when the default second ran out, and died without a word; a
+    # beam 8x the size of SLOW's, so that the run cannot finish inside those 10 s on a quiet machine either
     cmd = [shutil.which("mpirun"), "-n", "2", "--bind-to", "none", "--oversubscribe",
            "--mca", "odls_base_sigkill_timeout", "10", PYTHON, "-m", "fem_forms",
-           "run", str(scene(tmp_path, SLOW)), "--out", str(out)]
+           "run", str(scene(tmp_path, SLOW.replace("cells = [20, 3, 3]", "cells = [40, 6, 6]"))), "--out", str(out)]
     p, first = start_and_interrupt(cmd, signal.SIGINT, out)
     assert first.startswith("fem-forms: load step 1 ") and "accepted" in first, first + p.stderr
     assert "load step 1 " not in p.stderr              # the second rank printed no copy of it
     assert p.returncode != 0 and p.stderr.count("fem-forms: interrupted") == 1, p.stderr
     assert "Traceback" not in p.stderr
-    check_interrupted_outputs(out)
+    check_interrupted_outputs(out, tets=40 * 6 * 6 * 6)
 
 
 # -- compilation log ---------------------------------------------------------------------------------------
