@@ -22,6 +22,11 @@ from fem_forms.errors import InputError, SolveError
 from fem_forms.output.results import write_json_atomic
 from fem_forms.scene import Scene
 
+# Key numbers whose norm is below this fraction of the part's size (the largest probe point or displacement;
+# for frequencies the highest one) are zero to the solver's accuracy: a probe on a clamp, an unloaded part.
+# Their relative errors would be a ratio of two round-off numbers, so the study reports absolute errors.
+KEY_ROUNDOFF = 1e-10
+
 
 @dataclass
 class Run:
@@ -36,6 +41,8 @@ class Run:
     error_finest: float = math.nan
     error_richardson: float = math.nan
     ok: bool = False
+    size: float = 0.0        # the magnitude the key numbers are measured against (part size, top frequency)
+    error_kind: str = "relative"
 
 
 def key_numbers(summary: dict) -> np.ndarray | None:
@@ -48,6 +55,19 @@ def key_numbers(summary: dict) -> np.ndarray | None:
         p = probes[name]
         vals.extend(p.get("rest_position") or p.get("displacement") or [])
     return np.asarray(vals, dtype=float) if vals else None
+
+
+def key_size(summary: dict) -> float:
+    """What the key numbers are small or large against: the highest frequency, or the largest probe
+    point, rest position or displacement magnitude (m)."""
+    if "frequencies_hz" in summary:
+        return float(np.max(np.abs(summary["frequencies_hz"]), initial=0.0))
+    sizes = [abs(float(summary.get("max_displacement") or 0.0))]
+    for p in (summary.get("probes") or {}).values():
+        for key in ("point", "rest_position", "displacement"):
+            if p.get(key):
+                sizes.append(float(np.linalg.norm(p[key])))
+    return max(sizes)
 
 
 def mesh_level(scene: Scene, level: int) -> dict:
@@ -78,6 +98,7 @@ def _run_one(scene_path: Path, run: Run, ranks: int) -> None:
         run.wall = s.get("wall_time_s", math.nan)
         run.memory_mb = s.get("peak_memory_mb", math.nan)
         run.values = key_numbers(s)
+        run.size = key_size(s)
         run.ok = p.returncode == 0 and run.values is not None
     elif p.returncode == 2:
         raise InputError(p.stderr.strip().splitlines()[-1].replace("fem-forms: error: ", ""))
@@ -125,6 +146,13 @@ def study(scene_path: Path, out: Path, degrees: list[int], refine: int, override
     good = [r for r in runs if r.ok]
     if not good:
         raise SolveError("study: no run of the ladder converged")
+    estimate_errors(good, degrees)
+    return runs
+
+
+def estimate_errors(good: list[Run], degrees: list[int]) -> None:
+    """Each converged run's error against the finest run and the highest degree's Richardson limit:
+    relative to the finest run's key numbers, or absolute (error_kind) when those are at round-off."""
     finest = max(good, key=lambda r: (r.degree, r.level))
     limits = []
     for degree in sorted(set(degrees)):
@@ -133,27 +161,34 @@ def study(scene_path: Path, out: Path, degrees: list[int], refine: int, override
         if lim is not None:
             limits.append((degree, lim))
     reference = limits[-1][1] if limits else None               # highest degree's extrapolation
-    scale = max(np.linalg.norm(finest.values), 1e-300)
+    magnitude = float(np.linalg.norm(finest.values))
+    relative = magnitude > KEY_ROUNDOFF * max(r.size for r in good)
+    scale = magnitude if relative else 1.0
     for r in good:
+        r.error_kind = "relative" if relative else "absolute"
         r.error_finest = np.linalg.norm(r.values - finest.values) / scale
         if reference is not None:
             r.error_richardson = np.linalg.norm(r.values - reference) / scale
-    return runs
 
 
 def write_report(runs: list[Run], out: Path, title: str) -> str:
     """Markdown table, CSV and a PNG of error against wall time with the Pareto front."""
-    rows = ["| degree | mesh level | dofs | error vs finest | error vs Richardson | wall time [s] | peak memory [MB] |",
+    absolute = any(r.ok and r.error_kind == "absolute" for r in runs)
+    err = "absolute error [m]" if absolute else "error"
+    rows = [f"| degree | mesh level | dofs | {err} vs finest | {err} vs Richardson | wall time [s] | peak memory [MB] |",
             "|---|---|---|---|---|---|---|"]
-    csv = ["degree,level,dofs,error_finest,error_richardson,wall_time_s,peak_memory_mb,converged"]
+    csv = ["degree,level,dofs,error_finest,error_richardson,wall_time_s,peak_memory_mb,converged,error_kind"]
     for r in runs:
         rows.append(f"| P{r.degree} | {r.level} | {r.dofs} | {_cell(r.error_finest, '.2e')} | "
                     f"{_cell(r.error_richardson, '.2e')} | {_cell(r.wall, '.2f')} | {_cell(r.memory_mb, '.0f')} |"
                     if r.ok else
                     f"| P{r.degree} | {r.level} | {r.dofs} | failed | | | |")
         csv.append(f"{r.degree},{r.level},{r.dofs},{_field(r.error_finest)},{_field(r.error_richardson)},"
-                   f"{_field(r.wall)},{_field(r.memory_mb)},{int(r.ok)}")
+                   f"{_field(r.wall)},{_field(r.memory_mb)},{int(r.ok)},{r.error_kind}")
     table = "\n".join(rows) + "\n"
+    if absolute:
+        table += (f"\nThe key numbers are zero to the solver's accuracy (below {KEY_ROUNDOFF:g} of the part's size): "
+                  "errors are absolute, in m, not relative.\n")
     (out / "study.md").write_text(f"# {title}\n\n" + table)
     (out / "study.csv").write_text("\n".join(csv) + "\n")
     import matplotlib
@@ -173,7 +208,7 @@ def write_report(runs: list[Run], out: Path, title: str) -> str:
     if front:
         ax.loglog([r.wall for r in front], [_err(r) for r in front], "k--", lw=0.8, label="Pareto front")
     ax.set_xlabel("wall time [s]")
-    ax.set_ylabel("relative error of the key numbers")
+    ax.set_ylabel(f"{err} of the key numbers" if absolute else "relative error of the key numbers")
     ax.set_title(title)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend()
@@ -243,6 +278,7 @@ def solve_to_tolerance(scene_path: Path, out: Path, tolerance: float, overrides:
             shutil.copy2(f, out / f.name)
     summary = json.loads((best.folder / "results.json").read_text())
     summary["error_estimate"] = _err(best)
+    summary["error_kind"] = best.error_kind          # "absolute" (m) when the key numbers are at round-off
     summary["tolerance"] = tolerance
     summary["chosen"] = {"degree": best.degree, "mesh_level": best.level, "overrides": best.overrides}
     summary["study"] = "study/study.md"

@@ -26,7 +26,7 @@ def test_study_ladder_converges_to_beam_theory(tmp_path, capsys):
     code = main(["study", str(scene_file(tmp_path)), "--out", str(out), "--degrees", "1", "2", "--refine", "3"])
     assert code == 0
     rows = [ln.split(",") for ln in (out / "study.csv").read_text().splitlines()[1:]]
-    assert len(rows) == 6 and all(r[-1] == "1" for r in rows)
+    assert len(rows) == 6 and all(r[7] == "1" and r[8] == "relative" for r in rows)
     err = {(int(r[0]), int(r[1])): float(r[4]) for r in rows}          # error vs Richardson
     assert err[(2, 0)] < err[(1, 0)] and err[(2, 2)] < err[(2, 0)]      # P2 beats P1; refinement pays
     assert (out / "study.png").stat().st_size > 0 and "| P2 | 2 |" in (out / "study.md").read_text()

@@ -1,7 +1,7 @@
 """The study's arithmetic: Richardson extrapolation and the Pareto front, on closed-form sequences."""
 import numpy as np
 
-from fem_forms.study import pareto, richardson, Run
+from fem_forms.study import estimate_errors, key_size, pareto, richardson, Run
 
 
 def test_richardson_recovers_the_limit_of_a_second_order_sequence():
@@ -17,3 +17,33 @@ def test_pareto_front_keeps_only_undominated_runs():
             Run(1, 1, {}, None, wall=2.0, error_finest=0.6, ok=True),     # slower and worse
             Run(2, 0, {}, None, wall=3.0, error_finest=0.01, ok=True)]
     assert [r.wall for r in pareto(runs)] == [1.0, 3.0]
+
+
+def _ladder(values, size):
+    """Converged runs P1 and P2 on three levels with the given key numbers and part size."""
+    return [Run(d, lv, {}, None, values=np.asarray(v, dtype=float), size=size, ok=True)
+            for (d, lv), v in values.items()]
+
+
+def test_errors_are_relative_to_the_finest_run_when_the_key_numbers_are_not_zero():
+    runs = _ladder({(1, 0): [0.9], (1, 1): [0.99], (2, 0): [0.98], (2, 1): [0.998], (2, 2): [1.0]}, size=1.0)
+    estimate_errors(runs, [1, 2])
+    assert [r.error_kind for r in runs] == ["relative"] * 5
+    np.testing.assert_allclose([r.error_finest for r in runs], [0.1, 0.01, 0.02, 0.002, 0.0], atol=1e-15)
+
+
+def test_key_numbers_at_round_off_give_absolute_errors_not_a_ratio_of_noise():
+    # a probe on a clamp of a 1 m part: displacements of 1e-17 m, differing run to run by round-off
+    noise = {(1, 0): [3e-17], (1, 1): [-2e-17], (2, 0): [1e-17], (2, 1): [4e-17], (2, 2): [1e-17]}
+    runs = _ladder(noise, size=1.0)
+    estimate_errors(runs, [1, 2])
+    assert {r.error_kind for r in runs} == {"absolute"}
+    np.testing.assert_allclose([r.error_finest for r in runs], [2e-17, 3e-17, 0.0, 3e-17, 0.0], atol=1e-30)
+    # relative, the same numbers would have read as errors of 200 % and 300 %
+    assert max(r.error_finest for r in runs) < 1e-16
+
+
+def test_key_size_is_the_largest_probe_point_displacement_or_frequency():
+    assert key_size({"frequencies_hz": [10.0, 250.0]}) == 250.0
+    s = {"max_displacement": 0.02, "probes": {"a": {"point": [0.3, 0.4, 0.0], "displacement": [0, 0, 1e-17]}}}
+    assert key_size(s) == 0.5
