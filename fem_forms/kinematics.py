@@ -53,12 +53,22 @@ def biot_invariants(F, fixed_point_steps: int = 2, newton_steps: int = 3) -> tup
     to 1, 3e-14 at 2 (stretches 0.14 to 7.4); tr U to about 1e-14 absolute over that range."""
     if F.ufl_shape != (3, 3):
         raise ValueError(f"biot_invariants: needs a 3x3 F (got {F.ufl_shape})")
+    return biot_from_invariants(*small_invariants(F), fixed_point_steps, newton_steps)
+
+
+def small_invariants(F) -> tuple:
+    """(e1, e2, j): tr E, the second invariant of the Green strain E and J - 1, written in H = F - I
+    so that small strains keep their digits (I1 = 3 + 2 e1, I2 = 3 + 4 e1 + 4 e2)."""
     H = F - ufl.Identity(3)
     E = ufl.sym(H) + 0.5 * H.T * H                       # Green strain, from small H
-    e1 = ufl.tr(E)                                       # I1 = 3 + 2 e1
-    e2 = 0.5 * (e1**2 - ufl.tr(E * E))                   # I2 = 3 + 4 e1 + 4 e2
-    j = ufl.tr(H) + 0.5 * (ufl.tr(H)**2 - ufl.tr(H * H)) + ufl.det(H)   # J - 1
+    e1 = ufl.tr(E)
+    e2 = 0.5 * (e1**2 - ufl.tr(E * E))
+    j = ufl.tr(H) + 0.5 * (ufl.tr(H)**2 - ufl.tr(H * H)) + ufl.det(H)
+    return e1, e2, j
 
+
+def biot_from_invariants(e1, e2, j, fixed_point_steps: int = 2, newton_steps: int = 3) -> tuple:
+    """biot_invariants from the small invariants (e1, e2, j) of small_invariants."""
     def sqrt9_minus_3(s):                                # sqrt(9 + s) - 3, exact for small s
         return s / (ufl.sqrt(9 + s) + 3)
 

@@ -126,13 +126,24 @@ def equilibrium_forms(terms: list[Term], ctx: Context, unknown: fem.Function, v)
     test, trial = ufl.TestFunction(unknown.function_space), ufl.TrialFunction(unknown.function_space)
     energy = total_energy(terms, ctx)
     extra = virtual_work(terms, ctx, v)
-    by_hand = [t.first_variation(ctx, v) for t in terms if t.residual_by_hand]
-    derived = total_energy([t for t in terms if not t.residual_by_hand], ctx)
-    parts = ([] if derived is None else [ufl.derivative(derived, unknown, test)]) + by_hand + \
-        ([] if extra is None else [extra])
+    variation = energy_variation(terms, ctx, unknown, test, v)
+    parts = [p for p in (variation, extra) if p is not None]
     residual = sum(parts[1:], parts[0])
     jacobian = ufl.derivative(residual, unknown, trial)
     return EquilibriumForms(energy, residual, jacobian, extra is None)
+
+
+def energy_variation(terms: list[Term], ctx: Context, unknown, test, v, scale=1.0) -> ufl.Form | None:
+    """d/d unknown of scale x the terms' energies at ctx, in the direction `test` (v: its displacement
+    part): ufl.derivative of the energies, and a term's own `first_variation` where it gives its residual by
+    hand (a cavity closed by symmetry planes; a material with its own pk1). A by-hand variation is taken
+    with respect to ctx.u, so `scale` must make d/d unknown of scale x energy(ctx.u) equal it (dynamics:
+    1 / (1 - alpha_f) on the energy at the generalized mid-point u_f = (1 - alpha_f) u + alpha_f u_old).
+    None if no term has an energy (a plastic solid)."""
+    by_hand = [t.first_variation(ctx, v) for t in terms if t.residual_by_hand and t.energy(ctx) is not None]
+    derived = total_energy([t for t in terms if not t.residual_by_hand], ctx)
+    parts = ([] if derived is None else [ufl.derivative(scale * derived, unknown, test)]) + by_hand
+    return sum(parts[1:], parts[0]) if parts else None
 
 
 def inverse_forms(terms: list[Term], ctx: Context, rest_offset: fem.Function,

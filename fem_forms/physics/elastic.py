@@ -5,6 +5,7 @@ import ufl
 
 from fem_forms.materials import LinearElastic, Material, mixed_energy
 from fem_forms.materials.constants import set_parameters
+from fem_forms.materials.stresses import first_piola_kirchhoff
 from fem_forms.physics.terms import Context, Solid
 from fem_forms.physics.thermoelastic import thermoelastic_density
 
@@ -19,10 +20,24 @@ class ElasticEnergy(Solid):
     def set_values(self, scene) -> None:
         set_parameters(self.material, scene.material.material)
 
+    def prepare(self, ctx: Context) -> None:
+        """A material with its own pk1 (the chain rule through its invariants) gives the residual by hand,
+        so that the tangent differentiates that P once instead of psi twice; not in the mixed formulation,
+        whose residual has the pressure equation too."""
+        self.residual_by_hand = hasattr(self.material, "pk1") and ctx.pressure is None
+
     def pk1(self, ctx: Context):
-        """P = d psi / d F (pressure field and thermal strain included) by ufl.diff."""
+        """P = d psi / d F (pressure field and thermal strain included) by ufl.diff, or by the material's
+        own pk1 where it has one and neither a pressure field nor a temperature enters psi."""
+        if self._plain(ctx):
+            return first_piola_kirchhoff(self.material, ctx.F)
         F = ufl.variable(ctx.F)
         return ufl.diff(self.density_at(ctx, F), F)
+
+    @staticmethod
+    def _plain(ctx: Context) -> bool:
+        """psi(F) is the material's own: no pressure field, no thermal strain or modulus factor."""
+        return ctx.pressure is None and ctx.thermal_strain is None and "modulus_factor" not in ctx.extra
 
     def density(self, ctx: Context):
         """psi per rest volume at the context's F (mixed energy with the context's pressure)."""
@@ -42,10 +57,10 @@ class ElasticEnergy(Solid):
         return ctx.volume(self.density(ctx))
 
     def first_variation(self, ctx: Context, v) -> ufl.Form:
-        """d/du of the energy in the direction v, written as P : Grad v dX with P = d psi / d F by ufl.diff
-        (no pressure field). The same derivative as ufl.derivative of `energy`, in a form whose tangent
-        FFCx evaluates faster when F is not I + grad u (the inverse problem: measured 13 %)."""
-        F = ufl.variable(ctx.F)
-        P = ufl.diff(self.material.psi(F), F)
+        """d/du of the energy in the direction v (the displacement part of the test function), written as
+        P : Grad v dX with P = pk1 (thermal strain included; no pressure field). The same derivative as
+        ufl.derivative of `energy`, in a form whose tangent FFCx evaluates faster when F is not I + grad u
+        (the inverse problem: measured 13 %) and compiles faster for a material with its own pk1."""
+        P = self.pk1(ctx)
         grad_v = ufl.grad(v) if ctx.rest_map is None else ufl.grad(v) * ufl.inv(ctx.rest_map)
         return ctx.volume(ufl.inner(P, grad_v))

@@ -13,7 +13,7 @@ from petsc4py import PETSc
 import ufl
 
 from fem_forms.model import Model, build_model
-from fem_forms.physics.assemble import total_energy, virtual_work
+from fem_forms.physics.assemble import energy_variation, total_energy, virtual_work
 from fem_forms.physics.damping import RayleighDamping, ViscousDamping
 from fem_forms.physics.inertia import DiscreteInertia, Inertia
 from fem_forms.physics.terms import Context, Term
@@ -110,13 +110,15 @@ def build_system(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> DynamicSystem
     test, trial = ufl.TestFunction(V), ufl.TrialFunction(V)
     stored = total_energy(model.terms, ctx_f)          # None: no conservative term (a plastic solid)
     energy = None if stored is None else (1 / (1 - td.alpha_f)) * stored
+    # d energy / du: the stored part through each term's own variation where it has one (at u_f)
+    parts = [energy_variation(model.terms, ctx_f, u, test, test, scale=1 / (1 - td.alpha_f))]
     if not lumped:
         inertia = DiscreteInertia(td, u).energy(model.context)
         energy = inertia if energy is None else energy + inertia
+        parts.append(ufl.derivative(inertia, u, test))
     extra = virtual_work(model.terms + damping, ctx_f, test)
-    residual = extra if energy is None else ufl.derivative(energy, u, test)
-    if energy is not None and extra is not None:
-        residual = residual + extra
+    parts = [p for p in parts + [extra] if p is not None]
+    residual = sum(parts[1:], parts[0])
     v_h = fem.Function(V, name="velocity_h")
     explicit = model.residual
     wd = virtual_work(damping_terms(scene, model, model.context, v_h, True), model.context, test)
