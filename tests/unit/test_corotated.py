@@ -165,3 +165,36 @@ def test_scene_model_parameters_as_constants_and_mixed_split():
 def test_unknown_model_message_lists_corotated():
     with pytest.raises(ff.InputError, match="corotated"):
         ff.make_material("hookean", E=1e6, nu=0.3)
+
+
+def test_chain_rule_stress_gives_the_energys_own_residual_and_tangent():
+    """The model's residual (P by the chain rule through the invariants, the term's residual by hand) equals
+    ufl.derivative of int psi dX at a large non-uniform deformation, and its tangent equals the central
+    difference of that residual (the energy's second ufl.derivative would cost 18 s of JIT)."""
+    from dolfinx.fem.petsc import assemble_matrix, assemble_vector
+    from fem_forms.physics.assemble import energy_variation
+    from fem_forms.physics.elastic import ElasticEnergy
+    from fem_forms.physics.terms import Context
+
+    domain = mesh.create_box(MPI.COMM_WORLD, [[0, 0, 0], [1, 0.3, 0.3]], [2, 1, 1], mesh.CellType.tetrahedron)
+    V = fem.VectorFunctionSpace(domain, ("Lagrange", 1))
+    u, v, du = fem.Function(V), ufl.TestFunction(V), ufl.TrialFunction(V)
+    u.interpolate(lambda x: np.array([0.3 * x[0] ** 2 + 0.2 * x[1], 0.4 * x[0] * x[2] - 0.1 * x[1],
+                                      0.5 * x[0] ** 2 + 0.6 * x[1] * x[2]]))
+    term = ElasticEnergy(ff.Corotated(MU, LMBDA), "corotated")
+    ctx = Context(mesh=domain, u=u, dx=ufl.dx, ds=ufl.ds, regions={}, parameters=None, load=None)
+    term.prepare(ctx)
+    assert term.residual_by_hand
+    by_hand = energy_variation([term], ctx, u, v, v)
+    residual = fem.form(by_hand)
+    b = [assemble_vector(f).array for f in (residual, fem.form(ufl.derivative(term.energy(ctx), u, v)))]
+    np.testing.assert_allclose(b[0], b[1], rtol=0, atol=1e-13 * np.abs(b[1]).max())
+    K = assemble_matrix(fem.form(ufl.derivative(by_hand, u, du)))
+    K.assemble()
+    w = np.random.default_rng(1).standard_normal(len(u.x.array))
+    Kw = K.convert("dense").getDenseArray() @ w
+    u0, h, side = u.x.array.copy(), 1e-6, []
+    for sign in (1, -1):
+        u.x.array[:] = u0 + sign * h * w
+        side.append(assemble_vector(residual).array.copy())
+    np.testing.assert_allclose(Kw, (side[0] - side[1]) / (2 * h), rtol=0, atol=1e-8 * np.abs(Kw).max())
