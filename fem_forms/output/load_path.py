@@ -1,6 +1,6 @@
 """The load path of a static run that takes more than one load step, written as it is walked: after every
-accepted step a row of probes.csv (load factor, pseudo-time, each probe's displacement, the scalars the
-terms record) and the fields at that step in fields.xdmf (ParaView plays the path); at the end a
+accepted step a row of probes.csv (load factor, pseudo-time, each probe's displacement, each support's
+reaction, the scalars the terms record) and the fields at that step in fields.xdmf (ParaView plays the path); at the end a
 load-displacement picture, load_path.png. Each step's files are complete on disk before the next step
 starts, so a run stopped at a limit point or interrupted keeps its last converged state, and the
 interrupted results.json is written from rank 0's copy of that step without any collective call.
@@ -21,6 +21,8 @@ from fem_forms.output import fields, probes, results
 from fem_forms.output.guard import attempt
 from fem_forms.output.plastic import plastic_fields
 from fem_forms.output.quantities import Quantities, output_fields
+from fem_forms.output.reactions import support_forces
+from fem_forms.scene.spec import fix_names
 
 
 def field_functions(model, quantities: Quantities, names: list[str]) -> list:
@@ -74,11 +76,12 @@ class LoadPath:
         model = self.model
         model.sync_displacement()
         values = model.probes.evaluate(model.u)
+        forces = support_forces(model) if self.scene.fix else np.zeros((0, 3))
         recorded = records(model)
         if not self.rows:
             self.record_names = list(recorded)
         self.rows.append([lam, lam * self.span] + [x for n in model.probes.names for x in values[n]]
-                         + [recorded.get(k, math.nan) for k in self.record_names])
+                         + forces.ravel().tolist() + [recorded.get(k, math.nan) for k in self.record_names])
         if not self.stepping and lam < 1.0 - 1e-12:  # the first of several steps: the folder is needed now
             self.stepping = True
             if self.comm.rank == 0:
@@ -90,11 +93,14 @@ class LoadPath:
             self.files["probes"] = "probes.csv"
             self.comm.barrier()
         self.last = {"load_factor": lam, "time": lam * self.span, "steps": len(self.rows), "probes": values,
+                     "reactions": dict(zip(fix_names(self.scene.fix), forces.tolist())),
                      "records": recorded, "files": dict(self.files)}
 
     def head(self) -> list[str]:
-        """probes.csv's columns: load_factor, time, NAME_ux, NAME_uy, NAME_uz per probe, then the records."""
-        return ["load_factor", "time"] + probes.columns(self.model.probes.names) + self.record_names
+        """probes.csv's columns: load_factor, time, NAME_ux, NAME_uy, NAME_uz per probe, FIX_Fx, FIX_Fy, FIX_Fz
+        per support (the force it exerts on the body, N: a displacement-driven run's load), then the records."""
+        return (["load_factor", "time"] + probes.columns(self.model.probes.names)
+                + probes.columns(fix_names(self.scene.fix), ("Fx", "Fy", "Fz")) + self.record_names)
 
     def _write_fields(self, t: float) -> None:
         """This step's fields appended to fields.xdmf (created with the mesh at the first step); a failure
@@ -148,7 +154,7 @@ class LoadPath:
         axes[0, 0].set_ylabel("|u| at probe [m]")
         if self.model.probes.names:
             axes[0, 0].legend(fontsize=8)
-        first = 2 + 3 * len(self.model.probes.names)
+        first = 2 + 3 * len(self.model.probes.names) + 3 * len(self.scene.fix)
         for k, name in enumerate(shown):
             ax = axes[1 + k, 0]
             ax.plot(rows[:, 0], rows[:, first + k], "o-", ms=3)
@@ -174,6 +180,7 @@ class LoadPath:
                                                 "physics": model.physics, "warnings": model.warnings}),
                    "probes": {n: {"point": self.scene.output.probes[n], "displacement": v}
                               for n, v in last["probes"].items()},
+                   **({"reactions": last["reactions"]} if last.get("reactions") else {}),
                    **({"records": last["records"]} if last["records"] else {}),
                    "message": f"interrupted: load factor {last['load_factor']:.6g} reached in {last['steps']} "
                               f"accepted load step{'' if last['steps'] == 1 else 's'}; the files hold that state",

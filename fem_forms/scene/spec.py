@@ -269,8 +269,8 @@ LOAD_TYPES = {
                       kinds=("group",))),
     "traction": (LOAD_WHERE, Key("value", "vector", "dead traction per unit reference area", unit="Pa",
                                  required=True, length=3)),
-    "pressure": (LOAD_WHERE, Key("value", "number", "follower pressure on the deformed surface", unit="Pa",
-                                 required=True, attr="pressure")),
+    "pressure": (LOAD_WHERE, Key("pressure", "number", "follower pressure on the deformed surface", unit="Pa"),
+                 Key("value", "number", "the same as pressure (its first spelling, still read)", unit="Pa")),
     # a closed cavity's pressure as an energy, -p (V - V0): pressure or volume control (physics/cavities.py)
     "inflation": (where("the cavity's walls: a closed surface, or one closed by symmetry planes through the origin",
                         kinds=AREA_SELECTORS),
@@ -301,6 +301,11 @@ class Load:
 
 
 def _load_rules(ld: Load, t: Table) -> None:
+    if ld.type == "pressure":                      # `pressure`, as Load's attribute; `value` read as before
+        if (ld.pressure is None) == (ld.value is None):
+            raise InputError(f"{t.key('pressure')}: a pressure load gives its pressure (Pa) as pressure = ... "
+                             "(or value = ..., its first spelling), once")
+        ld.pressure, ld.value = (ld.pressure if ld.value is None else float(ld.value)), None
     if ld.type == "inflation" and (ld.pressure is None) == (ld.volume is None):
         raise InputError(f"{t.key('pressure')}: an inflation load gives either pressure (pressure control) or "
                          "volume (volume control), not both, not neither")

@@ -173,10 +173,11 @@ def check_interrupted_outputs(out: Path, tets: int = 20 * 3 * 3 * 6) -> dict:
     res = json.loads((out / "results.json").read_text())
     assert res["interrupted"] is True and res["converged"] is False
     rows = (out / "probes.csv").read_text().splitlines()
-    assert rows[0] == "load_factor,time,tip_ux,tip_uy,tip_uz" and len(rows) - 1 == res["load_steps"] >= 1
+    assert rows[0] == "load_factor,time,tip_ux,tip_uy,tip_uz,fix0_Fx,fix0_Fy,fix0_Fz" and len(rows) - 1 == res["load_steps"] >= 1
     last = [float(x) for x in rows[-1].split(",")]
     assert last[0] == pytest.approx(res["load_reached"], rel=1e-9) and 0 < last[0] < 1
-    assert last[2:] == pytest.approx(res["probes"]["tip"]["displacement"], rel=1e-9)
+    assert last[2:5] == pytest.approx(res["probes"]["tip"]["displacement"], rel=1e-9)
+    assert last[5:] == pytest.approx(res["reactions"]["fix0"], rel=1e-9)       # the clamp's force at that step
     times = [float(t.get("Value")) for t in ET.parse(out / "fields.xdmf").getroot().iter("Time")]
     assert len(times) == res["load_steps"] and times[-1] == pytest.approx(res["load_reached"], rel=1e-9)
     with dolfinx_io.XDMFFile(MPI.COMM_SELF, str(out / "fields.xdmf"), "r") as f:

@@ -209,3 +209,16 @@ def test_the_material_is_built_once_when_the_scene_is_read():
     mr = Scene.from_dict(changed("material", {"model": "mooney-rivlin", "C10": 1e5, "C01": 2e4, "lambda": 1e6,
                                               "rho": 1.0}))
     assert mr.material.material == make_material("mooney-rivlin", C10=1e5, C01=2e4, lmbda=1e6)
+
+
+def test_a_pressure_load_reads_pressure_as_its_python_attribute_and_value_as_before():
+    """`pressure = ...` (the key named like Load.pressure and like an inflation load's) and `value = ...`
+    (its first spelling) give the same load; both or neither: one line naming the key."""
+    def load(**keys):
+        return changed("load", [{"type": "pressure", "where": {"axis": "z", "at": 0.1}, **keys}])
+    assert Scene.from_dict(load(pressure=2e4)).load[0].pressure == 2e4
+    old = Scene.from_dict(load(value=2e4)).load[0]
+    assert old.pressure == 2e4 and old.value is None
+    for keys in ({"pressure": 1.0, "value": 1.0}, {}):
+        with pytest.raises(InputError, match=r"^load\[0\]\.pressure: a pressure load gives its pressure"):
+            Scene.from_dict(load(**keys))
