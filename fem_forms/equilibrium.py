@@ -215,7 +215,8 @@ def solve_static(scene: Scene, material=None, model: Model | None = None,
                                         max_cutbacks=scene.solver.max_cutbacks, linear_kind=linear_kind,
                                         near_nullspace=lambda: rigid_body_modes(model.V), stops=stops,
                                         min_step=min_load_step(model) if model.solid.is_plastic else 0.0,
-                                        limit_step=min_load_step(model), on_step=on_step or (lambda lam: None))
+                                        limit_step=min_load_step(model), on_step=on_step or (lambda lam: None),
+                                        max_step=scene.solver.max_step)
     r0.destroy()
     result = StaticResult(model, report)
     if report.converged:

@@ -317,6 +317,9 @@ def _load_rules(ld: Load, t: Table) -> None:
 SOLVER_KEYS = (
     Key("steps", "integer", "initial number of load steps", default=1, exclusive_minimum=0),
     Key("max_cutbacks", "integer", "how often a failed load step may be halved", default=12, minimum=0),
+    Key("max_step", "number", "largest load-factor increment of a step (load control): steps grow 1.5x after a "
+        "success up to it, so the load path is sampled at least this finely", default=1.0, exclusive_minimum=0,
+        maximum=1),
     Key("linear", "string", "linear solver: auto, direct (MUMPS) or iterative (CG + GAMG)", default="auto",
         choices=("auto", "direct", "iterative")),
     Key("control", "string", "what the continuation steps: the load factor (load), or the arc length along "
@@ -331,6 +334,7 @@ _SOLVER = {k.name: k for k in SOLVER_KEYS}
 class SolverSpec:
     steps: int = _SOLVER["steps"].field()
     max_cutbacks: int = _SOLVER["max_cutbacks"].field()
+    max_step: float = _SOLVER["max_step"].field()
     linear: str = _SOLVER["linear"].field()
     control: str = _SOLVER["control"].field()
     petsc: dict = _SOLVER["petsc"].field()

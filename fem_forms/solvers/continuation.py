@@ -22,7 +22,8 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
           near_nullspace: Callable[[], PETSc.NullSpace] | None = None,
           prefix: str = "fem_forms_", predictor: bool = True, reuse_factor: bool | str = False,
           driver: SNESDriver | None = None, stops: tuple = (), min_step: float = 0.0,
-          limit_step: float = 0.0, on_step: Callable[[float], None] = lambda lam: None) -> SolveReport:
+          limit_step: float = 0.0, on_step: Callable[[float], None] = lambda lam: None,
+          max_step: float = 1.0) -> SolveReport:
     """Continuation lambda: 0 -> 1 in `steps` increments, the increment grown 1.5x after a success and
     halved after a failure (at most `max_cutbacks` halvings in a row). A step is accepted only when
     SNES converged AND an independent re-assembly of the residual is small AND the state is finite
@@ -38,7 +39,8 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
     minutes on a perfectly plastic bar). `limit_step`: the same, but only once the path has flattened (near a
     limit point: a neo-Hookean sphere past its pressure maximum ran 10 minutes); elsewhere tiny steps of a
     hyperelastic solid do make progress (a rope-like beam at E = 100 Pa takes 1,000+ of them).
-    `on_step(lam)` runs after each accepted step, its state committed (per-step output, interrupts)."""
+    `on_step(lam)` runs after each accepted step, its state committed (per-step output, interrupts).
+    `max_step`: no increment grows beyond it (a load path sampled at least that finely)."""
     t0 = time.perf_counter()
     drv = driver or SNESDriver(problem, options, linear_kind, prefix, near_nullspace, reuse_factor)
     assembly0 = drv.assembly_time
@@ -52,7 +54,7 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
     set_load(1.0)                                    # reference scale: the rest state's residual at full load
     r_full = drv.load_scale(refresh=True)            # a reused driver's loads or rest shape may have changed
     report = SolveReport(False, 0.0, 0, math.nan, linear_solver=drv.linear_kind, load_scale=r_full)
-    lam, dlam, cuts = 0.0, 1.0 / steps, 0
+    lam, dlam, cuts = 0.0, min(1.0 / steps, max_step), 0
     if problem.set_load is None:                     # nothing to continue in: one attempt
         lam, dlam, max_cutbacks = 0.0, 1.0, 0
     last_step, last_dlam = None, 0.0                # secant: u_k - u_{k-1} over lambda_k - lambda_{k-1}
@@ -81,7 +83,7 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
             drv.newton_cap = path.newton_cap()   # near a limit point no step is worth the full Newton limit
             state.commit()
             lam, cuts = trial, 0
-            dlam = min(1.0 - lam, 1.5 * dlam) if lam < 1.0 else dlam
+            dlam = min(1.0 - lam, 1.5 * dlam, max_step) if lam < 1.0 else dlam
             report.load_reached = lam
             on_step(lam)
         else:
