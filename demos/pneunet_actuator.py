@@ -9,8 +9,8 @@ y of the end face, from two probes at its top and bottom edges.
 One point per accepted load step: from probes.csv when the static run writes it (`<probe>_ux..`, `chambers_
 pressure`, `chambers_volume`), else recorded here after each accepted step. Run:
 `.venv/bin/python demos/pneunet_actuator.py [OUT_DIR] [H]` (H the cell size in m, default 0.006). Writes
-the mesh, results.json, fields.xdmf, curve.csv and curve.png (tip angle and pressure against injected volume).
-No GIF of the stroke: per-step deformed shapes are not kept by the static run on this branch.
+the mesh, results.json, fields.xdmf (every step), curve.csv, curve.png (tip angle and pressure against
+injected volume) and stroke.gif (the deformed actuator at every accepted step, true scale).
 """
 import csv
 import math
@@ -22,9 +22,11 @@ import numpy as np
 
 import fem_forms as ff
 from fem_forms import progress
+from fem_forms.analyses.dynamic.output import write_gif
 from fem_forms.analyses.static import write_static_outputs
 from fem_forms.equilibrium import solve_static
 from fem_forms.model import build_model
+from fem_forms.output.fields import boundary_surface
 from fem_forms.physics.cavities import cavity_report
 
 here = Path(__file__).parent
@@ -41,14 +43,18 @@ def tip_angle(top, bottom) -> float:
     return math.degrees(math.atan2(top[0] - bottom[0], pneunet.H + top[2] - bottom[2]))
 
 
-def recorder(model, rows: list):
-    """A progress reporter appending (injected volume, pressure, tip angle) after each accepted step."""
-    def report(event, **fields):
+def recorder(model, rows: list, frames: list):
+    """A progress reporter appending (injected volume, pressure, tip angle) and the deformed boundary (rank 0)
+    after each accepted step."""
+    def report(event, **info):
         if event == "step_accepted":
             model.sync_displacement()
             cav = cavity_report(model.terms)["chambers"]
             u = model.probes.evaluate(model.u)
             rows.append((cav["volume_change"], cav["pressure"], tip_angle(u["tip_top"], u["tip_bottom"])))
+            surface = boundary_surface(model.u)             # gathered on rank 0 for the GIF
+            if surface is not None:
+                frames.append((cav["volume_change"] * 1e6, surface))
     return report
 
 
@@ -67,8 +73,8 @@ if comm.rank == 0:
     pneunet.build(out / "pneunet.msh", h)
 comm.barrier()
 scene = ff.Scene.from_file(here / "scenes" / "pneunet.toml", overrides={"mesh.file": str(out / "pneunet.msh")})
-model, rows = build_model(scene), []
-progress.set_reporter(recorder(model, rows))
+model, rows, frames = build_model(scene), [], []
+progress.set_reporter(recorder(model, rows, frames))
 result = solve_static(scene, model=model)
 progress.set_reporter(None)
 s = write_static_outputs(result, out)
@@ -96,6 +102,7 @@ if comm.rank == 0:
     ax.set_title(scene.title, fontsize=9)
     fig.tight_layout()
     fig.savefig(out / "curve.png", dpi=120)
+    write_gif(out / "stroke.gif", frames, "PneuNet", fps=8, label="{:.1f} ml injected")
     print(f"{scene.title}: {s['dofs']} dofs, {s['load_steps']} load steps, {s['newton_iterations']} Newton "
           f"iterations, {s['wall_time_s']:.1f} s, converged {s['converged']}")
     print(f"  curve ({source}): injected volume [ml], pressure [kPa], tip angle [deg]")
@@ -104,4 +111,4 @@ if comm.rank == 0:
     if cav:
         print(f"  at {cav['volume_change'] * 1e6:.4f} ml injected: pressure {cav['pressure'] / 1e3:.4f} kPa, "
               f"tip angle {curve[-1, 2]:.2f} deg")
-    print(f"  wrote {out}/results.json, fields.xdmf, curve.csv, curve.png")
+    print(f"  wrote {out}/results.json, fields.xdmf, curve.csv, curve.png, stroke.gif ({len(frames)} frames)")

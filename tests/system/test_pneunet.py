@@ -12,6 +12,7 @@ solve's own bookkeeping:
 import json
 
 import numpy as np
+from PIL import Image
 import pytest
 
 from helpers import ROOT, mpirun
@@ -43,6 +44,8 @@ def test_pneunet_actuator_demo(demo):
     assert np.all(np.diff(angle) > 0), angle                  # the actuator curls on with every step
     assert angle[-1] >= 90.0
     assert grab(rf"tip angle ({NUMBER}) deg", text)[0] == pytest.approx(angle[-1], abs=0.01)
+    with Image.open(out / "stroke.gif") as gif:               # the stroke: one frame per accepted step
+        assert gif.n_frames == res["load_steps"] == len(v) - 1
     # no net force at the clamp: the pressure's resultant over the closed walls vanishes
     force = np.linalg.norm(res["reactions"]["clamp"])
     chamber_section = 0.014 * 0.0065                          # m^2: one chamber's cross-section

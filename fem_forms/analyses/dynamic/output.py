@@ -62,8 +62,9 @@ class MotionWriter:
             self.xdmf.close()
 
 
-def write_gif(path: Path, frames: list, title: str, fps: int = 12) -> None:
-    """Animated GIF (matplotlib + pillow) of the deformed boundary, true scale."""
+def write_gif(path: Path, frames: list, title: str, fps: int = 12, label: str = "t = {:.4g} s") -> None:
+    """Animated GIF (matplotlib + pillow) of the deformed boundary, true scale; frames are (value, boundary
+    surface) pairs, each frame titled `title: label.format(value)`."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -83,7 +84,7 @@ def write_gif(path: Path, frames: list, title: str, fps: int = 12) -> None:
         ax.set_xlim(lo[0], hi[0]), ax.set_ylim(lo[1], hi[1]), ax.set_zlim(lo[2], hi[2])
         ax.set_box_aspect(np.maximum(hi - lo, 0.05 * (hi - lo).max()))
         ax.set_axis_off()
-        ax.set_title(f"{title}: t = {t:.4g} s", fontsize=9)
+        ax.set_title(f"{title}: {label.format(t)}", fontsize=9)
 
     anim = FuncAnimation(fig, draw, frames=len(frames))
     anim.save(str(path), writer=PillowWriter(fps=fps))
