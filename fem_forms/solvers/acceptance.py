@@ -46,7 +46,7 @@ def why_rejected(driver: SNESDriver, record: StepRecord, rtol: float | None = AC
     if not record.accepted:
         return f"SNES {record.reason}"
     if not finite_everywhere(driver.p.u.x.array, driver.comm):
-        return "NaN or Inf in the solution"
+        return NOT_FINITE
     if driver.p.inadmissible is not None and (bad := driver.p.inadmissible()):
         return bad
     if rtol is None:
@@ -60,6 +60,15 @@ def why_rejected(driver: SNESDriver, record: StepRecord, rtol: float | None = AC
     if rn > rtol * scale and rn > driver.roundoff_floor(ROUNDOFF_SAFETY):
         return f"residual {rn:.3e} left, above {rtol:g} of its scale {scale:.3e}"
     return None
+
+
+NOT_FINITE = "NaN or Inf in the solution"
+
+
+def left_the_domain(record: StepRecord, why: str | None) -> bool:
+    """Whether a rejected step failed because an iterate left the solid's domain (a NaN residual or state:
+    an element turned inside out) rather than for slow convergence or a plastic collapse."""
+    return "NAN" in record.reason.upper() or why == NOT_FINITE or (why or "").startswith("inverted elements")
 
 
 def finite_everywhere(values: np.ndarray, comm: MPI.Comm) -> bool:

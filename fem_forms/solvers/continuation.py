@@ -58,6 +58,9 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
     if problem.set_load is None:                     # nothing to continue in: one attempt
         lam, dlam, max_cutbacks = 0.0, 1.0, 0
     last_step, last_dlam = None, 0.0                # secant: u_k - u_{k-1} over lambda_k - lambda_{k-1}
+    # after a cut-back because a trial left the domain (an element inverted), the next accepted increment is
+    # not grown: grown at once it lands on the same failure (the PneuNet actuator failed every other step so)
+    hold = False
     path = PathStiffness(u)
     while lam < 1.0 - 1e-12:
         trial = min([1.0, lam + dlam] + [s for s in stops if s > lam + 1e-12])
@@ -83,12 +86,14 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
             drv.newton_cap = path.newton_cap()   # near a limit point no step is worth the full Newton limit
             state.commit()
             lam, cuts = trial, 0
-            dlam = min(1.0 - lam, 1.5 * dlam, max_step) if lam < 1.0 else dlam
+            dlam = min(1.0 - lam, (1.0 if hold else 1.5) * dlam, max_step) if lam < 1.0 else dlam
+            hold = False
             report.load_reached = lam
             on_step(lam)
         else:
             state.rollback()                         # back to the last accepted state, history included
             cuts, dlam = (cuts, dlam) if same_step else (cuts + 1, 0.5 * dlam)
+            hold = hold or acceptance.left_the_domain(rec, why)
             drv.rebuild()                        # fresh solver state after a failure
             drv.newton_cap = path.newton_cap()
             if cuts > max_cutbacks or dlam < min_step or (dlam < limit_step and path.near_limit()):

@@ -51,7 +51,8 @@ def sample(k: Key, tmp: Path):
 
 
 CROSS_KEY_NEEDS = {"material": {"E": 1e6, "nu": 0.3}}      # what the rules after the declarations ask
-CASE_NEEDS = {("load", "inflation"): {"pressure": 1e3}}      # one of pressure or volume (neither is required alone)
+CASE_NEEDS = {("load", "inflation"): {"pressure": 1e3},       # one of pressure or volume (neither is required alone)
+              ("load", "pressure"): {"pressure": 1e3}}        # pressure, or value (its first spelling)
 
 
 def minimal_cases(section: Section, tmp: Path):
