@@ -24,23 +24,20 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
           driver: SNESDriver | None = None, stops: tuple = (), min_step: float = 0.0,
           limit_step: float = 0.0, on_step: Callable[[float], None] = lambda lam: None,
           max_step: float = 1.0) -> SolveReport:
-    """Continuation lambda: 0 -> 1 in `steps` increments, the increment grown 1.5x after a success and
-    halved after a failure (at most `max_cutbacks` halvings in a row). A step is accepted only when
+    """Continuation lambda: 0 -> 1 in `steps` increments, the increment grown after a success (next_increment)
+    and halved after a failure (at most `max_cutbacks` halvings in a row). A step is accepted only when
     SNES converged AND an independent re-assembly of the residual is small AND the state is finite
     and admissible (no inverted elements). With `predictor`, each step starts from the secant
     extrapolation of the last two accepted states (a better first guess, fewer Newton steps).
-    `reuse_factor` factors the direct solver's LU once per load step (linear.REUSED_FACTOR).
-    A `driver` built once for `problem` and passed to repeated solves keeps its compiled forms,
-    matrix and SNES (the caller owns it); otherwise one is built here and destroyed at the end.
-    `stops`: load factors every step sequence must land on (the corners of a static load history, so that
-    a path-dependent material sees the peak load). `min_step`: give up once a halved increment is smaller
-    (a limit load such as plastic collapse is otherwise approached for ever: steps of shrinking size pass,
-    each failure between them resetting the count of cut-backs in a row; measured: 25,000 steps in 2
-    minutes on a perfectly plastic bar). `limit_step`: the same, but only once the path has flattened (near a
-    limit point: a neo-Hookean sphere past its pressure maximum ran 10 minutes); elsewhere tiny steps of a
-    hyperelastic solid do make progress (a rope-like beam at E = 100 Pa takes 1,000+ of them).
-    `on_step(lam)` runs after each accepted step, its state committed (per-step output, interrupts).
-    `max_step`: no increment grows beyond it (a load path sampled at least that finely)."""
+    `reuse_factor` factors the direct solver's LU once per load step (linear.REUSED_FACTOR). A `driver` built
+    once for `problem` and passed to repeated solves keeps its forms, matrix and SNES (the caller owns it).
+    `stops`: load factors every step sequence must land on (a static load history's corners: a path-dependent
+    material sees the peak load). `max_step`: the largest increment. `min_step`: give up once a halved
+    increment is smaller (a limit load such as plastic collapse is otherwise approached for ever, each failure
+    resetting the count of cut-backs in a row: 25,000 steps in 2 minutes on a perfectly plastic bar).
+    `limit_step`: the same, once the path has flattened (near a limit point: a neo-Hookean sphere past its
+    pressure maximum ran 10 minutes); elsewhere tiny steps of a hyperelastic solid do make progress (a
+    rope-like beam at E = 100 Pa takes 1,000+ of them). `on_step(lam)` runs after each accepted, committed step."""
     t0 = time.perf_counter()
     drv = driver or SNESDriver(problem, options, linear_kind, prefix, near_nullspace, reuse_factor)
     assembly0 = drv.assembly_time
@@ -58,9 +55,7 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
     if problem.set_load is None:                     # nothing to continue in: one attempt
         lam, dlam, max_cutbacks = 0.0, 1.0, 0
     last_step, last_dlam = None, 0.0                # secant: u_k - u_{k-1} over lambda_k - lambda_{k-1}
-    # after a cut-back because a trial left the domain (an element inverted), the next accepted increment is
-    # not grown: grown at once it lands on the same failure (the PneuNet actuator failed every other step so)
-    hold = False
+    hold = False                                     # the last cut-back's trial left the domain
     path = PathStiffness(u)
     while lam < 1.0 - 1e-12:
         trial = min([1.0, lam + dlam] + [s for s in stops if s > lam + 1e-12])
@@ -86,8 +81,7 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
             drv.newton_cap = path.newton_cap()   # near a limit point no step is worth the full Newton limit
             state.commit()
             lam, cuts = trial, 0
-            dlam = min(1.0 - lam, (1.0 if hold else 1.5) * dlam, max_step) if lam < 1.0 else dlam
-            hold = False
+            dlam, hold = next_increment(lam, dlam, hold, max_step), False
             report.load_reached = lam
             on_step(lam)
         else:
@@ -103,6 +97,14 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
     else:
         report.converged, report.message = True, "converged"
     return _finish(report, drv, assembly0, t0, own_driver=driver is None)
+
+
+def next_increment(lam: float, dlam: float, hold: bool, max_step: float) -> float:
+    """The increment after an accepted step at `lam`: 1.5x the last, or the same when the cut-back before it
+    was for a trial that left the domain (an element inverted: grown at once it met the same failure, the
+    PneuNet actuator every other step), at most `max_step` (a load path sampled at least that finely) and
+    what is left to full load."""
+    return min(1.0 - lam, (1.0 if hold else 1.5) * dlam, max_step) if lam < 1.0 else dlam
 
 
 def _finish(report: SolveReport, drv: SNESDriver, assembly0: float, t0: float, own_driver: bool) -> SolveReport:

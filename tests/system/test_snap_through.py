@@ -12,7 +12,6 @@ Gere, Theory of Elastic Stability, 7.7): q = EI k^4 [(e - a) + (e^2 - a^2) a / (
 a, k = pi / L; its limit point exists for e > 2 r and comes before the antisymmetric bifurcation for
 e < sqrt(22) r. With e = 4 r it is q_max = 8 EI k^4 r; a crown load P counts as q L / 2 in that mode. The
 one-mode shape is stiffer than the arch's (a Ritz bound), so the peak must lie a little below it."""
-import json
 import math
 
 import meshio
