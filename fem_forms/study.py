@@ -257,8 +257,11 @@ def run_study(scene_path: Path, out: Path, degrees: list[int], refine: int, over
 
 
 def cheapest_meeting(runs: list[Run], tolerance: float) -> Run | None:
-    """The fastest converged run whose estimated error is within the tolerance."""
-    ok = [r for r in runs if r.ok and np.isfinite(_err(r)) and _err(r) <= tolerance]
+    """The fastest converged run whose estimated error is within the tolerance (relative; for absolute errors,
+    key numbers at round-off, the tolerance times the part's size)."""
+    def allowed(r: Run) -> float:
+        return tolerance * (r.size if r.error_kind == "absolute" else 1.0)
+    ok = [r for r in runs if r.ok and np.isfinite(_err(r)) and _err(r) <= allowed(r)]
     return min(ok, key=lambda r: r.wall) if ok else None
 
 

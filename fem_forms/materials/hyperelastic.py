@@ -14,6 +14,9 @@ from fem_forms.kinematics import (biot_from_invariants, biot_invariants, green_s
 
 
 class Material(Protocol):
+    """An energy density psi(F). Optional: `pk1(F)`, the same d psi / d F written another way (the chain rule
+    through invariants, faster to compile); a material that has it gets its residual from it, so it must be
+    exactly the derivative of psi (the energy line search uses psi)."""
     def psi(self, F) -> ufl.core.expr.Expr: ...
 
 

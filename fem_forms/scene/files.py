@@ -22,6 +22,11 @@ def read_toml(path: str | Path, overrides: dict | None = None) -> dict:
     return data
 
 
+# keys a table of this `type` may spell two ways (a pressure load's pressure, first spelled value): an override of
+# one replaces the other, so `--set load.0.pressure=...` works on a scene that says value = ...
+SPELLINGS = {"pressure": ("pressure", "value")}
+
+
 def set_key(data: dict, dotted: str, value: Any) -> None:
     """data["a"]["b"] = value for dotted = "a.b" (tables are created as needed). An integer part indexes an
     array, e.g. "load.0.value" (the first [[load]]) or "mesh.cells.0"; an index out of range, a word into
@@ -38,6 +43,9 @@ def set_key(data: dict, dotted: str, value: Any) -> None:
         elif not last and k not in node and parts[depth + 1].lstrip("-").isdigit():
             raise InputError(f"--set {dotted}: the scene has no {'.'.join(parts[:depth + 1])!r} array to index")
         if last:
+            if isinstance(node, dict) and k in SPELLINGS.get(node.get("type"), ()):
+                for other in SPELLINGS[node["type"]]:
+                    node.pop(other, None)
             node[k] = value
         elif isinstance(node, dict):
             node = node.setdefault(k, {})

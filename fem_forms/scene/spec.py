@@ -317,8 +317,9 @@ def _load_rules(ld: Load, t: Table) -> None:
 SOLVER_KEYS = (
     Key("steps", "integer", "initial number of load steps", default=1, exclusive_minimum=0),
     Key("max_cutbacks", "integer", "how often a failed load step may be halved", default=12, minimum=0),
-    Key("max_step", "number", "largest load-factor increment of a step (load control): steps grow 1.5x after a "
-        "success up to it, so the load path is sampled at least this finely", default=1.0, exclusive_minimum=0,
+    Key("max_step", "number", "largest load-factor increment of a static run's step (load control; not the "
+        "inverse designs nor arc length): steps grow 1.5x after a success up to it, so the load path is sampled "
+        "at least this finely", default=1.0, exclusive_minimum=0,
         maximum=1),
     Key("linear", "string", "linear solver: auto, direct (MUMPS) or iterative (CG + GAMG)", default="auto",
         choices=("auto", "direct", "iterative")),

@@ -198,3 +198,9 @@ def test_chain_rule_stress_gives_the_energys_own_residual_and_tangent():
         u.x.array[:] = u0 + sign * h * w
         side.append(assemble_vector(residual).array.copy())
     np.testing.assert_allclose(Kw, (side[0] - side[1]) / (2 * h), rtol=0, atol=1e-8 * np.abs(Kw).max())
+    # with a thermal strain (set after prepare(), as build_model does) the by-hand residual takes it in too
+    u.x.array[:] = u0
+    ctx.thermal_strain = fem.Constant(domain, 0.02)
+    b = [assemble_vector(fem.form(f)).array for f in (energy_variation([term], ctx, u, v, v),
+                                                       ufl.derivative(term.energy(ctx), u, v))]
+    np.testing.assert_allclose(b[0], b[1], rtol=0, atol=1e-13 * np.abs(b[1]).max())

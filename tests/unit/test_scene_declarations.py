@@ -223,3 +223,13 @@ def test_a_pressure_load_reads_pressure_as_its_python_attribute_and_value_as_bef
     for keys in ({"pressure": 1.0, "value": 1.0}, {}):
         with pytest.raises(InputError, match=r"^load\[0\]\.pressure: a pressure load gives its pressure"):
             Scene.from_dict(load(**keys))
+
+
+def test_an_override_of_one_spelling_of_a_pressure_replaces_the_other(tmp_path):
+    """--set load.0.pressure=... on a scene that spells it value = ... (and the other way round)."""
+    path = tmp_path / "scene.toml"
+    path.write_text('[mesh]\nsize = [1.0, 0.1, 0.1]\n[material]\nE = 1e6\nnu = 0.3\n[[fix]]\nwhere = { axis = "x", at = 0.0 }\n'
+                    '[[load]]\ntype = "pressure"\nwhere = { axis = "z", at = 0.1 }\nvalue = 1.0\n')
+    assert Scene.from_file(path, {"load.0.pressure": 3.0}).load[0].pressure == 3.0
+    assert Scene.from_file(path, {"load.0.value": 4.0}).load[0].pressure == 4.0
+

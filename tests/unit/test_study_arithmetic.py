@@ -47,3 +47,10 @@ def test_key_size_is_the_largest_probe_point_displacement_or_frequency():
     assert key_size({"frequencies_hz": [10.0, 250.0]}) == 250.0
     s = {"max_displacement": 0.02, "probes": {"a": {"point": [0.3, 0.4, 0.0], "displacement": [0, 0, 1e-17]}}}
     assert key_size(s) == 0.5
+
+
+def test_a_tolerance_on_absolute_errors_is_relative_to_the_part_size():
+    from fem_forms.study import cheapest_meeting
+    runs = [Run(1, 0, {}, None, wall=1.0, error_finest=5e-3, size=1.0, error_kind="absolute", ok=True),
+            Run(2, 0, {}, None, wall=2.0, error_finest=1e-5, size=1.0, error_kind="absolute", ok=True)]
+    assert cheapest_meeting(runs, 1e-3).wall == 2.0           # 5 mm on a 1 m part misses 1e-3; 10 um meets it
