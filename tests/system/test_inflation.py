@@ -112,6 +112,7 @@ def test_inflation_keys_are_checked(tmp_path, capsys):
     assert code == 2 and "load[0].volume: volume control is for analysis = 'static'" in err
 
 
+@pytest.mark.mpi
 def test_volume_control_on_two_ranks_gives_the_serial_answer(sphere_mesh, tmp_path, capsys):
     d = sphere_scene(sphere_mesh, steps=2, volume=0.5)
     code, serial, err, _ = run_scene(tmp_path, d, capsys)

@@ -171,6 +171,7 @@ def test_obrien_plastic_limit_caps_the_plastic_strain():
     assert r.probes["c"][0] == pytest.approx(0.015 * math.sqrt(2 / 3), rel=1e-9)
 
 
+@pytest.mark.mpi
 def test_two_ranks_give_the_serial_plastic_answer(sphere_mesh, tmp_path):
     d = sphere_scene(sphere_mesh, 250e6)
     d["output"]["fields"] = ["displacement"]

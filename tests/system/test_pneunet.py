@@ -56,6 +56,7 @@ def test_pneunet_actuator_demo(demo):
     assert work == pytest.approx(stored, rel=0.005)          # measured 0.11 % (trapezoid on 34 steps)
 
 
+@pytest.mark.mpi
 def test_pneunet_on_two_ranks_gives_the_serial_answer(demo, two_ranks):
     _, out = demo("pneunet_actuator")
     one = json.loads((out / "results.json").read_text())
