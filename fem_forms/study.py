@@ -175,7 +175,8 @@ def write_report(runs: list[Run], out: Path, title: str) -> str:
     """Markdown table, CSV and a PNG of error against wall time with the Pareto front."""
     absolute = any(r.ok and r.error_kind == "absolute" for r in runs)
     err = "absolute error [m]" if absolute else "error"
-    rows = [f"| degree | mesh level | dofs | {err} vs finest | {err} vs Richardson | wall time [s] | peak memory [MB] |",
+    rows = [f"| degree | mesh level | dofs | {err} vs finest | {err} vs Richardson | wall time [s] "
+            "| peak memory [MB] |",
             "|---|---|---|---|---|---|---|"]
     csv = ["degree,level,dofs,error_finest,error_richardson,wall_time_s,peak_memory_mb,converged,error_kind"]
     for r in runs:

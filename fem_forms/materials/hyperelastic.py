@@ -132,8 +132,8 @@ class Corotated:
     residual and tangent are exact for the assembled energy. Measured JIT (P1 residual and tangent):
     135 s with R from kinematics.polar_rotation, 8 s through tr U alone (same numbers), about 17 min
     for the tangent of 4 matrix Newton steps R <- (R + R^-T)/2; `pk1` (the chain rule through the
-    invariants, the residual's P) brought the first run of a P1 beam from 25.1 s to 10.4 s. The mixed u-p split (volumetric) is
-    exact, but its Taylor-Hood tangent did not finish compiling within 6 minutes here."""
+    invariants, the residual's P) brought the first run of a P1 beam from 25.1 s to 10.4 s. The mixed u-p
+    split (volumetric) is exact, but its Taylor-Hood tangent did not finish compiling within 6 minutes here."""
     mu: float
     lmbda: float
 

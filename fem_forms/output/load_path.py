@@ -1,7 +1,7 @@
 """The load path of a static run that takes more than one load step, written as it is walked: after every
 accepted step a row of probes.csv (load factor, pseudo-time, each probe's displacement, each support's
-reaction, the scalars the terms record) and the fields at that step in fields.xdmf (ParaView plays the path); at the end a
-load-displacement picture, load_path.png. Each step's files are complete on disk before the next step
+reaction, the scalars the terms record) and the fields at that step in fields.xdmf (ParaView plays the
+path); at the end a load-displacement picture, load_path.png. Each step's files are complete on disk before the next step
 starts, so a run stopped at a limit point or interrupted keeps its last converged state, and the
 interrupted results.json is written from rank 0's copy of that step without any collective call.
 
