@@ -25,6 +25,11 @@ if ! .venv/bin/python -c "import pymeshfix" 2>/dev/null; then
   .venv/bin/python -m pip install -q --no-warn-script-location "pymeshfix>=0.17" >/dev/null 2>&1 \
     || { echo "setup: pip could not install pymeshfix" >&2; exit 1; }
 fi
+# ipctk (the IPC Toolkit: contact barrier, collision candidates, CCD) from the package index; a wheel for 3.11
+if ! .venv/bin/python -c "import ipctk" 2>/dev/null; then
+  .venv/bin/python -m pip install -q --no-warn-script-location "ipctk>=1.6,<2" >/dev/null 2>&1 \
+    || { echo "setup: pip could not install ipctk" >&2; exit 1; }
+fi
 # byte-compile the package as a regular pip install would (an editable one does not; with
 # PYTHONDONTWRITEBYTECODE set, every run would compile ~100 modules from source: 0.1 s, measured)
 .venv/bin/python -m compileall -q fem_forms >/dev/null

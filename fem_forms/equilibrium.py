@@ -39,6 +39,7 @@ class StaticResult:
     reactions: dict = field(default_factory=dict)        # reactions, applied_load, equilibrium_error
     quantities: Quantities | None = None                 # recovered stresses and strains
     cavities: dict = field(default_factory=dict)         # name -> pressure, volume, volume_change
+    contact: dict = field(default_factory=dict)          # contact, min_distance, intersection_free, ...
     wall_time_s: float = 0.0
 
     @property
@@ -78,6 +79,7 @@ class StaticResult:
                            **self.probe_stresses.get(n, {})} for n, v in self.probes.items()},
             **self.reactions,
             **({"cavities": self.cavities} if self.cavities else {}),
+            **self.contact,
             "message": r.message,
         }
 
@@ -236,6 +238,8 @@ def post_process(result: StaticResult) -> None:
             + sum(t.energy_value(model.unknown.vector) for t in model.terms.arrays)
     result.max_displacement = max_norm(model.u)
     result.cavities = cavity_report(model.terms)
+    for term in model.terms.with_role("contact"):
+        result.contact.update(term.report(model.unknown.vector))
     result.probes = model.probes.evaluate(model.u)
     result.quantities = Quantities(model)
     result.probe_stresses = attempt(model.warnings, "stress recovery at the probes",

@@ -117,6 +117,9 @@ class Model:
         large strains), or None."""
         if why := self.solid.outside_theory(self.context):
             return why
+        for term in self.terms.with_role("contact"):     # checked apart from the step filter that prevents it
+            if why := term.intersection(self.unknown.vector):
+                return why
         if self.scene.material.model == "linear" and self.scene.analysis == "static":
             return None                                  # small-strain theory: J has no meaning
         jmin = self.min_jacobian()

@@ -20,6 +20,7 @@ from fem_forms.output.guard import attempt
 from fem_forms.output.interrupts import Interrupts
 from fem_forms.output.load_path import LoadPath, field_functions
 from fem_forms.output.plastic import plastic_summary, plastic_term
+from fem_forms.output.stl import write_deformed_surface
 from fem_forms.output import fields
 from fem_forms.scene import Scene
 
@@ -73,6 +74,8 @@ def write_static_outputs(result: StaticResult, out: "Path", path: LoadPath | Non
                                             lambda: pictures.picture(out / "deformed.png", result.u, scene.title,
                                                                      up=pictures.scene_up(scene)) or True):
             files["picture"] = "deformed.png"
+        if attempt(warnings, "deformed.stl", lambda: write_deformed_surface(result.model, out / "deformed.stl")):
+            files["surface"] = "deformed.stl"
     if stepped:
         files.update(path.finish(summary))
     results.write_newton_history(out / "newton_history.csv", result.report.steps, comm)

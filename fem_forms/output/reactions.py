@@ -29,6 +29,9 @@ def support_forces(model) -> np.ndarray:
     """(number of fixes, 3): the force each support exerts on the body, summed over all ranks."""
     b = fpetsc.assemble_vector(model.compiled("residual"))
     b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    for term in model.terms.arrays:                      # contact at a held node is part of its reaction
+        term.add_gradient(model.unknown.vector, b)
+    b.assemble()
     residual = b.array                                   # owned entries only
     held = np.zeros(len(residual), dtype=bool)
     forces = np.zeros((len(model.scene.fix), 3))
@@ -94,12 +97,20 @@ def equilibrium_imbalance(reactions: np.ndarray, load: np.ndarray) -> float:
 
 
 def reaction_report(model, noise: float = 0.0) -> dict:
-    """results.json entries: reactions {fix name: [Fx, Fy, Fz]}, applied_load, equilibrium_imbalance (N) and
+    """results.json entries: reactions {fix name: [Fx, Fy, Fz]}, applied_load, equilibrium_imbalance (N: of
+    the reactions, the obstacles' contact forces and the applied load) and
     equilibrium_error (relative; null when loads and reactions are at the round-off of a solve whose
     accepted residual norm is `noise`, N)."""
     forces = support_forces(model)
     load = applied_load(model)
+    held = np.vstack([forces] + [contact_forces(t) for t in model.terms.with_role("contact")])
     return {"reactions": {n: f.tolist() for n, f in zip(fix_names(model.scene.fix), forces)},
             "applied_load": load.tolist(),
-            "equilibrium_error": equilibrium_error(forces, load, noise),
-            "equilibrium_imbalance": equilibrium_imbalance(forces, load)}
+            "equilibrium_error": equilibrium_error(held, load, noise),
+            "equilibrium_imbalance": equilibrium_imbalance(held, load)}
+
+
+def contact_forces(term) -> np.ndarray:
+    """(obstacles, 3): the force each obstacle exerts on the body (they hold it as supports do)."""
+    rows = [r["force"] for r in term.report(term.state).get("contact", {}).values()]
+    return np.array(rows).reshape(-1, 3)

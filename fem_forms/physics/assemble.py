@@ -17,6 +17,7 @@ from fem_forms.meshes import LoadedMesh
 from fem_forms.physics.elastic import ElasticEnergy
 import fem_forms.physics.loads  # noqa: F401 (registers the load terms)
 import fem_forms.physics.cavities  # noqa: F401 (registers the inflation load)
+import fem_forms.physics.contact  # noqa: F401 (registers the [contact] terms)
 from fem_forms.physics.parameters import Parameters
 from fem_forms.physics import quadrature
 from fem_forms.physics.plastic import plastic_term

@@ -12,6 +12,7 @@ from pathlib import Path
 from fem_forms.errors import InputError
 from fem_forms.scene import registry
 from fem_forms.scene.analyses.balance import BalanceSpec
+from fem_forms.scene.analyses.contact_section import ContactSpec
 from fem_forms.scene.analyses.dynamic import DampingSpec, DynamicSpec
 from fem_forms.scene.analyses.inverse import InverseSpec
 from fem_forms.scene.analyses.modal import ModalSpec, SoundSpec
@@ -50,6 +51,7 @@ class Scene:
     dynamic: DynamicSpec = field(default_factory=DynamicSpec)
     damping: DampingSpec = field(default_factory=DampingSpec)
     thermal: ThermalSpec | None = None     # None: no temperature field
+    contact: ContactSpec | None = None     # None: no contact
     source: Path | None = None
 
     @classmethod

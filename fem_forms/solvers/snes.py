@@ -345,11 +345,12 @@ class SNESDriver:
         so the energy line search sees no decrease and takes a tiny step while the residual is still
         above what round-off allows (measured: 4.8e-5 left where 1e-9 was reachable). Full Newton steps
         (no line search) converge quadratically from there: take up to 3 and keep them only if they
-        reduced the residual; with `polish_stuck` (staggered sub-solves only) also after a line search failed
-        below 1e-6 of the load scale last computed (measured: bt on a staggered sub-solve 1e-9 from its answer).
+        reduced the residual; with `polish_stuck` (staggered sub-solves) or a step-capping array term (contact:
+        its steps stay capped) also after a line search failed below 1e-6 of the load scale last computed
+        (measured: bt on a staggered sub-solve 1e-9 from its answer; a block on a floor 2e-9).
         Returns (reason, Newton iterations, Krylov iterations) added."""
         last = self._history[-1] if self._history else math.inf
-        near = self.polish_stuck and last < 1e-6 * (getattr(self, "_load_scale", None) or 0.0)
+        near = (self.polish_stuck or self.arrays.caps) and last < 1e-6 * (getattr(self, "_load_scale", None) or 0.0)
         stuck = near and reason == PETSc.SNES.ConvergedReason.DIVERGED_LINE_SEARCH
         if not (stuck or reason == PETSc.SNES.ConvergedReason.CONVERGED_SNORM_RELATIVE) \
                 or last <= max(self.base_atol(), self.roundoff_floor(1.0)):

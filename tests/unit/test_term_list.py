@@ -12,8 +12,8 @@ from helpers import beam_scene
 
 
 class Spring(Term):
-    """A term of a role no analysis knows (as contact will be): k/2 int |u|^2 dX."""
-    name, role, keys = "spring", "contact", ("contact",)
+    """A term of a role no analysis knows: k/2 int |u|^2 dX."""
+    name, role, keys = "spring", "spring", ("spring",)
 
     def energy(self, ctx):
         return 0.5 * 1e3 * ctx.volume(ufl.inner(ctx.u, ctx.u))
@@ -40,8 +40,8 @@ def test_a_term_after_the_solid_is_not_a_load():
     without = applied_load(model)
     model.terms = TermList([model.solid, Spring(), *model.loads])
     assert [t.name for t in model.loads] == ["gravity", "traction"]
-    assert model.terms.with_role("contact")[0].name == "spring"
-    # the applied load sums the loads alone: the spring (a reaction of the floor, later) is not in it
+    assert model.terms.with_role("spring")[0].name == "spring"
+    # the applied load sums the loads alone: the spring (a term of another role) is not in it
     np.testing.assert_allclose(applied_load(model), without, rtol=1e-14, atol=1e-14)
 
 

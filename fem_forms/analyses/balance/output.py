@@ -11,6 +11,7 @@ import numpy as np
 
 from fem_forms.design.support import ground_frame
 from fem_forms.output.fields import gather_mesh, write_fields
+from fem_forms.output.stl import write_stl
 
 # faces of a tetrahedron and of a VTK-ordered hexahedron, outward for a positively oriented cell
 TET_FACES = [(1, 2, 3), (0, 3, 2), (0, 1, 3), (0, 2, 1)]
@@ -27,19 +28,6 @@ def boundary_faces(cells: np.ndarray) -> np.ndarray:
     if once.shape[1] == 4:
         once = np.vstack([once[:, [0, 1, 2]], once[:, [0, 2, 3]]])
     return once
-
-
-def write_stl(path: Path, points: np.ndarray, triangles: np.ndarray, name: str) -> None:
-    """Binary STL."""
-    p = points[triangles]
-    n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
-    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
-    rec = np.zeros(len(p), dtype=[("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")])
-    rec["n"], rec["v"] = n, p
-    with open(path, "wb") as f:
-        f.write(name.encode()[:80].ljust(80, b" "))
-        f.write(np.uint32(len(p)).tobytes())
-        f.write(rec.tobytes())
 
 
 def density_function(mesh, density: np.ndarray) -> fem.Function:

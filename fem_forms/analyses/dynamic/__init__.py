@@ -58,6 +58,8 @@ def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> d
         for name, value in result.system.model.probes.evaluate(T).items():
             summary["probes"][name]["temperature"] = value[0]
     summary.update(plastic_summary(result.system.model))
+    for term in model.terms.with_role("contact"):
+        summary.update(term.report(model.u.vector))
     if "max_plastic_strain" in summary and not result.energy.plastic_accounted:
         warnings.append("plasticity: the plastic work is not in the energy account; energy_balance_error "
                         "includes it")

@@ -49,22 +49,23 @@ class Energies:
     dissipated: float = 0.0
     thermal_work: float = 0.0
     plastic_work: float = 0.0
+    contact: float = 0.0              # the contact barrier's stored energy
 
     def row(self) -> list:
         """The values in the order of COLUMNS."""
         return [self.kinetic, self.elastic, self.external_work, self.dissipated, self.thermal_work,
-                self.plastic_work]
+                self.plastic_work, self.contact]
 
     def balance(self) -> float:
-        """E_kin + E_el - W_ext - W_th + D + W_p (constant in an exact account)."""
-        return (self.kinetic + self.elastic - self.external_work - self.thermal_work + self.dissipated
-                + self.plastic_work)
+        """E_kin + E_el + E_contact - W_ext - W_th + D + W_p (constant in an exact account)."""
+        return (self.kinetic + self.elastic + self.contact - self.external_work - self.thermal_work
+                + self.dissipated + self.plastic_work)
 
 
 # energies below that of the whole part strained this much are round-off: a balance relative to them would be
 # a ratio of two noises (strains of 1e-8 are sqrt(machine epsilon), far below any motion a run is asked for)
 ENERGY_FLOOR_STRAIN = 1e-8
-COLUMNS = ("kinetic", "elastic", "external_work", "dissipated", "thermal_work", "plastic_work")
+COLUMNS = ("kinetic", "elastic", "external_work", "dissipated", "thermal_work", "plastic_work", "contact")
 
 
 def at_temperature(ctx: Context, T: fem.Function, T_then: fem.Function) -> Context:
@@ -190,7 +191,7 @@ class EnergyAccount:
 
     def start(self, t: float) -> Energies:
         self._set(self.ue, self.system.u.x.array)
-        self.now = Energies(self.kinetic(), self._scalar(self.elastic))
+        self.now = Energies(self.kinetic(), self._scalar(self.elastic), contact=self._contact())
         self.history.append((t, self.now))
         return self.now
 
@@ -215,6 +216,7 @@ class EnergyAccount:
                 y.pointwiseMult(y, self.vm.vector)
                 dis += self.lumped_alpha * y.dot(self.w.vector)
                 y.destroy()
+        dis += sum(t.friction_work(s.u.vector) for t in s.model.terms.with_role("contact"))   # lagged friction
         thermal = plastic = 0.0
         if self.thermal and self.plastic_thermal is None:
             thermal = self._thermal_work(0.5 * (u0 + u1))
@@ -225,15 +227,21 @@ class EnergyAccount:
             if self.plastic_thermal is not None:
                 thermal = self._scalar(self.plastic_thermal)
         self.now = Energies(self.kinetic(), self._scalar(self.elastic), prev.external_work + work,
-                            prev.dissipated + dis, prev.thermal_work + thermal, prev.plastic_work + plastic)
+                            prev.dissipated + dis, prev.thermal_work + thermal, prev.plastic_work + plastic,
+                            self._contact())
         self.history.append((t_new, self.now))
         return self.now
 
+    def _contact(self) -> float:
+        """The contact barrier's energy at the current state (0 without [contact])."""
+        return sum(t.energy_value(self.system.u.vector) for t in self.system.model.terms.with_role("contact"))
+
     def columns(self) -> tuple:
         """The energies this run records (thermal_work with a temperature field, plastic_work with an
-        accounted plastic solid)."""
+        accounted plastic solid, contact with [contact])."""
         return COLUMNS[:4] + (("thermal_work",) if self.thermal else ()) + \
-            (("plastic_work",) if self.plastic_accounted else ())
+            (("plastic_work",) if self.plastic_accounted else ()) + \
+            (("contact",) if self.system.model.terms.with_role("contact") else ())
 
     def imbalance(self) -> float:
         """max over time of |E_kin + E_el - W_ext - W_th + D + W_p - (its start value)| in J."""

@@ -103,6 +103,14 @@ def initial_acceleration(system: DynamicSystem, released: set) -> None:
     b = fpetsc.assemble_vector(L)
     b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
     b.scale(-1.0)
+    for term in system.model.terms.with_role("contact"):     # a barrier already pushing at the start
+        push = b.duplicate()
+        push.set(0.0)
+        term.update(0.0)
+        term.add_gradient(system.u.vector, push)
+        push.assemble()
+        b.axpy(-1.0, push)
+        push.destroy()
     fpetsc.set_bc(b, system.model.bcs, scale=0.0)
     a = system.a
     if system.lumped is not None:

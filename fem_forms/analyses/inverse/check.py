@@ -14,6 +14,7 @@ from fem_forms.design.parameters import InverseResult
 from fem_forms.errors import InputError
 from fem_forms.meshes import MeshArrays, check_cells, from_arrays, mesh_size
 from fem_forms.output import fields, pictures
+from fem_forms.output.stl import write_stl
 from fem_forms.scene import Scene
 
 
@@ -66,7 +67,7 @@ def _write_and_inspect(scene: Scene, out: Path, gathered, target, groups, size: 
     try:
         rest_shape.write_volume_mesh(out / "rest_shape.msh", points, cells, ctype, groups)
         tris = rest_shape.triangles(faces)
-        rest_shape.write_stl(out / "rest_shape.stl", points, tris)
+        write_stl(out / "rest_shape.stl", points, tris, "rest_shape", ascii=True)
     except OSError as e:
         write_ok = False
         problems.append(f"cannot write the rest shape: {e}")

@@ -5,6 +5,7 @@ from dataclasses import dataclass
 
 from fem_forms.errors import InputError
 from fem_forms.scene.analyses import Analysis
+from fem_forms.scene.analyses.contact_section import CONTACT
 from fem_forms.scene.analyses.thermal_section import THERMAL, check_coupled
 from fem_forms.scene.reader import Key, Section, Table
 
@@ -94,6 +95,9 @@ def _check(scene) -> None:
     for i, fix in enumerate(scene.fix):
         if any(v != 0.0 for v in fix.value):
             raise InputError(f"fix[{i}].value: dynamic analysis holds supports fixed (value must be zero)")
+    if scene.contact is not None and scene.dynamic.scheme == "central-difference":
+        raise InputError("contact: not with dynamic.scheme = 'central-difference' (the barrier needs the implicit "
+                         "step's step filter); use 'newmark' or 'generalized-alpha'")
     check_coupled(scene)
 
 
@@ -106,6 +110,7 @@ ANALYSIS = Analysis(
                 keys=DYNAMIC_KEYS, rules=_dynamic_rules),
         Section("damping", "Rayleigh and viscous (Kelvin-Voigt) damping", DampingSpec, keys=DAMPING_KEYS),
         THERMAL,                         # [thermal]: transient heat, staggered with the motion step by step
+        CONTACT,                         # [contact]: obstacles and self-contact in the implicit step
     ),
     outputs=("results.json", "probes.csv", "energy.csv", "motion.xdmf", "motion.gif", "history.png",
              "checkpoint/"),

@@ -1,13 +1,14 @@
 """Static analysis: equilibrium under the scene's loads (and, with [thermal], a steady temperature's strain)."""
 from fem_forms.scene.analyses import Analysis
+from fem_forms.scene.analyses.contact_section import CONTACT
 from fem_forms.scene.analyses.thermal_section import THERMAL, check_coupled
 
 ANALYSIS = Analysis(
     name="static",
     doc="equilibrium under the loads (load stepping, Newton)",
     runner="fem_forms.analyses.static:run",
-    outputs=("results.json", "fields.xdmf", "deformed.png", "newton_history.csv"),
+    outputs=("results.json", "fields.xdmf", "deformed.png", "deformed.stl", "newton_history.csv"),
     formulations=("displacement", "mixed"),
-    sections=(THERMAL,),                  # [thermal]: steady temperature, then its thermal strain
+    sections=(THERMAL, CONTACT),          # [thermal]: steady temperature, then its thermal strain; [contact]
     check=check_coupled,
 )

@@ -1,0 +1,144 @@
+"""The part's outer surface as triangles on the displacement's nodes, the same on every rank: what contact
+measures distances on and what deformed.stl shows. The surface is small next to the volume, so it is gathered
+whole; each rank remembers which of its nodes it owns, to read displacements and to add forces."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from dolfinx import fem, mesh as dmesh
+from mpi4py import MPI
+import numpy as np
+from petsc4py import PETSc
+
+from fem_forms.errors import InputError
+
+
+@dataclass
+class BoundarySurface:
+    """Surface nodes (global dof blocks of a vector Lagrange space), their rest positions, outward triangles and
+    lumped rest areas; identical on every rank. `owned` indexes the nodes this rank owns, `owned_local` gives
+    their local block numbers."""
+    blocks: np.ndarray          # (n,) global block index of each surface node
+    rest: np.ndarray            # (n, 3) rest positions
+    faces: np.ndarray           # (m, 3) triangles, indices into blocks, outward by the right-hand rule
+    area: np.ndarray            # (n,) a third of the rest area of the triangles around each node
+    owned: np.ndarray           # indices into blocks of the nodes this rank owns
+    owned_local: np.ndarray     # their local block numbers
+    comm: MPI.Comm
+
+    @property
+    def size(self) -> int:
+        return len(self.blocks)
+
+    def displacement(self, x: PETSc.Vec) -> np.ndarray:
+        """(n, 3) displacement of every surface node from the owned entries of x (a collective call)."""
+        mine = x.array_r.reshape(-1, 3)[self.owned_local]
+        parts = self.comm.allgather((self.owned, mine))
+        u = np.empty((self.size, 3))
+        for idx, vals in parts:
+            u[idx] = vals
+        return u
+
+    def positions(self, x: PETSc.Vec) -> np.ndarray:
+        """(n, 3) current positions rest + u of the surface nodes."""
+        return self.rest + self.displacement(x)
+
+    def face_areas(self) -> np.ndarray:
+        """(m,) rest area of each triangle."""
+        p = self.rest[self.faces]
+        return 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
+
+    def edges(self) -> np.ndarray:
+        """(k, 2) the triangles' edges, each once (sorted node pairs)."""
+        e = np.sort(np.concatenate([self.faces[:, [0, 1]], self.faces[:, [1, 2]], self.faces[:, [2, 0]]]), axis=1)
+        return np.unique(e, axis=0)
+
+
+def _pair(coords: np.ndarray, corners: list, k: int) -> tuple:
+    """The two corners whose midpoint lies nearest to node k (the edge node k sits on)."""
+    pairs = [(a, b) for i, a in enumerate(corners) for b in corners[i + 1:]]
+    return min(pairs, key=lambda ab: np.linalg.norm(coords[k] - (coords[ab[0]] + coords[ab[1]]) / 2))
+
+
+def _facet_triangles(nodes: np.ndarray, coords: np.ndarray, kinds: np.ndarray, inside: np.ndarray) -> list:
+    """One facet's triangles on its nodes: a triangle (3 corners) itself, a quadrilateral split along a
+    diagonal; degree 2 facets into 4 (triangle) or 8 (quadrilateral, around its centre node) triangles on the
+    corner, edge and centre nodes. All turned so that their normals point away from the cell centroid `inside`.
+    `kinds` holds each node's entity dimension (0 corner, 1 edge, 2 face)."""
+    corners = [int(i) for i in np.flatnonzero(kinds == 0)]
+    edge = {_pair(coords, corners, int(k)): int(k) for k in np.flatnonzero(kinds == 1)}
+    local = []
+    if len(corners) == 3 and not edge:
+        local = [corners]
+    elif len(corners) == 4 and not edge:       # along the diagonal from corner 0 to its opposite corner
+        opp = max(corners[1:], key=lambda k: np.linalg.norm(coords[k] - coords[corners[0]]))
+        i, j = [k for k in corners[1:] if k != opp]
+        local = [[corners[0], i, opp], [corners[0], opp, j]]
+    elif len(corners) == 3:
+        a, b, c = corners
+        ab, bc, ca = (edge[tuple(sorted(p, key=corners.index))] for p in ((a, b), (b, c), (a, c)))
+        local = [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]
+    else:
+        centre = int(np.flatnonzero(kinds == 2)[0])
+        for v in corners:
+            ea, eb = [k for pair, k in edge.items() if v in pair]
+            local += [[v, ea, centre], [v, centre, eb]]
+    p = coords[corners]
+    normal = np.cross(p[1] - p[0], p[2] - p[0])
+    if normal @ (p.mean(axis=0) - inside) < 0:
+        normal = -normal
+    out = []
+    for tri in local:
+        q = coords[tri]
+        flip = np.cross(q[1] - q[0], q[2] - q[0]) @ normal < 0
+        out.append(nodes[[tri[0], tri[2], tri[1]]] if flip else nodes[tri])
+    return out
+
+
+def boundary_surface(V: fem.FunctionSpace) -> BoundarySurface:
+    """The outer surface of V's mesh on V's nodes (a vector Lagrange space of degree 1 or 2 on tetrahedra or
+    hexahedra: degree 2 facets are split into triangles on their corner, edge and centre nodes), gathered on
+    every rank."""
+    mesh = V.mesh
+    degree = V.ufl_element().degree()
+    if degree > 2:
+        raise InputError(f"contact: elements of degree 1 or 2 (this space's is {degree})")
+    tdim, fdim = mesh.topology.dim, mesh.topology.dim - 1
+    mesh.topology.create_connectivity(fdim, tdim)
+    mesh.topology.create_connectivity(tdim, fdim)
+    f2c, c2f = mesh.topology.connectivity(fdim, tdim), mesh.topology.connectivity(tdim, fdim)
+    imap = V.dofmap.index_map
+    layout = V.dofmap.dof_layout
+    xyz = V.tabulate_dof_coordinates()
+    owned_facets = dmesh.exterior_facet_indices(mesh.topology)
+    owned_facets = owned_facets[owned_facets < mesh.topology.index_map(fdim).size_local]
+    cell = mesh.topology.cell_name()
+    if cell not in ("tetrahedron", "hexahedron"):
+        raise InputError(f"contact: tetrahedra or hexahedra only (this mesh has {cell} cells)")
+    n_corners, n_edges = {"tetrahedron": (4, 6), "hexahedron": (8, 12)}[cell]
+    tris, coords = [], {}
+    for f in owned_facets:
+        c = f2c.links(f)[0]
+        local = int(np.flatnonzero(c2f.links(c) == f)[0])
+        cell_dofs = V.dofmap.cell_dofs(c)
+        closure = np.asarray(layout.entity_closure_dofs(fdim, local))
+        nodes = cell_dofs[closure]
+        glob = imap.local_to_global(nodes.astype(np.int32)).astype(np.int64)
+        kinds = (closure >= n_corners).astype(int) + (closure >= n_corners + n_edges)
+        tris.extend(_facet_triangles(glob, xyz[nodes], kinds, xyz[cell_dofs[:n_corners]].mean(axis=0)))
+        coords.update(zip(glob.tolist(), xyz[nodes]))
+    gathered = mesh.comm.allgather((np.array(tris, dtype=np.int64).reshape(-1, 3),
+                                    np.array(list(coords), dtype=np.int64), np.array(list(coords.values()))))
+    faces = np.concatenate([g[0] for g in gathered])
+    blocks = np.concatenate([g[1] for g in gathered])
+    rest_all = np.concatenate([g[2].reshape(-1, 3) for g in gathered])
+    blocks, first = np.unique(blocks, return_index=True)
+    rest = rest_all[first]
+    faces = np.searchsorted(blocks, faces)
+    lo, hi = imap.local_range
+    owned = np.flatnonzero((blocks >= lo) & (blocks < hi))
+    surface = BoundarySurface(blocks, rest, faces, np.zeros(len(blocks)), owned,
+                              (blocks[owned] - lo).astype(np.int32), mesh.comm)
+    for k in range(3):
+        np.add.at(surface.area, faces[:, k], surface.face_areas() / 3.0)
+    return surface

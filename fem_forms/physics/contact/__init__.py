@@ -1,0 +1,20 @@
+"""Contact ([contact]): the scene section's terms. Incremental Potential Contact against rigid obstacles
+(term.py: the barrier energy as an array term; obstacles.py: their signed distances; barrier.py: b(d))."""
+from __future__ import annotations
+
+from fem_forms.errors import InputError
+from fem_forms.physics.contact.term import ContactTerm
+from fem_forms.physics.terms import Term, register_terms
+from fem_forms.physics.thermoelastic import young_modulus
+
+
+@register_terms("contact")
+def contact_terms(scene, mesh) -> list[Term]:
+    """The contact term of a scene with [contact] (none without)."""
+    if getattr(scene, "contact", None) is None:
+        return []
+    try:
+        modulus = young_modulus(scene.material.material)
+    except InputError:
+        raise InputError("contact: needs a built-in material model (its modulus scales the barrier)") from None
+    return [ContactTerm(scene.contact, modulus)]

@@ -1,0 +1,246 @@
+"""Contact as one array term of the energy (Incremental Potential Contact, Li et al. 2020): a barrier on the
+distance of every surface node to every rigid obstacle, kappa sum_v A_v b(d_v) (A_v the node's share of the
+rest surface: the barrier acts as a pressure, independent of the mesh's grading), its gradient and its
+PSD-projected Hessian beside the UFL terms in the same Newton solve, and a step filter that keeps every Newton
+step intersection-free. The surface is gathered on every rank; each rank adds the rows it owns."""
+from __future__ import annotations
+
+from dolfinx import fem
+import numpy as np
+from petsc4py import PETSc
+
+from fem_forms.errors import InputError
+from fem_forms.meshes.boundary_surface import BoundarySurface, boundary_surface
+from fem_forms.physics.contact.barrier import barrier, barrier_first, barrier_second, pressure_at_half, psd_blocks
+from fem_forms.physics.contact.friction import LaggedFriction, tangent_basis
+from fem_forms.physics.contact.obstacles import make_obstacle
+from fem_forms.physics.terms import ArrayTerm, Context, add_entries
+
+DEFAULT_DISTANCE = 1e-3      # dhat as a share of the part's bounding-box diagonal, as in IPC
+SLIP_RATE = 1e-3             # friction's slip eps: this share of the bounding-box diagonal per unit of time
+TOO_CLOSE = 1e-4             # a gap below this share of dhat doubles kappa (IPC's adaptive stiffness) ...
+MAX_RAISE = 1e6              # ... up to this many times its first value
+
+
+class ContactTerm(ArrayTerm):
+    """kappa sum_obstacles sum_v A_v b(d_v): the part's surface nodes against the scene's rigid obstacles."""
+    name, role, keys = "contact (IPC barrier)", "contact", ("contact",)
+
+    def __init__(self, spec, modulus: float):
+        self.modulus = modulus
+        self.surface: BoundarySurface | None = None
+        self.kappa = self.kappa0 = 0.0
+        self.intersection_free = True
+        self.time = self.start_time = 0.0
+        self.friction: list[LaggedFriction] = []
+        self._lagged_at = None                     # the state the friction was lagged from
+        self.set_spec(spec)
+
+    def set_spec(self, spec) -> None:
+        for i, ob in enumerate(spec.obstacle):
+            if ob.shape == "file":
+                raise InputError(f"contact.obstacle[{i}].shape = 'file': not available yet (plane, sphere, box, "
+                                 "cylinder are)")
+        if spec.self:
+            raise InputError("contact.self = true: self-contact is not available yet (obstacles are)")
+        self.spec = spec
+        self.obstacles = [make_obstacle(ob) for ob in spec.obstacle]
+        for ob in self.obstacles:
+            ob.move_to(self.time)
+
+    def set_values(self, scene) -> None:
+        self.set_spec(scene.contact)
+        if self.surface is not None:
+            self._scale()
+
+    def prepare(self, ctx: Context) -> None:
+        if not isinstance(ctx.u, fem.Function) or ctx.rest_map is not None or ctx.deformation is not None:
+            raise InputError("contact: available with formulation = 'displacement' in forward analyses only")
+        self.surface = boundary_surface(ctx.u.function_space)
+        self.state = ctx.u.vector                       # the state `record` reports after each accepted step
+        self.friction_at_start = np.zeros((self.surface.size, 3))
+        self._start_positions = self.surface.rest.copy()
+        self._scale()
+        for i, ob in enumerate(self.obstacles):
+            d = ob.distance(self.surface.rest)
+            if d.min() <= 0.0:
+                raise InputError(f"contact.obstacle[{i}] ({ob.name}): intersects or touches the part at the start "
+                                 f"(smallest distance {d.min():.3g} m); the barrier needs a gap: move it at least "
+                                 f"{-d.min() + self.dhat / 2:.3g} m away")
+
+    def _scale(self) -> None:
+        """dhat (the scene's, else 1e-3 x the bounding-box diagonal) and kappa: the barrier's push at a gap of
+        dhat / 2 equals the elastic pressure of a surface displacement dhat over one surface edge (E dhat / h),
+        so its stiffness is of the elastic Hessian's scale."""
+        rest = self.surface.rest
+        self.diagonal = float(np.linalg.norm(rest.max(axis=0) - rest.min(axis=0)))
+        self.dhat = self.spec.distance or DEFAULT_DISTANCE * self.diagonal
+        e = self.surface.edges()
+        h = float(np.mean(np.linalg.norm(rest[e[:, 0]] - rest[e[:, 1]], axis=1)))
+        self.kappa = self.kappa0 = self.modulus / (h * pressure_at_half(self.dhat))
+
+    def update(self, t: float) -> None:
+        """Move the obstacles to time t and lag the friction from the current state (the step's start). A state
+        that changed since the last call was accepted at the last call's time: the step now starts there."""
+        x = self.state.array_r
+        if self._lagged_at is None or len(x) != len(self._lagged_at) or not np.array_equal(x, self._lagged_at):
+            self.friction_at_start = self._friction_forces(self.surface.positions(self.state))
+            self.start_time, self._lagged_at = self.time, x.copy()
+        self.time = t
+        for ob in self.obstacles:
+            ob.move_to(self.start_time)
+        p = self._start_positions = self.surface.positions(self.state)
+        eps = max(SLIP_RATE * self.diagonal * (t - self.start_time), 1e-9 * self.diagonal)
+        self.friction = []
+        for ob in self.obstacles:
+            d, g = ob.derivatives(p, order=1)
+            act = np.flatnonzero((d < self.dhat) & (d > 0))
+            lam = -self.kappa * self.surface.area[act] * barrier_first(d[act], self.dhat)
+            start_offset = ob.offset.copy()
+            ob.move_to(t)
+            self.friction.append(LaggedFriction(act, lam, tangent_basis(g[act]), p[act], ob.friction, eps,
+                                                ob.offset - start_offset) if ob.friction > 0 and len(act) else None)
+
+    # --- the energy, its gradient and Hessian at x ------------------------------------------------------
+    def _gaps(self, p: np.ndarray) -> list[tuple]:
+        """Per obstacle: the active nodes (gap below dhat), their gaps, gradients and Hessians of the gap."""
+        out = []
+        for ob in self.obstacles:
+            d = ob.distance(p)
+            act = np.flatnonzero(d < self.dhat)
+            _, g, H = ob.derivatives(p[act]) if len(act) else (None, np.zeros((0, 3)), np.zeros((0, 3, 3)))
+            out.append((act, d[act], g, H, float(d.min()) if len(d) else np.inf))
+        return out
+
+    def energy_value(self, x: PETSc.Vec) -> float:
+        p = self.surface.positions(x)
+        A = self.surface.area
+        push = sum(self.kappa * np.sum(A[act] * barrier(d, self.dhat)) for act, d, *_ in self._gaps(p))
+        return float(push + sum(f.energy(p) for f in self.friction if f is not None))
+
+    def nodal_forces(self, x: PETSc.Vec) -> list[tuple]:
+        """Per obstacle: active nodes and the force (n, 3) the obstacle exerts on each, -dE/dx_v."""
+        p = self.surface.positions(x)
+        A = self.surface.area
+        out = []
+        for (act, d, g, *_), fr in zip(self._gaps(p), self.friction or [None] * len(self.obstacles)):
+            push = -(self.kappa * A[act] * barrier_first(d, self.dhat))[:, None] * g
+            if fr is not None:
+                act, push = np.concatenate([act, fr.nodes]), np.concatenate([push, -fr.gradient(p)])
+            out.append((act, push))
+        return out
+
+    def add_gradient(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
+        mine = np.full(self.surface.size, -1)
+        mine[self.surface.owned] = self.surface.owned_local
+        rows = b.array.reshape(-1, 3)
+        for act, force in self.nodal_forces(x):
+            keep = mine[act] >= 0
+            np.add.at(rows, mine[act][keep], -force[keep])
+
+    def add_hessian(self, x: PETSc.Vec, A: PETSc.Mat, constrained: np.ndarray) -> None:
+        p = self.surface.positions(x)
+        gaps = self._gaps(p)
+        self._adapt(min((m for *_, m in gaps), default=np.inf))
+        owned = np.zeros(self.surface.size, bool)
+        owned[self.surface.owned] = True
+        area = self.surface.area
+        for (act, d, g, H, _), fr in zip(gaps, self.friction or [None] * len(gaps)):
+            if fr is not None:
+                keep = owned[fr.nodes]
+                self._add_blocks(A, fr.nodes[keep], fr.hessian(p)[keep], constrained)
+            keep = owned[act]
+            act, d, g, H = act[keep], d[keep], g[keep], H[keep]
+            if not len(act):
+                continue
+            w = self.kappa * area[act]
+            blocks = (w * barrier_second(d, self.dhat))[:, None, None] * g[:, :, None] * g[:, None, :] \
+                + (w * barrier_first(d, self.dhat))[:, None, None] * H
+            self._add_blocks(A, act, psd_blocks(blocks), constrained)
+
+    def _add_blocks(self, A: PETSc.Mat, nodes: np.ndarray, blocks: np.ndarray, constrained: np.ndarray) -> None:
+        """One 3x3 block per surface node on the diagonal of A (in every tangent's pattern)."""
+        base = 3 * self.surface.blocks[nodes]
+        rows = np.repeat(base[:, None] + np.arange(3), 3, axis=1).ravel()
+        cols = np.tile(base[:, None] + np.arange(3), (1, 3)).ravel()
+        add_entries(A, rows.astype(PETSc.IntType), cols.astype(PETSc.IntType), blocks.reshape(-1), constrained)
+
+    def _adapt(self, smallest: float) -> None:
+        """Double kappa when a gap falls below TOO_CLOSE x dhat: the same contact force then sits at a larger
+        gap, away from the barrier's singularity (IPC's adaptive barrier stiffness)."""
+        if smallest < TOO_CLOSE * self.dhat and self.kappa < MAX_RAISE * self.kappa0:
+            self.kappa *= 2.0
+
+    def max_step(self, x: PETSc.Vec, dx: PETSc.Vec) -> float:
+        p0, dp = self.surface.positions(x), self.surface.displacement(dx)
+        return min((ob.safe_fraction(p0, dp) for ob in self.obstacles), default=1.0)
+
+    # --- what results.json and probes.csv report -----------------------------------------------------------
+    def _friction_forces(self, p: np.ndarray) -> np.ndarray:
+        """(n, 3) the friction force on each surface node at positions p, with the current lag."""
+        out = np.zeros((self.surface.size, 3))
+        for f in self.friction:
+            if f is not None:
+                np.add.at(out, f.nodes, -f.gradient(p))
+        return out
+
+    def friction_work(self, x: PETSc.Vec) -> float:
+        """The energy friction dissipated over the current step, up to the state x (J): the slip times the mean
+        of the friction forces at the step's ends (the trapezoidal rule Newmark's energy identity has)."""
+        p = self.surface.positions(x)
+        start = self._start_positions
+        mean = 0.5 * (self.friction_at_start + self._friction_forces(p))
+        return float(-np.sum(mean * (p - start)))
+
+    def min_distance(self, x: PETSc.Vec) -> float:
+        p = self.surface.positions(x)
+        return min((float(ob.distance(p).min()) for ob in self.obstacles), default=np.inf)
+
+    def intersection(self, x: PETSc.Vec) -> str | None:
+        """Why the state at x is not intersection-free (a surface node on or inside an obstacle), or None."""
+        p = self.surface.positions(x)
+        for ob in self.obstacles:
+            d = ob.distance(p)
+            if d.min() <= 0.0:
+                return f"the surface meets obstacle {ob.name!r} ({int(np.sum(d <= 0))} nodes at or inside it)"
+        return None
+
+    def report(self, x: PETSc.Vec) -> dict:
+        """results.json: contact {NAME: force (by the obstacle on the part, N), area (m^2 of the rest surface's
+        triangles whose nodes are all within dhat), max_pressure (Pa), active_points (nodes within dhat)}, min_distance (m), intersection_free, barrier numbers."""
+        p = self.surface.positions(x)
+        A = self.surface.area
+        out = {}
+        forces = [f.sum(axis=0) for _, f in self.nodal_forces(x)]
+        for ob, (act, d, g, *_), force in zip(self.obstacles, self._gaps(p), forces):
+            pressure = -self.kappa * barrier_first(d, self.dhat)
+            touching = np.zeros(self.surface.size, bool)
+            touching[act] = True
+            out[ob.name] = {"force": force.tolist(),
+                            "area": float(self.surface.face_areas()[touching[self.surface.faces].all(axis=1)].sum()),
+                            "max_pressure": float(pressure.max(initial=0.0)),
+                            "active_points": int(len(act))}
+        smallest = self.min_distance(x)
+        self.intersection_free = self.intersection_free and smallest > 0.0
+        return {"contact": out, "min_distance": smallest, "intersection_free": self.intersection_free,
+                "contact_distance": self.dhat, "barrier_stiffness": self.kappa}
+
+    def record(self) -> dict[str, float]:
+        """probes.csv columns after every accepted step: each obstacle's force and the smallest gap."""
+        rep = self.report(self.state)
+        out = {f"{n}_F{c}": f for n, r in rep["contact"].items() for c, f in zip("xyz", r["force"])}
+        out["min_distance"] = rep["min_distance"]
+        return out
+
+    def held_motion(self, values: np.ndarray) -> np.ndarray:
+        """The parts of a motion (its values at the surface nodes, (n, 3)) the obstacles resist at rest, at the
+        nodes nearest each: all of it with friction, its normal component without (no hold on sliding); an
+        obstacle farther than dhat resists nothing (a static solve's first Newton step would be singular)."""
+        rows = []
+        for ob in self.obstacles:
+            d, g = ob.derivatives(self.surface.rest, order=1)
+            if d.min() >= self.dhat:
+                continue                           # beyond the barrier's reach: it holds nothing at the start
+            near = d <= d.min() + 0.5 * self.dhat
+            rows.append(values[near].ravel() if ob.friction > 0 else np.einsum("ij,ij->i", g[near], values[near]))
+        return np.concatenate(rows) if rows else np.zeros(0)

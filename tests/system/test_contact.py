@@ -1,0 +1,136 @@
+"""Contact with rigid obstacles (IPC barrier, [contact]) against independent references: Hertz's sphere on a
+rigid plane, a block whose weight the floor carries exactly (on 1 and 2 ranks), and one-line refusals of bad
+contact input."""
+import json
+import math
+
+import meshio
+import numpy as np
+import pytest
+
+from system.contact_meshes import quarter_hemisphere
+from fem_forms.cli import main
+from helpers import MPIRUN, mpirun, run_scene, toml_dumps
+
+GAP = 5e-4                                     # the block's start gap to the floor (m)
+DHAT = 1e-3
+
+
+def block_scene(**extra) -> dict:
+    """A 0.1 m cube (1 kg) under gravity above a frictionless floor; its top held sideways only (x, y), so
+    the floor must carry all of its weight."""
+    d = {"title": "block on a floor", "mesh": {"generator": "box", "size": [0.1, 0.1, 0.1], "cells": [3, 3, 3]},
+         "material": {"E": 1e5, "nu": 0.3, "rho": 1000.0},
+         "fix": [{"name": "sideways", "where": {"axis": "z", "at": 0.1}, "components": ["x", "y"]}],
+         "load": [{"type": "gravity"}],
+         "contact": {"distance": DHAT, "obstacle": [{"name": "floor", "shape": "plane", "point": [0, 0, -GAP],
+                                                      "normal": [0, 0, 1]}]},
+         "output": {"picture": False, "fields": False}}
+    d.update(extra)
+    return d
+
+
+def test_a_block_on_a_frictionless_floor_rests_on_it_with_its_whole_weight(tmp_path):
+    code, r, _, out = run_scene(tmp_path, block_scene())
+    assert code == 0 and r["converged"]
+    floor = r["contact"]["floor"]
+    assert floor["force"][2] == pytest.approx(1.0 * 9.81, rel=1e-9)
+    assert abs(floor["force"][0]) < 1e-9 and abs(floor["force"][1]) < 1e-9
+    assert r["reactions"]["sideways"][2] == 0.0                        # the support holds no z
+    assert r["equilibrium_error"] < 1e-9
+    assert r["intersection_free"] is True and 0.0 < r["min_distance"] < DHAT
+    assert floor["area"] == pytest.approx(0.01, rel=1e-9) and floor["active_points"] == 7 * 7
+    assert "contact (IPC barrier)" in r["physics"]
+    surface = meshio.read(out / "deformed.stl")
+    assert len(surface.cells_dict["triangle"]) == 6 * 9 * 2 * 4           # P2: each facet in 4 triangles
+    assert surface.points[:, 2].min() == pytest.approx(-GAP + r["min_distance"], abs=1e-6)
+
+
+def test_a_block_rests_on_a_frictional_table_with_no_support_at_all(tmp_path):
+    """No [[fix]]: the table's friction holds the sliding the barrier alone would leave free."""
+    scene = block_scene(fix=[], **floor(friction=0.5))
+    code, r, _, _ = run_scene(tmp_path, scene)
+    assert code == 0 and r["converged"] and r["intersection_free"]
+    assert np.allclose(r["contact"]["floor"]["force"], [0.0, 0.0, 9.81], rtol=1e-9, atol=1e-9)
+    assert r["reactions"] == {} and r["equilibrium_error"] < 1e-9
+
+
+@pytest.mark.mpi
+@pytest.mark.skipif(MPIRUN is None, reason="needs mpirun")
+def test_the_block_gives_the_same_answer_on_two_ranks(tmp_path):
+    (tmp_path / "one").mkdir()
+    code, serial, _, _ = run_scene(tmp_path / "one", block_scene())
+    path = tmp_path / "scene.toml"
+    path.write_text(toml_dumps(block_scene()))
+    proc = mpirun(["-m", "fem_forms", "run", str(path), "--out", str(tmp_path / "two"), "-q"])
+    assert proc.returncode == 0, proc.stderr
+    two = json.loads((tmp_path / "two" / "results.json").read_text())
+    assert two["mpi_ranks"] == 2
+    assert np.allclose(two["contact"]["floor"]["force"], serial["contact"]["floor"]["force"], rtol=1e-10, atol=1e-12)
+    assert two["min_distance"] == pytest.approx(serial["min_distance"], rel=1e-8)
+
+
+def test_hertz_sphere_pressed_on_a_rigid_plane(tmp_path):
+    """Hertz (Johnson, Contact Mechanics, 4.2): a sphere of radius R pressed by d onto a rigid plane carries
+    F = 4/3 E* sqrt(R) d^1.5 over a contact radius a = sqrt(R d), E* = E / (1 - nu^2). A quarter hemisphere
+    (P2, graded toward the contact) is pushed down by its flat face; d / R = 1e-3 keeps the finite body close
+    to Hertz's half-space (its far-field compliance shifts F by ~0.6 sqrt(d / R)), dhat = d / 50."""
+    R, E, nu, d = 0.01, 1e6, 0.3, 1e-5
+    dhat = d / 50
+    mesh = quarter_hemisphere(tmp_path / "hemisphere.msh", R, fine=1e-4, coarse=2.5e-3, zone=5e-4)
+    scene = {"title": "Hertz", "mesh": {"generator": "file", "file": mesh},
+             "material": {"E": E, "nu": nu},
+             "fix": [{"name": "press", "where": {"group": "top"}, "value": [0.0, 0.0, -(d + dhat)]},
+                     {"where": {"axis": "x", "at": 0.0}, "components": ["x"]},
+                     {"where": {"axis": "y", "at": 0.0}, "components": ["y"]}],
+             "contact": {"distance": dhat, "obstacle": [{"name": "plane", "shape": "plane",
+                                                         "point": [0, 0, -dhat], "normal": [0, 0, 1]}]},
+             "output": {"picture": False, "fields": False}}
+    code, r, _, _ = run_scene(tmp_path, scene)
+    assert code == 0 and r["intersection_free"]
+    force = 4 * r["contact"]["plane"]["force"][2]
+    radius = math.sqrt(4 * r["contact"]["plane"]["area"] / math.pi)
+    hertz_force = 4 / 3 * E / (1 - nu ** 2) * math.sqrt(R) * d ** 1.5
+    assert force == pytest.approx(hertz_force, rel=0.03)               # measured 0.7 %
+    assert radius == pytest.approx(math.sqrt(R * d), rel=0.04)         # measured 1.6 %
+    assert -4 * r["reactions"]["press"][2] == pytest.approx(force, rel=1e-6)
+
+
+def run(tmp_path, scene, capsys):
+    path = tmp_path / "scene.toml"
+    path.write_text(toml_dumps(scene))
+    code = main(["run", str(path), "--out", str(tmp_path / "out"), "-q"])
+    return code, capsys.readouterr().err, (tmp_path / "out" / "results.json").exists()
+
+
+def floor(**keys) -> dict:
+    return {"contact": {"distance": DHAT, "obstacle": [{"name": "floor", "shape": "plane", "point": [0, 0, -GAP],
+                                                        "normal": [0, 0, 1], **keys}]}}
+
+
+REFUSED = [
+    ("obstacle through the part", floor(point=[0, 0, 0.02]), "contact.obstacle[0] (floor): intersects or touches"),
+    ("distance not positive", {"contact": floor()["contact"] | {"distance": 0.0}},
+     "contact.distance = 0.0: must be"),
+    ("motion backwards in time", floor(motion=[[1.0, 0, 0, 0], [0.5, 0, 0, -0.01]]),
+     "contact.obstacle[0].motion: times must increase"),
+    ("sphere without radius", {"contact": {"obstacle": [{"shape": "sphere", "center": [0, 0, -1]}]}},
+     "contact.obstacle[0].radius: missing (required for shape = 'sphere')"),
+    ("key of another shape", floor(radius=1.0), "contact.obstacle[0].radius: only for shape = 'sphere' or"),
+    ("nothing to touch", {"contact": {"distance": DHAT}}, "[contact] with neither self = true nor"),
+    ("frictionless floor leaves sliding free", {"fix": []},
+     "the supports leave the body free (translation x, translation y, rotation about z)"),
+    ("contact in a modal analysis", {"analysis": "modal"}, "contact: only for analysis = 'static'"),
+    ("static part out of the table's reach", {"fix": [], **floor(point=[0, 0, -0.002], friction=0.5)},
+     "leave the body free (translation z) and the loads push it that way"),
+    ("central difference", {"analysis": "dynamic", "dynamic": {"scheme": "central-difference", "mass": "lumped"}},
+     "contact: not with dynamic.scheme = 'central-difference'"),
+]
+
+
+@pytest.mark.parametrize("name, extra, fragment", REFUSED, ids=[r[0] for r in REFUSED])
+def test_bad_contact_input_is_refused_in_one_line(tmp_path, capsys, name, extra, fragment):
+    code, err, wrote = run(tmp_path, block_scene(**extra), capsys)
+    lines = err.strip().splitlines()
+    assert code == 2 and len(lines) == 1 and fragment in lines[0], err
+    assert not wrote

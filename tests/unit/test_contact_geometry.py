@@ -1,0 +1,90 @@
+"""The contact barrier and the analytic obstacles, against independent references: the IPC Toolkit's own
+barrier functions, central differences of the signed distances, and exact times of impact."""
+from types import SimpleNamespace
+
+import ipctk
+import numpy as np
+import pytest
+
+from fem_forms.physics.contact.barrier import barrier, barrier_first, barrier_second, psd_blocks
+from fem_forms.physics.contact.obstacles import KEEP, make_obstacle
+
+
+def test_barrier_and_its_derivatives_equal_the_ipc_toolkits():
+    dhat = 1e-3
+    d = np.array([1e-9, 1e-6, 2e-4, 5e-4, 9.99e-4, 1e-3, 2e-3])
+    for ours, theirs in ((barrier, ipctk.barrier), (barrier_first, ipctk.barrier_first_derivative),
+                         (barrier_second, ipctk.barrier_second_derivative)):
+        ref = np.array([theirs(x, dhat) if x < dhat else 0.0 for x in d])
+        assert np.allclose(ours(d, dhat), ref, rtol=1e-12, atol=0.0)
+    assert barrier(np.array([0.0, -1e-6]), dhat).tolist() == [np.inf, np.inf]
+
+
+SPECS = {
+    "plane": dict(point=[0.1, 0.0, -0.2], normal=[0.3, -0.2, 1.0]),
+    "sphere": dict(center=[0.0, 0.1, -1.0], radius=0.7),
+    "cylinder": dict(point=[0.0, 0.0, -1.0], axis=[1.0, 0.5, 0.2], radius=0.6),
+    "box": dict(min=[-0.5, -0.4, -1.5], max=[0.3, 0.2, -0.6]),
+}
+
+
+def obstacle(shape, motion=None):
+    return make_obstacle(SimpleNamespace(name=shape, shape=shape, friction=0.0, motion=motion, **SPECS[shape]))
+
+
+@pytest.mark.parametrize("shape", list(SPECS))
+def test_gradient_and_hessian_of_each_distance_are_its_central_differences(shape):
+    ob = obstacle(shape)
+    rng = np.random.default_rng(3)
+    p = rng.uniform(-0.3, 0.6, size=(40, 3))
+    d, g, H = ob.derivatives(p)
+    h = 1e-6
+    for k in range(3):
+        e = np.zeros(3)
+        e[k] = h
+        dp, gp, _ = ob.derivatives(p + e)
+        dm, gm, _ = ob.derivatives(p - e)
+        assert np.allclose((dp - dm) / (2 * h), g[:, k], atol=1e-7)
+        assert np.allclose((gp - gm) / (2 * h), H[:, :, k], atol=1e-5)
+
+
+@pytest.mark.parametrize("shape", list(SPECS))
+def test_a_filtered_step_never_enters_the_obstacle(shape):
+    """Points thrown straight through the obstacle: the safe fraction stops every one of them outside, with at
+    least KEEP of its gap, and no further point on the capped segments is inside (sampled densely)."""
+    ob = obstacle(shape)
+    rng = np.random.default_rng(5)
+    p0 = rng.uniform(-0.3, 0.6, size=(30, 3))
+    p0 = p0[ob.distance(p0) > 1e-3]
+    dp = np.array(SPECS.get(shape, {}).get("center", [0.0, 0.0, -1.2])) - p0
+    s = ob.safe_fraction(p0, 2.5 * dp)
+    assert 0.0 < s < 1.0
+    for t in np.linspace(0.0, s, 400):
+        assert np.all(ob.distance(p0 + t * 2.5 * dp) > 0.0)
+    assert np.all(ob.distance(p0 + s * 2.5 * dp) >= KEEP * ob.distance(p0) * (1 - 1e-9))
+
+
+def test_plane_step_filter_is_its_exact_time_of_impact_shortened_to_keep_a_gap():
+    ob = obstacle("plane")
+    n = ob.normal
+    p0 = np.array([[0.1, 0.0, -0.2]]) + 0.01 * n
+    s = ob.safe_fraction(p0, -0.04 * n[None])        # impact at a quarter of the step
+    assert s == pytest.approx(0.25 * (1 - KEEP), rel=1e-12)
+
+
+def test_motion_moves_the_obstacle_piecewise_linearly_and_holds_after_the_last_row():
+    ob = obstacle("sphere", motion=[[0.0, 0.0, 0.0, 0.0], [2.0, 0.2, 0.0, -0.4]])
+    p = np.array([[0.0, 0.1, 0.0]])
+    d0 = ob.distance(p)[0]
+    ob.move_to(1.0)
+    assert ob.distance(p)[0] == pytest.approx(np.linalg.norm([0.1, 0.0, 1.2]) - 0.7, rel=1e-12)
+    ob.move_to(5.0)
+    assert np.allclose(ob.offset, [0.2, 0.0, -0.4])
+    assert d0 == pytest.approx(0.3, rel=1e-12)
+
+
+def test_psd_projection_keeps_positive_parts_and_drops_negative_eigenvalues():
+    Q = np.linalg.qr(np.random.default_rng(1).normal(size=(3, 3)))[0]
+    H = Q @ np.diag([2.0, -1.0, 0.5]) @ Q.T
+    P = psd_blocks(H[None])[0]
+    assert np.allclose(P, Q @ np.diag([2.0, 0.0, 0.5]) @ Q.T)
