@@ -62,7 +62,13 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
         set_load(trial)
         corner = any(abs(lam - s) < 1e-12 for s in stops)     # the load path turns: no extrapolation across
         if predictor and last_step is not None and last_dlam > 0 and not corner:   # secant extrapolation
-            u.x.array[:] = old.x.array + ((trial - lam) / last_dlam) * last_step
+            step = ((trial - lam) / last_dlam) * last_step
+            if drv.arrays.caps:                      # a contact's step filter: the guess stays intersection-free
+                dx = old.vector.copy()
+                dx.array[:] = step[: len(dx.array)]
+                step = drv.arrays.max_step(old.vector, dx) * step
+                dx.destroy()
+            u.x.array[:] = old.x.array + step
             u.x.scatter_forward()
         drv.load_factor = trial
         progress.report("load_step", load=trial, step=len(report.steps) + 1)

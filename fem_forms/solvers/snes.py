@@ -250,6 +250,17 @@ class SNESDriver:
         r.destroy()
         return ok
 
+    def _start_is_safe(self, x_old: PETSc.Vec) -> bool:
+        """Whether moving from x_old to the start state self.x keeps every contact intersection-free (the step
+        filter of the array terms, applied to the supports' increment; True without such terms)."""
+        if not self.arrays.caps:
+            return True
+        dx = self.x.copy()
+        dx.axpy(-1.0, x_old)
+        safe = self.arrays.max_step(x_old, dx) >= 1.0
+        dx.destroy()
+        return safe
+
     def _linear_extension(self, x_old: PETSc.Vec) -> None:
         """Moving only the constrained dofs inverted some cells (thin or sliver cells at the boundary):
         start instead from one linear step from the last state, which carries the Dirichlet increment
@@ -314,9 +325,14 @@ class SNESDriver:
         fpetsc.set_bc(self.x, self.p.bcs)
         self.x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         if check_start:
-            if not self._finite_residual(self.x):
+            if not self._finite_residual(self.x) or not self._start_is_safe(x_old):
                 self._linear_extension(x_old)
+            unsafe = not self._start_is_safe(x_old)
             x_old.destroy()
+            if unsafe:                           # the supports' increment would cross a contact: a smaller one
+                self.p.u.vector.copy(self.x)
+                return StepRecord(0.0, 0, [], "SUPPORTS_CROSS_CONTACT", False,
+                                  note="the supports' move would make the surface cross a contact")
         self.snes.setTolerances(atol=self.base_atol(), max_it=min(self.max_it, self.newton_cap or self.max_it))
         if self.bounds is not None:
             self.bounds.install(self.snes)           # refreshed: a bound may be a committed old value
@@ -391,6 +407,8 @@ class SNESDriver:
                 opts[self.prefix + k] = self.options[k]
             else:
                 opts.delValue(self.prefix + k)
+        self.arrays.install(self.snes)           # a new type may drop the step cap: a contact's full Newton
+                                                 # step crossed a surface (seen in a polish on a squeezed ring)
 
     def stale_preconditioner_failed(self) -> bool:
         """Whether the last linear solve ran with a kept preconditioner (its failure is no reason

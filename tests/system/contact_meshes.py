@@ -35,3 +35,22 @@ def quarter_hemisphere(path, R: float, fine: float, coarse: float, zone: float) 
     finally:
         gmsh.finalize()
     return str(path)
+
+
+def ring(path, outer: float, inner: float, length: float, h: float) -> str:
+    """A thick-walled tube (radii outer > inner) of the given length along y, its axis through the origin."""
+    gmsh.initialize()
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        occ = gmsh.model.occ
+        tube = occ.addCylinder(0, 0, 0, 0, length, 0, outer)
+        occ.cut([(3, tube)], [(3, occ.addCylinder(0, 0, 0, 0, length, 0, inner))])
+        occ.synchronize()
+        gmsh.model.addPhysicalGroup(3, [v[1] for v in gmsh.model.getEntities(3)], 1)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", h)
+        gmsh.option.setNumber("Mesh.MeshSizeMin", h)
+        gmsh.model.mesh.generate(3)
+        gmsh.write(str(path))
+    finally:
+        gmsh.finalize()
+    return str(path)

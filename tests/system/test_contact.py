@@ -8,7 +8,8 @@ import meshio
 import numpy as np
 import pytest
 
-from system.contact_meshes import quarter_hemisphere
+from fem_forms.design.rest_shape import self_intersections
+from system.contact_meshes import quarter_hemisphere, ring
 from fem_forms.cli import main
 from helpers import MPIRUN, mpirun, run_scene, toml_dumps
 
@@ -94,6 +95,49 @@ def test_hertz_sphere_pressed_on_a_rigid_plane(tmp_path):
     assert force == pytest.approx(hertz_force, rel=0.03)               # measured 0.7 %
     assert radius == pytest.approx(math.sqrt(R * d), rel=0.04)         # measured 1.6 %
     assert -4 * r["reactions"]["press"][2] == pytest.approx(force, rel=1e-6)
+
+
+def ring_scene(mesh: str, self_contact: bool) -> dict:
+    """A soft tube (R 20 mm, wall 5 mm) squeezed flat between two strips along its length, 32 mm: its inner walls
+    (30 mm apart) must meet and be pressed together."""
+    strip = lambda z0, z1: {"box": [[-0.006, -0.001, z0], [0.006, 0.011, z1]]}          # noqa: E731
+    return {"title": "squeezed ring", "mesh": {"generator": "file", "file": mesh},
+            "material": {"E": 1e5, "nu": 0.3}, "discretization": {"degree": 1},
+            "fix": [{"name": "bottom", "where": strip(-0.021, -0.019)},
+                    {"name": "top", "where": strip(0.019, 0.021), "value": [0.0, 0.0, -0.032]}],
+            "solver": {"steps": 10, "max_step": 0.1},
+            **({"contact": {"self": True, "distance": 2e-4}} if self_contact else {}),
+            "output": {"picture": False, "fields": False}}
+
+
+def test_a_squeezed_ring_whose_inner_walls_meet_stays_intersection_free(tmp_path):
+    """Checked on deformed.stl by the inverse design's own triangle-crossing test (not the contact's): without
+    self-contact the same squeeze passes the walls through each other."""
+    mesh = ring(tmp_path / "ring.msh", 0.02, 0.015, 0.01, 0.003)
+    (tmp_path / "with").mkdir()
+    code, r, _, out = run_scene(tmp_path / "with", ring_scene(mesh, True))
+    assert code == 0 and r["converged"] and r["intersection_free"]
+    touch = r["contact"]["self"]
+    assert touch["active_points"] > 20 and touch["area"] > 1e-4 and 0 < r["min_distance"] < 2e-4
+    assert np.linalg.norm(touch["force"]) < 1e-9 * touch["max_pressure"] * touch["area"]   # internal: sums to 0
+    surface = meshio.read(out / "deformed.stl")
+    assert self_intersections(surface.points.astype(float), surface.cells_dict["triangle"]) == 0
+    (tmp_path / "without").mkdir()
+    code, _, _, out = run_scene(tmp_path / "without", ring_scene(mesh, False))
+    surface = meshio.read(out / "deformed.stl")
+    assert code == 0 and self_intersections(surface.points.astype(float), surface.cells_dict["triangle"]) > 0
+
+
+@pytest.mark.mpi
+@pytest.mark.skipif(MPIRUN is None, reason="needs mpirun")
+def test_self_contact_on_two_ranks_is_refused_in_one_line(tmp_path):
+    """Not yet parallel (see the issue's note): refused before solving, never a crash."""
+    path = tmp_path / "scene.toml"
+    path.write_text(toml_dumps(block_scene(contact={"self": True})))
+    proc = mpirun(["-m", "fem_forms", "run", str(path), "--out", str(tmp_path / "two"), "-q"])
+    ours = [line for line in proc.stderr.splitlines() if line.startswith("fem-forms:")]
+    assert proc.returncode != 0 and len(ours) == 1 and "contact.self = true: on one MPI rank for now" in ours[0]
+    assert not (tmp_path / "two" / "results.json").exists()
 
 
 def run(tmp_path, scene, capsys):

@@ -88,3 +88,41 @@ def test_psd_projection_keeps_positive_parts_and_drops_negative_eigenvalues():
     H = Q @ np.diag([2.0, -1.0, 0.5]) @ Q.T
     P = psd_blocks(H[None])[0]
     assert np.allclose(P, Q @ np.diag([2.0, 0.0, 0.5]) @ Q.T)
+
+
+def plates(gap, n=3):
+    from fem_forms.physics.contact.self_contact import _plates
+    V, F, n, area = _plates(0.01, gap, n=n)
+    edges = np.unique(np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1), axis=0)
+    return SimpleNamespace(rest=V, faces=F, edges=lambda: edges), n, area
+
+
+def test_self_contact_gradient_is_the_central_difference_of_its_energy():
+    from fem_forms.physics.contact.self_contact import SelfContact
+    surface, n, _ = plates(0.003)
+    p = surface.rest + np.random.default_rng(0).normal(scale=3e-4, size=surface.rest.shape)
+    sc = SelfContact(surface, 0.005)
+    g = sc.gradient(p).ravel()
+    fd = np.zeros_like(g)
+    for k in range(len(g)):
+        e = np.zeros(len(g))
+        e[k] = 1e-7
+        fd[k] = (sc.energy(p + e.reshape(-1, 3)) - sc.energy(p - e.reshape(-1, 3))) / 2e-7
+    assert np.abs(fd - g).max() < 1e-6 * np.abs(g).max()
+    assert np.linalg.eigvalsh(sc.hessian(p).toarray()).min() > -1e-12 * np.abs(g).max()   # projected: PSD
+
+
+def test_self_contact_calibration_gives_the_asked_pressure_and_ccd_stops_before_crossing():
+    from fem_forms.physics.contact.self_contact import SHORTEN, SelfContact
+    surface, n, area = plates(0.0025, n=6)                    # the calibration's own probe: patches of 6 x 6
+    sc = SelfContact(surface, 0.005)
+    sc.calibrate(0.01, 1e3)
+    force = -sc.gradient(surface.rest)[:n, 2].sum() / area    # on the lower patch: down, Pa
+    assert force == pytest.approx(-1e3, rel=1e-9) and sc.stiffness > 0
+    dp = np.zeros_like(surface.rest)
+    x = surface.rest[n:, 0]
+    dp[n:, 2] = -0.005 + 0.2 * (x - x.mean())                 # the top patch tilted through the bottom one
+    first = 0.0025 / 0.011                                    # its corner at x = 0 meets the bottom patch first
+    s = sc.safe_fraction(surface.rest, dp)
+    assert SHORTEN * first * 0.85 < s < SHORTEN * first * 1.0001     # Tight Inclusion errs early (measured 5 %)
+    assert not sc.intersects(surface.rest + s * dp) and sc.intersects(surface.rest + 0.75 * dp)

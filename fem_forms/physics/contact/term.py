@@ -6,6 +6,7 @@ step intersection-free. The surface is gathered on every rank; each rank adds th
 from __future__ import annotations
 
 from dolfinx import fem
+from mpi4py import MPI
 import numpy as np
 from petsc4py import PETSc
 
@@ -14,6 +15,7 @@ from fem_forms.meshes.boundary_surface import BoundarySurface, boundary_surface
 from fem_forms.physics.contact.barrier import barrier, barrier_first, barrier_second, pressure_at_half, psd_blocks
 from fem_forms.physics.contact.friction import LaggedFriction, tangent_basis
 from fem_forms.physics.contact.obstacles import make_obstacle
+from fem_forms.physics.contact.self_contact import SelfContact
 from fem_forms.physics.terms import ArrayTerm, Context, add_entries
 
 DEFAULT_DISTANCE = 1e-3      # dhat as a share of the part's bounding-box diagonal, as in IPC
@@ -29,6 +31,7 @@ class ContactTerm(ArrayTerm):
     def __init__(self, spec, modulus: float):
         self.modulus = modulus
         self.surface: BoundarySurface | None = None
+        self.selfc: SelfContact | None = None
         self.kappa = self.kappa0 = 0.0
         self.intersection_free = True
         self.time = self.start_time = 0.0
@@ -41,8 +44,9 @@ class ContactTerm(ArrayTerm):
             if ob.shape == "file":
                 raise InputError(f"contact.obstacle[{i}].shape = 'file': not available yet (plane, sphere, box, "
                                  "cylinder are)")
-        if spec.self:
-            raise InputError("contact.self = true: self-contact is not available yet (obstacles are)")
+        if spec.self and spec.friction > 0.0:
+            raise InputError(f"contact.friction = {spec.friction}: friction of self-contact is not available yet "
+                             "(frictionless self-contact and obstacles' friction are)")
         self.spec = spec
         self.obstacles = [make_obstacle(ob) for ob in spec.obstacle]
         for ob in self.obstacles:
@@ -56,6 +60,9 @@ class ContactTerm(ArrayTerm):
     def prepare(self, ctx: Context) -> None:
         if not isinstance(ctx.u, fem.Function) or ctx.rest_map is not None or ctx.deformation is not None:
             raise InputError("contact: available with formulation = 'displacement' in forward analyses only")
+        if self.spec.self and ctx.mesh.comm.size > 1:
+            raise InputError("contact.self = true: on one MPI rank for now (a two-rank run aborted inside the "
+                             "solver once the surfaces met); obstacles run on any number of ranks")
         self.surface = boundary_surface(ctx.u.function_space)
         self.state = ctx.u.vector                       # the state `record` reports after each accepted step
         self.friction_at_start = np.zeros((self.surface.size, 3))
@@ -78,6 +85,10 @@ class ContactTerm(ArrayTerm):
         e = self.surface.edges()
         h = float(np.mean(np.linalg.norm(rest[e[:, 0]] - rest[e[:, 1]], axis=1)))
         self.kappa = self.kappa0 = self.modulus / (h * pressure_at_half(self.dhat))
+        if self.spec.self:                         # the same push at dhat / 2 between the part's own pieces
+            self.selfc = SelfContact(self.surface, self.dhat)
+            self.selfc.calibrate(h, self.modulus * self.dhat / h)
+            self.self_stiffness0 = self.selfc.stiffness
 
     def update(self, t: float) -> None:
         """Move the obstacles to time t and lag the friction from the current state (the step's start). A state
@@ -116,6 +127,8 @@ class ContactTerm(ArrayTerm):
         p = self.surface.positions(x)
         A = self.surface.area
         push = sum(self.kappa * np.sum(A[act] * barrier(d, self.dhat)) for act, d, *_ in self._gaps(p))
+        if self.selfc is not None:
+            push += self.selfc.energy(p)
         return float(push + sum(f.energy(p) for f in self.friction if f is not None))
 
     def nodal_forces(self, x: PETSc.Vec) -> list[tuple]:
@@ -137,13 +150,20 @@ class ContactTerm(ArrayTerm):
         for act, force in self.nodal_forces(x):
             keep = mine[act] >= 0
             np.add.at(rows, mine[act][keep], -force[keep])
+        if self.selfc is not None:
+            rows[self.surface.owned_local] += self.selfc.gradient(self.surface.positions(x))[self.surface.owned]
 
     def add_hessian(self, x: PETSc.Vec, A: PETSc.Mat, constrained: np.ndarray) -> None:
         p = self.surface.positions(x)
         gaps = self._gaps(p)
-        self._adapt(min((m for *_, m in gaps), default=np.inf))
+        smallest = min((m for *_, m in gaps), default=np.inf)
+        if self.selfc is not None:
+            smallest = min(smallest, self.selfc.min_distance(p))
+        self._adapt(smallest)
         owned = np.zeros(self.surface.size, bool)
         owned[self.surface.owned] = True
+        if self.selfc is not None:
+            self._add_self_hessian(A, p, owned, constrained)
         area = self.surface.area
         for (act, d, g, H, _), fr in zip(gaps, self.friction or [None] * len(gaps)):
             if fr is not None:
@@ -158,6 +178,26 @@ class ContactTerm(ArrayTerm):
                 + (w * barrier_first(d, self.dhat))[:, None, None] * H
             self._add_blocks(A, act, psd_blocks(blocks), constrained)
 
+    def _add_self_hessian(self, A: PETSc.Mat, p: np.ndarray, owned: np.ndarray, constrained: np.ndarray) -> None:
+        """Self-contact's Hessian rows of the owned nodes. It couples nodes no element joins: it is assembled
+        into its own matrix and added with MatAXPY, which widens A's pattern (inserting new nonzeros into an
+        assembled parallel A crashed PETSc on 2 ranks)."""
+        H = self.selfc.hessian(p)
+        to_global = lambda i: 3 * self.surface.blocks[i // 3] + i % 3        # noqa: E731
+        rows, cols = to_global(H.row), to_global(H.col)
+        keep = owned[H.row // 3] & (H.data != 0.0) & ~np.isin(rows, constrained) & ~np.isin(cols, constrained)
+        if not A.comm.tompi4py().allreduce(bool(keep.any()), op=MPI.LOR):
+            return
+        lo, hi = A.getOwnershipRange()
+        rows, cols, vals = rows[keep] - lo, cols[keep], H.data[keep]
+        order = np.lexsort((cols, rows))
+        rows, cols, vals = rows[order], cols[order], vals[order]
+        indptr = np.searchsorted(rows, np.arange(hi - lo + 1)).astype(PETSc.IntType)
+        C = PETSc.Mat().createAIJ(A.getSizes(), csr=(indptr, cols.astype(PETSc.IntType), vals), comm=A.comm)
+        C.assemble()
+        A.axpy(1.0, C, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+        C.destroy()
+
     def _add_blocks(self, A: PETSc.Mat, nodes: np.ndarray, blocks: np.ndarray, constrained: np.ndarray) -> None:
         """One 3x3 block per surface node on the diagonal of A (in every tangent's pattern)."""
         base = 3 * self.surface.blocks[nodes]
@@ -170,10 +210,13 @@ class ContactTerm(ArrayTerm):
         gap, away from the barrier's singularity (IPC's adaptive barrier stiffness)."""
         if smallest < TOO_CLOSE * self.dhat and self.kappa < MAX_RAISE * self.kappa0:
             self.kappa *= 2.0
+            if self.selfc is not None:
+                self.selfc.stiffness *= 2.0
 
     def max_step(self, x: PETSc.Vec, dx: PETSc.Vec) -> float:
         p0, dp = self.surface.positions(x), self.surface.displacement(dx)
-        return min((ob.safe_fraction(p0, dp) for ob in self.obstacles), default=1.0)
+        own = self.selfc.safe_fraction(p0, dp) if self.selfc is not None else 1.0
+        return min([own] + [ob.safe_fraction(p0, dp) for ob in self.obstacles])
 
     # --- what results.json and probes.csv report -----------------------------------------------------------
     def _friction_forces(self, p: np.ndarray) -> np.ndarray:
@@ -194,7 +237,8 @@ class ContactTerm(ArrayTerm):
 
     def min_distance(self, x: PETSc.Vec) -> float:
         p = self.surface.positions(x)
-        return min((float(ob.distance(p).min()) for ob in self.obstacles), default=np.inf)
+        own = self.selfc.min_distance(p) if self.selfc is not None else np.inf
+        return min([own] + [float(ob.distance(p).min()) for ob in self.obstacles])
 
     def intersection(self, x: PETSc.Vec) -> str | None:
         """Why the state at x is not intersection-free (a surface node on or inside an obstacle), or None."""
@@ -203,13 +247,14 @@ class ContactTerm(ArrayTerm):
             d = ob.distance(p)
             if d.min() <= 0.0:
                 return f"the surface meets obstacle {ob.name!r} ({int(np.sum(d <= 0))} nodes at or inside it)"
+        if self.selfc is not None and self.selfc.intersects(p):
+            return "the surface intersects itself"
         return None
 
     def report(self, x: PETSc.Vec) -> dict:
         """results.json: contact {NAME: force (by the obstacle on the part, N), area (m^2 of the rest surface's
         triangles whose nodes are all within dhat), max_pressure (Pa), active_points (nodes within dhat)}, min_distance (m), intersection_free, barrier numbers."""
         p = self.surface.positions(x)
-        A = self.surface.area
         out = {}
         forces = [f.sum(axis=0) for _, f in self.nodal_forces(x)]
         for ob, (act, d, g, *_), force in zip(self.obstacles, self._gaps(p), forces):
@@ -220,10 +265,22 @@ class ContactTerm(ArrayTerm):
                             "area": float(self.surface.face_areas()[touching[self.surface.faces].all(axis=1)].sum()),
                             "max_pressure": float(pressure.max(initial=0.0)),
                             "active_points": int(len(act))}
+        if self.selfc is not None:
+            out["self"] = self._self_report(p)
         smallest = self.min_distance(x)
         self.intersection_free = self.intersection_free and smallest > 0.0
         return {"contact": out, "min_distance": smallest, "intersection_free": self.intersection_free,
                 "contact_distance": self.dhat, "barrier_stiffness": self.kappa}
+
+    def _self_report(self, p: np.ndarray) -> dict:
+        """results.json contact.self: the pushes' sum (zero: internal), area, largest pressure, active nodes."""
+        g = self.selfc.gradient(p)
+        push = np.linalg.norm(g, axis=1)
+        active = push > 0.0
+        faces = active[self.surface.faces].all(axis=1)
+        return {"force": (-g.sum(axis=0)).tolist(), "area": float(self.surface.face_areas()[faces].sum()),
+                "max_pressure": float((push[active] / self.surface.area[active]).max(initial=0.0)),
+                "active_points": int(active.sum())}
 
     def record(self) -> dict[str, float]:
         """probes.csv columns after every accepted step: each obstacle's force and the smallest gap."""
