@@ -39,6 +39,11 @@ class ArrayTerms:
         return self._constrained
 
     @property
+    def widens(self) -> bool:
+        """Whether some term adds Hessian entries outside the forms' pattern (self-contact): the tangent is AIJ."""
+        return any(getattr(t, "widens_pattern", False) for t in self.terms)
+
+    @property
     def caps(self) -> bool:
         """Whether some term can cap a step (the pre-check is installed only then)."""
         return any(t.caps for t in self.terms)
@@ -87,6 +92,27 @@ class ArrayTerms:
         """The smallest safe fraction over the terms of the step x -> x + dx."""
         local = min((t.max_step(x, dx) for t in self.terms if t.caps), default=1.0)
         return x.comm.tompi4py().allreduce(local, op=MPI.MIN)     # one step for all ranks, whatever a term did
+
+    def safe_move(self, x: PETSc.Vec, target: PETSc.Vec) -> bool:
+        """Whether the whole move x -> target passes the terms' step filter (a start state the supports' new
+        values or a predictor made; True without capping terms)."""
+        if not self.caps:
+            return True
+        dx = target.copy()
+        dx.axpy(-1.0, x)
+        safe = dx.norm(PETSc.NormType.INFINITY) == 0.0 or self.max_step(x, dx) >= 1.0
+        dx.destroy()
+        return safe
+
+    def safe_share(self, x: PETSc.Vec, step) -> float:
+        """The safe fraction of the move x -> x + step (step: the owned entries' array); 1 without capping terms."""
+        if not self.caps:
+            return 1.0
+        dx = x.copy()
+        dx.array[:] = step[: len(dx.array)]
+        share = self.max_step(x, dx)
+        dx.destroy()
+        return share
 
     def precheck(self, x: PETSc.Vec, y: PETSc.Vec) -> bool:
         """PETSc's line-search pre-check: newtonls tries x - lambda y (lambda = 1 first), so the step is

@@ -54,8 +54,7 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
     lam, dlam, cuts = 0.0, min(1.0 / steps, max_step), 0
     if problem.set_load is None:                     # nothing to continue in: one attempt
         lam, dlam, max_cutbacks = 0.0, 1.0, 0
-    last_step, last_dlam = None, 0.0                # secant: u_k - u_{k-1} over lambda_k - lambda_{k-1}
-    hold = False                                     # the last cut-back's trial left the domain
+    last_step, last_dlam, hold = None, 0.0, False   # secant u_k - u_{k-1} over its dlam; a cut-back left the domain
     path = PathStiffness(u)
     while lam < 1.0 - 1e-12:
         trial = min([1.0, lam + dlam] + [s for s in stops if s > lam + 1e-12])
@@ -63,12 +62,7 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
         corner = any(abs(lam - s) < 1e-12 for s in stops)     # the load path turns: no extrapolation across
         if predictor and last_step is not None and last_dlam > 0 and not corner:   # secant extrapolation
             step = ((trial - lam) / last_dlam) * last_step
-            if drv.arrays.caps:                      # a contact's step filter: the guess stays intersection-free
-                dx = old.vector.copy()
-                dx.array[:] = step[: len(dx.array)]
-                step = drv.arrays.max_step(old.vector, dx) * step
-                dx.destroy()
-            u.x.array[:] = old.x.array + step
+            u.x.array[:] = old.x.array + drv.arrays.safe_share(old.vector, step) * step   # contact: no crossing
             u.x.scatter_forward()
         drv.load_factor = trial
         progress.report("load_step", load=trial, step=len(report.steps) + 1)

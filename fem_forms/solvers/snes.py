@@ -91,8 +91,8 @@ class SNESDriver:
         self.bordered = Bordered(self, problem.scalars) if problem.scalars else None
         self.assembly_time = 0.0
         self.load_factor = 1.0           # for progress reports; set by the continuation
-        # polish also after a failed line search near the answer (staggered sub-solves); off for continuation:
-        # at a limit load it would accept a state just past the limit (measured: 1.0e-5 over StVK's)
+        # polish also after a failed line search near the answer (staggered sub-solves; contact); off for plain
+        # continuation: at a limit load it would accept a state just past the limit (measured: 1.0e-5 over StVK's)
         self.polish_stuck = False
         self.newton_cap: int | None = None   # fewer Newton iterations than the options allow (near a limit point)
         self.rebuild()
@@ -111,16 +111,15 @@ class SNESDriver:
         merged.update(self.user_options)
         pmultigrid.drop_unused(merged, self.user_options)
         vi.options(merged, self.user_options, self.bounds)     # bounded: vinewtonrsls and its line search
-        # block (BAIJ) matrices assemble 2.5-3x faster and MUMPS takes them; multigrid (GAMG, hypre, and the
-        # p-multigrid's Galerkin product: PETSc 3.18 has no BAIJ PtAP) needs AIJ and builds from an AIJ copy
-        # (self.P, made when it rebuilds); other solvers get AIJ
+        # BAIJ assembles 2.5-3x faster, MUMPS takes it, multigrid builds from an AIJ copy (self.P); others get AIJ
         mumps = merged.get("pc_type") in ("lu", "cholesky") and merged.get("pc_factor_mat_solver_type") == "mumps"
         self.multigrid = merged.get("pc_type") in ("gamg", "hypre", "mg")
         self.pmg = pmultigrid.for_driver(getattr(self, "pmg", None), V, merged)
         if getattr(self, "P", None) is not None:
             self.P.destroy()
         self.P = None
-        self.A = fpetsc.create_matrix(self.a, "baij" if mumps or self.multigrid else "aij")
+        block = (mumps or self.multigrid) and not self.arrays.widens      # a widened pattern: AIJ (MatAXPY)
+        self.A = fpetsc.create_matrix(self.a, "baij" if block else "aij")
         self._A_norm = None
         if self.bordered is not None:
             self.bordered.options(merged)        # K's linear options move to the inner solve
@@ -250,17 +249,6 @@ class SNESDriver:
         r.destroy()
         return ok
 
-    def _start_is_safe(self, x_old: PETSc.Vec) -> bool:
-        """Whether moving from x_old to the start state self.x keeps every contact intersection-free (the step
-        filter of the array terms, applied to the supports' increment; True without such terms)."""
-        if not self.arrays.caps:
-            return True
-        dx = self.x.copy()
-        dx.axpy(-1.0, x_old)
-        safe = self.arrays.max_step(x_old, dx) >= 1.0
-        dx.destroy()
-        return safe
-
     def _linear_extension(self, x_old: PETSc.Vec) -> None:
         """Moving only the constrained dofs inverted some cells (thin or sliver cells at the boundary):
         start instead from one linear step from the last state, which carries the Dirichlet increment
@@ -313,26 +301,23 @@ class SNESDriver:
         return roundoff_floor(self._A_norm, self.p.u.vector, safety)
 
     def solve_step(self, check_start: bool = True) -> StepRecord:
-        """One SNES solve from the current u at the current load. `check_start`: if moving the
-        constrained dofs to their (new) values makes the residual non-finite, start from a linear
-        extension instead; a caller whose supports never move (dynamics) skips this extra assembly."""
+        """One SNES solve from the current u at the current load, moved onto the supports' (new) values so that
+        Newton directions vanish on them. `check_start`: if that move makes the residual non-finite or crosses a
+        contact, start from a linear extension instead (still crossing: the step fails); a caller whose supports
+        never move (dynamics) skips this extra assembly."""
         self._history: list[float] = []
         self.p.u.vector.copy(self.x)
-        # start from a state that satisfies the (current) Dirichlet values, so Newton directions are
-        # zero on constrained dofs and descend the energy the line search measures
         if check_start:
             x_old = self.x.copy()
         fpetsc.set_bc(self.x, self.p.bcs)
         self.x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         if check_start:
-            if not self._finite_residual(self.x) or not self._start_is_safe(x_old):
+            if not self._finite_residual(self.x) or not self.arrays.safe_move(x_old, self.x):
                 self._linear_extension(x_old)
-            unsafe = not self._start_is_safe(x_old)
+            safe = self.arrays.safe_move(x_old, self.x)
             x_old.destroy()
-            if unsafe:                           # the supports' increment would cross a contact: a smaller one
-                self.p.u.vector.copy(self.x)
-                return StepRecord(0.0, 0, [], "SUPPORTS_CROSS_CONTACT", False,
-                                  note="the supports' move would make the surface cross a contact")
+            if not safe:
+                return StepRecord(0.0, 0, [], "SUPPORTS_CROSS_CONTACT", False)
         self.snes.setTolerances(atol=self.base_atol(), max_it=min(self.max_it, self.newton_cap or self.max_it))
         if self.bounds is not None:
             self.bounds.install(self.snes)           # refreshed: a bound may be a committed old value
@@ -361,9 +346,8 @@ class SNESDriver:
         so the energy line search sees no decrease and takes a tiny step while the residual is still
         above what round-off allows (measured: 4.8e-5 left where 1e-9 was reachable). Full Newton steps
         (no line search) converge quadratically from there: take up to 3 and keep them only if they
-        reduced the residual; with `polish_stuck` (staggered sub-solves) or a step-capping array term (contact:
-        its steps stay capped) also after a line search failed below 1e-6 of the load scale last computed
-        (measured: bt on a staggered sub-solve 1e-9 from its answer; a block on a floor 2e-9).
+        reduced the residual; with `polish_stuck` (staggered sub-solves) or a step-capping array term also after a
+        line search failed below 1e-6 of the load scale (measured: 1e-9 from a sub-solve's answer; contact 2e-9).
         Returns (reason, Newton iterations, Krylov iterations) added."""
         last = self._history[-1] if self._history else math.inf
         near = (self.polish_stuck or self.arrays.caps) and last < 1e-6 * (getattr(self, "_load_scale", None) or 0.0)
@@ -407,8 +391,7 @@ class SNESDriver:
                 opts[self.prefix + k] = self.options[k]
             else:
                 opts.delValue(self.prefix + k)
-        self.arrays.install(self.snes)           # a new type may drop the step cap: a contact's full Newton
-                                                 # step crossed a surface (seen in a polish on a squeezed ring)
+        self.arrays.install(self.snes)           # a new type may drop the step cap (seen: a polish crossed)
 
     def stale_preconditioner_failed(self) -> bool:
         """Whether the last linear solve ran with a kept preconditioner (its failure is no reason

@@ -130,14 +130,18 @@ def test_a_squeezed_ring_whose_inner_walls_meet_stays_intersection_free(tmp_path
 
 @pytest.mark.mpi
 @pytest.mark.skipif(MPIRUN is None, reason="needs mpirun")
-def test_self_contact_on_two_ranks_is_refused_in_one_line(tmp_path):
-    """Not yet parallel (see the issue's note): refused before solving, never a crash."""
+def test_self_contact_gives_the_same_squeeze_on_two_ranks(tmp_path):
+    mesh = ring(tmp_path / "ring.msh", 0.02, 0.015, 0.01, 0.003)
+    (tmp_path / "one").mkdir()
+    code, serial, _, _ = run_scene(tmp_path / "one", ring_scene(mesh, True))
     path = tmp_path / "scene.toml"
-    path.write_text(toml_dumps(block_scene(contact={"self": True})))
+    path.write_text(toml_dumps(ring_scene(mesh, True)))
     proc = mpirun(["-m", "fem_forms", "run", str(path), "--out", str(tmp_path / "two"), "-q"])
-    ours = [line for line in proc.stderr.splitlines() if line.startswith("fem-forms:")]
-    assert proc.returncode != 0 and len(ours) == 1 and "contact.self = true: on one MPI rank for now" in ours[0]
-    assert not (tmp_path / "two" / "results.json").exists()
+    assert proc.returncode == 0, proc.stderr
+    two = json.loads((tmp_path / "two" / "results.json").read_text())
+    assert two["mpi_ranks"] == 2 and two["intersection_free"]
+    assert two["reactions"]["top"][2] == pytest.approx(serial["reactions"]["top"][2], rel=1e-6)   # measured 2e-9
+    assert two["contact"]["self"]["active_points"] == serial["contact"]["self"]["active_points"]
 
 
 def run(tmp_path, scene, capsys):

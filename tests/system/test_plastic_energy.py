@@ -158,5 +158,5 @@ def test_two_ranks_agree_on_the_thermal_and_plastic_work(tmp_path):
     lines = (tmp_path / "out" / "energy.csv").read_text().splitlines()
     assert lines[0] == "time,kinetic,elastic,external_work,dissipated,thermal_work,plastic_work"
     rows = np.loadtxt(lines[1:], delimiter=",")
-    ref = np.array([[t, *e.row()] for t, e in serial.energy.history])
+    ref = np.array([[t] + [getattr(e, c) for c in serial.energy.columns()] for t, e in serial.energy.history])
     np.testing.assert_allclose(rows, ref, rtol=1e-8, atol=1e-8 * ref[:, 5].max())

@@ -216,11 +216,7 @@ class ImplicitStepper:
 
     def _filtered_predictor(self, start, step) -> None:
         """u = u_n + s dt v_n with s the largest safe fraction of that move (1 without a contact in the way)."""
-        dx = start.vector.copy()
-        dx.array[:] = step[: len(dx.array)]
-        fraction = self.driver.arrays.max_step(start.vector, dx)
-        self.s.u.x.array[:] = start.x.array + fraction * step
-        dx.destroy()
+        self.s.u.x.array[:] = start.x.array + self.driver.arrays.safe_share(start.vector, step) * step
 
     def error_estimate(self, dt: float) -> float:
         """Zienkiewicz-Xie local error dt^2 |beta - 1/6| |a_{n+1} - a_n|, relative to the largest

@@ -60,9 +60,6 @@ class ContactTerm(ArrayTerm):
     def prepare(self, ctx: Context) -> None:
         if not isinstance(ctx.u, fem.Function) or ctx.rest_map is not None or ctx.deformation is not None:
             raise InputError("contact: available with formulation = 'displacement' in forward analyses only")
-        if self.spec.self and ctx.mesh.comm.size > 1:
-            raise InputError("contact.self = true: on one MPI rank for now (a two-rank run aborted inside the "
-                             "solver once the surfaces met); obstacles run on any number of ranks")
         self.surface = boundary_surface(ctx.u.function_space)
         self.state = ctx.u.vector                       # the state `record` reports after each accepted step
         self.friction_at_start = np.zeros((self.surface.size, 3))
@@ -74,6 +71,11 @@ class ContactTerm(ArrayTerm):
                 raise InputError(f"contact.obstacle[{i}] ({ob.name}): intersects or touches the part at the start "
                                  f"(smallest distance {d.min():.3g} m); the barrier needs a gap: move it at least "
                                  f"{-d.min() + self.dhat / 2:.3g} m away")
+
+    @property
+    def widens_pattern(self) -> bool:
+        """Self-contact couples surface nodes no element joins (its Hessian widens the tangent's pattern)."""
+        return bool(self.spec.self)
 
     def _scale(self) -> None:
         """dhat (the scene's, else 1e-3 x the bounding-box diagonal) and kappa: the barrier's push at a gap of
