@@ -1,7 +1,7 @@
 """Benchmark: the accuracy that the barrier's activation distance dhat ([contact] distance) trades, on Hertz's
 sphere pressed onto a rigid plane.
 
-The Hertz test's case (tests/system/test_contact.py): a quarter hemisphere R = 10 mm, E 1 MPa, nu 0.3, P2
+The Hertz case of the verification manual and of tests/system/test_contact.py: a quarter hemisphere R = 10 mm, E 1 MPa, nu 0.3, P2
 tetrahedra graded toward the contact, its flat face pushed down so that the sphere would pass the plane's
 geometric position by d = 10 um (d / R = 1e-3; the plane starts dhat below the sphere). The barrier holds the
 surfaces a gap g < dhat apart, so the true indentation is d - g: the force error grows with dhat. Per dhat:
@@ -22,8 +22,8 @@ from pathlib import Path
 import fem_forms as ff
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "tests"))
-from system.contact_meshes import quarter_hemisphere  # noqa: E402
+sys.path.insert(0, str(HERE.parent / "verification" / "geometry"))
+import hertz_hemisphere  # noqa: E402
 
 R, E, NU, D = 0.01, 1e6, 0.3, 1e-5
 SHARES = (1 / 200, 1 / 50, 1 / 20, 1 / 10, 1 / 5, 1 / 2)     # dhat / d
@@ -42,7 +42,8 @@ def scene(mesh: str, dhat: float) -> ff.Scene:
 
 def main() -> None:
     ff.quiet_jit()
-    mesh = quarter_hemisphere(Path(tempfile.mkdtemp()) / "hemisphere.msh", R, fine=1e-4, coarse=2.5e-3, zone=5e-4)
+    mesh = str(hertz_hemisphere.build(Path(tempfile.mkdtemp()) / "hemisphere.msh", R, fine=1e-4, coarse=2.5e-3,
+                                      zone=5e-4))
     force_ref = 4 / 3 * E / (1 - NU ** 2) * math.sqrt(R) * D ** 1.5
     radius_ref = math.sqrt(R * D)
     lines = ["# Contact: accuracy against the barrier distance dhat (Hertz)", "",

@@ -163,6 +163,28 @@ def mass_rows(t: dict, tolerance: float, base_z: float = 0.0) -> list:
                 tolerance, "kg m^2")]
 
 
+def hertz(quantity: str):
+    """Hertz's force (N) or contact radius (m) on the whole sphere from the quarter's results.json contact."""
+    def get(res, ref):
+        c = (res.get("contact") or {}).get("plane")
+        if c is None:
+            raise NotAvailable("results.json has no contact.plane")
+        return 4 * float(c["force"][2]) if quantity == "force" else math.sqrt(4 * float(c["area"]) / math.pi)
+    return get
+
+
+def sliding_acceleration(res, ref) -> float:
+    """Twice the t^2 coefficient of a parabola through the probe's slide (times >= 0.02 s) in probes.csv."""
+    import numpy as np
+    t, x = history(res, "c_ux")
+    keep = t >= 0.02
+    return 2.0 * float(np.polyfit(t[keep], x[keep], 2)[0])
+
+
+HERTZ_R, HERTZ_E, HERTZ_NU, HERTZ_D = 0.01, 1.0e6, 0.3, 1.0e-5
+JOHNSON = "Hertz's solution (K. L. Johnson, Contact Mechanics, Cambridge University Press, 1985, section 4.2)"
+
+
 CASES = [
     Case("uniaxial_tension", "Uniaxial tension, neo-Hookean (stretch 1.54)", BONET_WOOD,
          "uniaxial_tension.toml",
@@ -382,4 +404,22 @@ CASES = [
          notes="goal = \"check\" with a waterline (0.025 m, half the height: density 500). The cells are "
                "clipped at the water plane; the waterplane is the inscribed polygon of the tetrahedra, so V "
                "and I = pi R^4 / 4 come out slightly small."),
+    Case("hertz_contact", "Hertz: elastic sphere pressed on a rigid plane (IPC barrier contact)", JOHNSON,
+         "hertz_contact.toml",
+         [Row("contact force F = 4/3 E* sqrt(R) d^1.5",
+              4 / 3 * HERTZ_E / (1 - HERTZ_NU**2) * math.sqrt(HERTZ_R) * HERTZ_D**1.5, hertz("force"), 0.03, "N"),
+          Row("contact radius a = sqrt(R d)", math.sqrt(HERTZ_R * HERTZ_D), hertz("radius"), 0.04, "m")],
+         fast=False, mesh=("hertz_hemisphere", {}),
+         notes="R = 10 mm, d = 10 um (d / R = 1e-3: the finite hemisphere stays close to Hertz's half-space), P2 "
+               "tetrahedra graded to 0.1 mm at the contact (6,639 dofs), dhat = d / 50. The radius is that of the "
+               "rest area whose nodes are all within dhat of the plane. How dhat trades accuracy: "
+               "benchmarks/contact_distance.md."),
+    Case("sliding_block", "Block sliding down a 30 degree slope, Coulomb friction mu = 0.3 (IPC)",
+         "rigid block with Coulomb friction: a = g (sin theta - mu cos theta) (any dynamics text, e.g. Meriam & "
+         "Kraige, Engineering Mechanics: Dynamics, 3/3)", "sliding_block.toml",
+         [Row("acceleration down the slope", 9.81 * (0.5 - 0.3 * math.cos(math.pi / 6)), sliding_acceleration,
+              0.03, "m/s^2")],
+         fast=False,
+         notes="Smoothed Coulomb friction lagged per step (IPC); generalized-alpha (rho_inf 0.5) damps the barrier's "
+               "stiff rocking; the acceleration is fitted to the slide after 0.02 s (probes.csv)."),
 ]
