@@ -135,7 +135,15 @@ def load_path(model: Model) -> tuple:
     for t in model.loads:                     # every load's own factor at 1, as a new model has it (the rest-
         t.factor.value = 1.0                  # state checks see the full loads): none is left where an earlier
     if not timed:                             # run of this model put it; set_load moves them along the histories
-        return model.load.set, ()
+        contact = model.terms.with_role("contact")
+        if not contact:
+            return model.load.set, ()
+
+        def set_factor(lam: float) -> None:   # contact: obstacles move and friction lags with pseudo-time lambda
+            model.load.set(lam)
+            for term in contact:
+                term.update(lam)
+        return set_factor, ()
     t_end = max(t.history[-1][0] for t in timed)
 
     def set_load(lam: float) -> None:

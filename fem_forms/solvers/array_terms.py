@@ -121,8 +121,9 @@ class ArrayTerms:
         dx.scale(-1.0)
         s = self.max_step(x, dx)
         dx.destroy()
-        if not 0.0 < s <= 1.0:                   # a term's bug: stop the solve rather than step unsafely
-            raise ValueError(f"max_step gave {s}: a safe fraction of the step lies in (0, 1]")
+        if not 0.0 <= s <= 1.0:                  # a term's bug: stop the solve rather than step unsafely
+            raise ValueError(f"max_step gave {s}: a safe fraction of the step lies in [0, 1]")
+        # 0: the state is already unsafe (an obstacle moved onto it): no step, the line search fails, the step is cut
         self.last_cap = s
         if s < 1.0:
             y.scale(s)

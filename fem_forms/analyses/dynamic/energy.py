@@ -234,7 +234,7 @@ class EnergyAccount:
 
     def _contact(self) -> float:
         """The contact barrier's energy at the current state (0 without [contact])."""
-        return sum(t.energy_value(self.system.u.vector) for t in self.system.model.terms.with_role("contact"))
+        return sum(t.barrier_energy(self.system.u.vector) for t in self.system.model.terms.with_role("contact"))
 
     def columns(self) -> tuple:
         """The energies this run records (thermal_work with a temperature field, plastic_work with an

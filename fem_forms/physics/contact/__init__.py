@@ -13,6 +13,10 @@ def contact_terms(scene, mesh) -> list[Term]:
     """The contact term of a scene with [contact] (none without)."""
     if getattr(scene, "contact", None) is None:
         return []
+    if scene.solver.control == "arc-length" or any(ld.type == "inflation" and ld.volume is not None
+                                                   for ld in scene.load):
+        raise InputError("contact: not with solver.control = 'arc-length' or a volume-controlled cavity yet (their "
+                         "bordered Newton solve has no step filter); use load control and a cavity pressure")
     try:
         modulus = young_modulus(scene.material.material)
     except InputError:

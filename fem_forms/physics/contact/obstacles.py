@@ -83,7 +83,7 @@ class Plane(Obstacle):
         closing = rate < 0.0
         if not closing.any():
             return 1.0
-        return float(min(1.0, np.min((1.0 - KEEP) * d0[closing] / -rate[closing])))
+        return float(min(1.0, max(0.0, np.min((1.0 - KEEP) * d0[closing] / -rate[closing]))))   # 0: already in
 
 
 def _radial(r: np.ndarray, order: int, radius: float, project=None):

@@ -96,13 +96,16 @@ class ContactTerm(ArrayTerm):
         """Move the obstacles to time t and lag the friction from the current state (the step's start). A state
         that changed since the last call was accepted at the last call's time: the step now starts there."""
         x = self.state.array_r
-        if self._lagged_at is None or len(x) != len(self._lagged_at) or not np.array_equal(x, self._lagged_at):
+        moved = self._lagged_at is None or len(x) != len(self._lagged_at) or not np.array_equal(x, self._lagged_at)
+        if self.surface.comm.allreduce(moved, op=MPI.LOR):      # one decision for all ranks
             self.friction_at_start = self._friction_forces(self.surface.positions(self.state))
             self.start_time, self._lagged_at = self.time, x.copy()
         self.time = t
         for ob in self.obstacles:
             ob.move_to(self.start_time)
         p = self._start_positions = self.surface.positions(self.state)
+        if moved:
+            self._adapt(self.min_distance(self.state))     # kappa changes between steps only, as in IPC
         eps = max(SLIP_RATE * self.diagonal * (t - self.start_time), 1e-9 * self.diagonal)
         self.friction = []
         for ob in self.obstacles:
@@ -125,13 +128,16 @@ class ContactTerm(ArrayTerm):
             out.append((act, d[act], g, H, float(d.min()) if len(d) else np.inf))
         return out
 
-    def energy_value(self, x: PETSc.Vec) -> float:
+    def barrier_energy(self, x: PETSc.Vec) -> float:
+        """The barriers' stored energy at x (J): obstacles and self-contact, without friction's potential."""
         p = self.surface.positions(x)
         A = self.surface.area
         push = sum(self.kappa * np.sum(A[act] * barrier(d, self.dhat)) for act, d, *_ in self._gaps(p))
-        if self.selfc is not None:
-            push += self.selfc.energy(p)
-        return float(push + sum(f.energy(p) for f in self.friction if f is not None))
+        return float(push + (self.selfc.energy(p) if self.selfc is not None else 0.0))
+
+    def energy_value(self, x: PETSc.Vec) -> float:
+        p = self.surface.positions(x)
+        return self.barrier_energy(x) + float(sum(f.energy(p) for f in self.friction if f is not None))
 
     def nodal_forces(self, x: PETSc.Vec) -> list[tuple]:
         """Per obstacle: active nodes and the force (n, 3) the obstacle exerts on each, -dE/dx_v."""
@@ -158,10 +164,6 @@ class ContactTerm(ArrayTerm):
     def add_hessian(self, x: PETSc.Vec, A: PETSc.Mat, constrained: np.ndarray) -> None:
         p = self.surface.positions(x)
         gaps = self._gaps(p)
-        smallest = min((m for *_, m in gaps), default=np.inf)
-        if self.selfc is not None:
-            smallest = min(smallest, self.selfc.min_distance(p))
-        self._adapt(smallest)
         owned = np.zeros(self.surface.size, bool)
         owned[self.surface.owned] = True
         if self.selfc is not None:
@@ -208,8 +210,8 @@ class ContactTerm(ArrayTerm):
         add_entries(A, rows.astype(PETSc.IntType), cols.astype(PETSc.IntType), blocks.reshape(-1), constrained)
 
     def _adapt(self, smallest: float) -> None:
-        """Double kappa when a gap falls below TOO_CLOSE x dhat: the same contact force then sits at a larger
-        gap, away from the barrier's singularity (IPC's adaptive barrier stiffness)."""
+        """Double kappa when the accepted state's smallest gap is below TOO_CLOSE x dhat: the same contact force
+        then sits at a larger gap, away from the barrier's singularity (IPC's adaptive barrier stiffness)."""
         if smallest < TOO_CLOSE * self.dhat and self.kappa < MAX_RAISE * self.kappa0:
             self.kappa *= 2.0
             if self.selfc is not None:
