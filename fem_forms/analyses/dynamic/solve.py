@@ -176,6 +176,8 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
     t_start, step0, dt = 0.0, 0, dyn.dt
     if restart is not None:
         t_start, step0, dt = checkpoint.load(restart, result)
+        for term in system.model.terms.with_role("contact"):
+            term.resume(t_start)                   # the next step starts at the checkpoint's time
     else:
         account.start(0.0)
         result.probe_rows.append(probe_row(points, system, 0.0))

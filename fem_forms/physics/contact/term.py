@@ -117,6 +117,13 @@ class ContactTerm(ArrayTerm):
             self.friction.append(LaggedFriction(act, lam, tangent_basis(g[act]), p[act], ob.friction, eps,
                                                 ob.offset - start_offset) if ob.friction > 0 and len(act) else None)
 
+    def resume(self, t: float) -> None:
+        """Continue from a restored state at time t (a dynamic --restart): the next step starts there; kappa
+        starts again from its first value and the friction from no force at the start."""
+        self.time, self._lagged_at = t, None
+        for ob in self.obstacles:
+            ob.move_to(t)
+
     # --- the energy, its gradient and Hessian at x ------------------------------------------------------
     def _gaps(self, p: np.ndarray) -> list[tuple]:
         """Per obstacle: the active nodes (gap below dhat), their gaps, gradients and Hessians of the gap."""
