@@ -11,7 +11,7 @@ import pytest
 from fem_forms.design.rest_shape import self_intersections
 from system.contact_meshes import quarter_hemisphere, ring
 from fem_forms.cli import main
-from helpers import MPIRUN, mpirun, run_scene, toml_dumps
+from helpers import mpirun, run_scene, toml_dumps
 
 GAP = 5e-4                                     # the block's start gap to the floor (m)
 DHAT = 1e-3
@@ -57,7 +57,6 @@ def test_a_block_rests_on_a_frictional_table_with_no_support_at_all(tmp_path):
 
 
 @pytest.mark.mpi
-@pytest.mark.skipif(MPIRUN is None, reason="needs mpirun")
 def test_the_block_gives_the_same_answer_on_two_ranks(tmp_path):
     (tmp_path / "one").mkdir()
     code, serial, _, _ = run_scene(tmp_path / "one", block_scene())
@@ -129,7 +128,6 @@ def test_a_squeezed_ring_whose_inner_walls_meet_stays_intersection_free(tmp_path
 
 
 @pytest.mark.mpi
-@pytest.mark.skipif(MPIRUN is None, reason="needs mpirun")
 def test_self_contact_gives_the_same_squeeze_on_two_ranks(tmp_path):
     mesh = ring(tmp_path / "ring.msh", 0.02, 0.015, 0.01, 0.003)
     (tmp_path / "one").mkdir()
