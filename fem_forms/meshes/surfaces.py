@@ -39,8 +39,8 @@ def quiet_meshio():
         logging.disable(previous)
 
 
-def read_meshio(path: Path):
-    """meshio.read, silenced, with a read failure as a one-line InputError."""
+def read_meshio(path: Path, key: str = "mesh.file"):
+    """meshio.read, silenced, with a read failure as a one-line InputError naming the scene's `key`."""
     import meshio
     try:
         with quiet_meshio():
@@ -48,12 +48,12 @@ def read_meshio(path: Path):
     except (Exception, SystemExit) as e:    # noqa: BLE001 - any reader failure is bad input (meshio's VTU
         # reader calls sys.exit(1) on malformed XML: that must not end one rank and hang the others)
         why = " ".join(str(e).split())[:200] or "malformed file"
-        raise InputError(f"mesh.file = {str(path)!r}: cannot read it ({type(e).__name__}: {why})") from None
+        raise InputError(f"{key} = {str(path)!r}: cannot read it ({type(e).__name__}: {why})") from None
 
 
-def read_triangles(path: Path) -> tuple[np.ndarray, np.ndarray]:
+def read_triangles(path: Path, key: str = "mesh.file") -> tuple[np.ndarray, np.ndarray]:
     """Points (n, 3) and triangles (m, 3) of a surface file as written, quads split in two."""
-    m = read_meshio(path)
+    m = read_meshio(path, key)
     tris = [np.asarray(b.data)[:, :3] for b in m.cells if b.type == "triangle"]
     for b in m.cells:
         if b.type == "quad":
@@ -61,10 +61,10 @@ def read_triangles(path: Path) -> tuple[np.ndarray, np.ndarray]:
             tris += [q[:, [0, 1, 2]], q[:, [0, 2, 3]]]
     if not tris:
         found = ", ".join(sorted({b.type for b in m.cells})) or "nothing"
-        raise InputError(f"mesh.file = {str(path)!r}: needs a triangulated surface (found: {found})")
+        raise InputError(f"{key} = {str(path)!r}: needs a triangulated surface (found: {found})")
     pts = np.asarray(m.points, dtype=float)
     if pts.ndim != 2 or pts.shape[1] != 3:
-        raise InputError(f"mesh.file = {str(path)!r}: points must have 3 coordinates")
+        raise InputError(f"{key} = {str(path)!r}: points must have 3 coordinates")
     return pts, np.vstack(tris).astype(np.int64)
 
 
@@ -79,12 +79,12 @@ def merge_points(pts: np.ndarray, tris: np.ndarray) -> tuple[np.ndarray, np.ndar
     return pts[first], tris[keep]
 
 
-def read_surface(path: Path) -> tuple[np.ndarray, np.ndarray]:
+def read_surface(path: Path, key: str = "mesh.file") -> tuple[np.ndarray, np.ndarray]:
     """Points (n, 3) and triangles (m, 3) of a surface file, quads split, duplicate points merged."""
-    return merge_points(*read_triangles(path))
+    return merge_points(*read_triangles(path, key))
 
 
-def check_closed(points: np.ndarray, tris: np.ndarray, key: str) -> None:
+def check_closed(points: np.ndarray, tris: np.ndarray, key: str, hint: str = REPAIR_HINT) -> None:
     """Every edge must belong to exactly two triangles: open edges (a hole) and edges shared by more
     than two (not a manifold) are refused, counted, with where the first one is."""
     edges = np.sort(np.vstack([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]]), axis=1)
@@ -93,7 +93,7 @@ def check_closed(points: np.ndarray, tris: np.ndarray, key: str) -> None:
         if bad.any():
             where = np.round(points[uniq[bad][0]].mean(axis=0), 6).tolist()
             raise InputError(f"{key}: the surface is not closed: {int(bad.sum())} {what} edges, the first "
-                             f"near {where}; a solid needs a watertight surface: {REPAIR_HINT}")
+                             f"near {where}; a solid needs a watertight surface: {hint}")
 
 
 def enclosed_volume(points: np.ndarray, tris: np.ndarray) -> float:

@@ -91,31 +91,31 @@ def test_psd_projection_keeps_positive_parts_and_drops_negative_eigenvalues():
 
 
 def plates(gap, n=3):
-    from fem_forms.physics.contact.self_contact import _plates
+    from fem_forms.physics.contact.ipc_surfaces import _plates
     V, F, n, area = _plates(0.01, gap, n=n)
     edges = np.unique(np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1), axis=0)
-    return SimpleNamespace(rest=V, faces=F, edges=lambda: edges), n, area
+    return SimpleNamespace(rest=V, faces=F, edges=lambda: edges, size=len(V)), n, area
 
 
 def test_self_contact_gradient_is_the_central_difference_of_its_energy():
-    from fem_forms.physics.contact.self_contact import SelfContact
+    from fem_forms.physics.contact.ipc_surfaces import IpcSurfaces
     surface, n, _ = plates(0.003)
     p = surface.rest + np.random.default_rng(0).normal(scale=3e-4, size=surface.rest.shape)
-    sc = SelfContact(surface, 0.005)
+    sc = IpcSurfaces(surface, 0.005)
     g = sc.gradient(p).ravel()
     fd = np.zeros_like(g)
     for k in range(len(g)):
         e = np.zeros(len(g))
         e[k] = 1e-7
-        fd[k] = (sc.energy(p + e.reshape(-1, 3)) - sc.energy(p - e.reshape(-1, 3))) / 2e-7
+        fd[k] = (sc.barrier_energy(p + e.reshape(-1, 3)) - sc.barrier_energy(p - e.reshape(-1, 3))) / 2e-7
     assert np.abs(fd - g).max() < 1e-6 * np.abs(g).max()
     assert np.linalg.eigvalsh(sc.hessian(p).toarray()).min() > -1e-12 * np.abs(g).max()   # projected: PSD
 
 
 def test_self_contact_calibration_gives_the_asked_pressure_and_ccd_stops_before_crossing():
-    from fem_forms.physics.contact.self_contact import SHORTEN, SelfContact
+    from fem_forms.physics.contact.ipc_surfaces import SHORTEN, IpcSurfaces
     surface, n, area = plates(0.0025, n=6)                    # the calibration's own probe: patches of 6 x 6
-    sc = SelfContact(surface, 0.005)
+    sc = IpcSurfaces(surface, 0.005)
     sc.calibrate(0.01, 1e3)
     force = -sc.gradient(surface.rest)[:n, 2].sum() / area    # on the lower patch: down, Pa
     assert force == pytest.approx(-1e3, rel=1e-9) and sc.stiffness > 0
@@ -126,3 +126,41 @@ def test_self_contact_calibration_gives_the_asked_pressure_and_ccd_stops_before_
     s = sc.safe_fraction(surface.rest, dp)
     assert SHORTEN * first * 0.85 < s < SHORTEN * first * 1.0001     # Tight Inclusion errs early (measured 5 %)
     assert not sc.intersects(surface.rest + s * dp) and sc.intersects(surface.rest + 0.75 * dp)
+
+
+def test_winding_numbers_tell_inside_from_outside_of_a_closed_surface():
+    from fem_forms.physics.contact.mesh_obstacle import winding_numbers
+    import ipctk
+    box = np.array([[x, y, z] for z in (0, 1) for y in (0, 1) for x in (0, 1)], float)
+    faces = np.array([[0, 2, 1], [1, 2, 3], [4, 5, 6], [5, 7, 6], [0, 1, 4], [1, 5, 4], [2, 6, 3], [3, 6, 7],
+                      [0, 4, 2], [2, 4, 6], [1, 3, 5], [3, 7, 5]])
+    assert len(ipctk.edges(faces)) == 18                      # closed: every edge in two triangles
+    w = winding_numbers(np.array([[0.5, 0.5, 0.5], [0.1, 0.9, 0.2], [1.5, 0.5, 0.5], [0.5, -2, 3]]), box, faces)
+    assert np.allclose(np.abs(w), [1, 1, 0, 0], atol=1e-12)
+
+
+def test_an_obstacle_file_sliding_over_the_part_drags_it_with_coulombs_force():
+    """The lower patch is the part, the upper one a rigid obstacle moving 1 mm along x during the step: the
+    friction on the part is mu times the normal force (slip >> the mollifier's eps), along the motion, and the
+    gradient of the whole potential (barrier + friction) is the central difference of its energy."""
+    from fem_forms.physics.contact.ipc_surfaces import IpcSurfaces
+    surface, n, area = plates(0.0025, n=6)
+    top = surface.rest[n:]
+    ob = SimpleNamespace(name="tool", friction=0.4, points=top, triangles=surface.faces[len(surface.faces) // 2:] - n,
+                         points_at=lambda t: top + [1e-3 * t, 0, 0], current_points=lambda: top)
+    lower = surface.faces[:len(surface.faces) // 2]
+    edges = np.unique(np.sort(np.concatenate([lower[:, [0, 1]], lower[:, [1, 2]], lower[:, [2, 0]]]), axis=1), axis=0)
+    part = SimpleNamespace(rest=surface.rest[:n], faces=lower, size=n, edges=lambda: edges)
+    c = IpcSurfaces(part, 0.005, [ob], self_pairs=False)
+    c.calibrate(0.01, 1e3)
+    c.lag_friction(part.rest, 0.0, 1.0, 1e-7, 0.0)
+    normal = -(c.gradient(part.rest) + c.friction_forces(part.rest))[:, 2].sum()     # the obstacle pushes down
+    drag = c.friction_forces(part.rest).sum(axis=0)
+    assert normal == pytest.approx(-1e3 * area, rel=1e-9)     # the calibrated pressure at dhat / 2
+    assert drag[0] == pytest.approx(0.4 * 1e3 * area, rel=1e-6) and abs(drag[1]) < 1e-9 * drag[0]
+    p = part.rest + np.random.default_rng(2).normal(scale=2e-4, size=part.rest.shape)
+    energy = lambda q: c.barrier_energy(q) + c.friction_energy(q)        # noqa: E731
+    g = c.gradient(p).ravel()
+    fd = np.array([(energy(p + e.reshape(-1, 3)) - energy(p - e.reshape(-1, 3))) / 2e-8
+                   for e in np.eye(len(g)) * 1e-8])
+    assert np.abs(fd - g).max() < 1e-5 * np.abs(g).max()

@@ -87,6 +87,8 @@ def initial_static(system: DynamicSystem) -> None:
     for term in system.loads:
         term.factor.value = 1.0 if term.index in held else term.factor_at(0.0)
     m = system.model
+    for term in m.terms.with_role("contact"):      # obstacles at t = 0, friction lagged from the start state
+        term.update(0.0)
     problem = m.problem(m.load.set, state=system.state)
     rep = continuation.solve(problem, system.scene.solver.petsc, steps=system.scene.solver.steps,
                              max_cutbacks=system.scene.solver.max_cutbacks, linear_kind="direct")

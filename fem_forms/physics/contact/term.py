@@ -14,8 +14,9 @@ from fem_forms.errors import InputError
 from fem_forms.meshes.boundary_surface import BoundarySurface, boundary_surface
 from fem_forms.physics.contact.barrier import barrier, barrier_first, barrier_second, pressure_at_half, psd_blocks
 from fem_forms.physics.contact.friction import LaggedFriction, tangent_basis
+from fem_forms.physics.contact.ipc_surfaces import IpcSurfaces
+from fem_forms.physics.contact.mesh_obstacle import FileObstacle
 from fem_forms.physics.contact.obstacles import make_obstacle
-from fem_forms.physics.contact.self_contact import SelfContact
 from fem_forms.physics.terms import ArrayTerm, Context, add_entries
 
 DEFAULT_DISTANCE = 1e-3      # dhat as a share of the part's bounding-box diagonal, as in IPC
@@ -25,32 +26,34 @@ MAX_RAISE = 1e6              # ... up to this many times its first value
 
 
 class ContactTerm(ArrayTerm):
-    """kappa sum_obstacles sum_v A_v b(d_v): the part's surface nodes against the scene's rigid obstacles."""
+    """kappa sum_obstacles sum_v A_v b(d_v): the part's surface nodes against the scene's analytic obstacles;
+    the part's triangles against themselves and against obstacle files through the IPC Toolkit (`ipc`)."""
     name, role, keys = "contact (IPC barrier)", "contact", ("contact",)
 
     def __init__(self, spec, modulus: float):
         self.modulus = modulus
         self.surface: BoundarySurface | None = None
-        self.selfc: SelfContact | None = None
+        self.selfc: IpcSurfaces | None = None      # the part against itself
+        self.filec: IpcSurfaces | None = None      # the part against the obstacle files
         self.kappa = self.kappa0 = 0.0
         self.intersection_free = True
+        self.blocked = False                       # an obstacle file moved onto the part at the step's time
         self.time = self.start_time = 0.0
         self.friction: list[LaggedFriction] = []
         self._lagged_at = None                     # the state the friction was lagged from
         self.set_spec(spec)
 
     def set_spec(self, spec) -> None:
-        for i, ob in enumerate(spec.obstacle):
-            if ob.shape == "file":
-                raise InputError(f"contact.obstacle[{i}].shape = 'file': not available yet (plane, sphere, box, "
-                                 "cylinder are)")
-        if spec.self and spec.friction > 0.0:
-            raise InputError(f"contact.friction = {spec.friction}: friction of self-contact is not available yet "
-                             "(frictionless self-contact and obstacles' friction are)")
         self.spec = spec
-        self.obstacles = [make_obstacle(ob) for ob in spec.obstacle]
-        for ob in self.obstacles:
+        self.obstacles = [make_obstacle(ob) for ob in spec.obstacle if ob.shape != "file"]
+        self.files = [FileObstacle(ob, f"contact.obstacle[{i}]") for i, ob in enumerate(spec.obstacle)
+                      if ob.shape == "file"]
+        for ob in self.obstacles + self.files:
             ob.move_to(self.time)
+
+    @property
+    def ipc(self) -> list[IpcSurfaces]:
+        return [c for c in (self.selfc, self.filec) if c is not None]
 
     def set_values(self, scene) -> None:
         self.set_spec(scene.contact)
@@ -71,6 +74,11 @@ class ContactTerm(ArrayTerm):
                 raise InputError(f"contact.obstacle[{i}] ({ob.name}): intersects or touches the part at the start "
                                  f"(smallest distance {d.min():.3g} m); the barrier needs a gap: move it at least "
                                  f"{-d.min() + self.dhat / 2:.3g} m away")
+        if self.filec is not None and (self.filec.intersects(self.surface.rest)
+                                       or self.filec.min_distance(self.surface.rest) <= 0.0):
+            names = ", ".join(ob.name for ob in self.files)
+            raise InputError(f"contact.obstacle ({names}): an obstacle file intersects, touches or encloses the part "
+                             "at the start (or lies inside it); the barrier needs a gap between the surfaces")
 
     @property
     def widens_pattern(self) -> bool:
@@ -87,10 +95,12 @@ class ContactTerm(ArrayTerm):
         e = self.surface.edges()
         h = float(np.mean(np.linalg.norm(rest[e[:, 0]] - rest[e[:, 1]], axis=1)))
         self.kappa = self.kappa0 = self.modulus / (h * pressure_at_half(self.dhat))
-        if self.spec.self:                         # the same push at dhat / 2 between the part's own pieces
-            self.selfc = SelfContact(self.surface, self.dhat)
-            self.selfc.calibrate(h, self.modulus * self.dhat / h)
-            self.self_stiffness0 = self.selfc.stiffness
+        self.selfc = IpcSurfaces(self.surface, self.dhat) if self.spec.self else None
+        for ob, i in zip(self.files, [i for i, o in enumerate(self.spec.obstacle) if o.shape == "file"]):
+            ob.refine(h, f"contact.obstacle[{i}]")
+        self.filec = IpcSurfaces(self.surface, self.dhat, self.files, self_pairs=False) if self.files else None
+        for c in self.ipc:                         # the same push at dhat / 2 between triangles
+            c.calibrate(h, self.modulus * self.dhat / h)
 
     def update(self, t: float) -> None:
         """Move the obstacles to time t and lag the friction from the current state (the step's start). A state
@@ -101,12 +111,18 @@ class ContactTerm(ArrayTerm):
             self.friction_at_start = self._friction_forces(self.surface.positions(self.state))
             self.start_time, self._lagged_at = self.time, x.copy()
         self.time = t
-        for ob in self.obstacles:
+        for ob in self.obstacles + self.files:
             ob.move_to(self.start_time)
         p = self._start_positions = self.surface.positions(self.state)
         if moved:
             self._adapt(self.min_distance(self.state))     # kappa changes between steps only, as in IPC
         eps = max(SLIP_RATE * self.diagonal * (t - self.start_time), 1e-9 * self.diagonal)
+        for c in self.ipc:
+            c.lag_friction(p, self.start_time, t, eps, self.spec.friction)
+        for ob in self.files:
+            ob.move_to(t)
+        # an obstacle file moved onto the part at t: no step from here is safe (the step is cut back)
+        self.blocked = self.filec is not None and self.filec.intersects(p)
         self.friction = []
         for ob in self.obstacles:
             d, g = ob.derivatives(p, order=1)
@@ -121,7 +137,7 @@ class ContactTerm(ArrayTerm):
         """Continue from a restored state at time t (a dynamic --restart): the next step starts there; kappa
         starts again from its first value and the friction from no force at the start."""
         self.time, self._lagged_at = t, None
-        for ob in self.obstacles:
+        for ob in self.obstacles + self.files:
             ob.move_to(t)
 
     # --- the energy, its gradient and Hessian at x ------------------------------------------------------
@@ -140,11 +156,12 @@ class ContactTerm(ArrayTerm):
         p = self.surface.positions(x)
         A = self.surface.area
         push = sum(self.kappa * np.sum(A[act] * barrier(d, self.dhat)) for act, d, *_ in self._gaps(p))
-        return float(push + (self.selfc.energy(p) if self.selfc is not None else 0.0))
+        return float(push + sum(c.barrier_energy(p) for c in self.ipc))
 
     def energy_value(self, x: PETSc.Vec) -> float:
         p = self.surface.positions(x)
-        return self.barrier_energy(x) + float(sum(f.energy(p) for f in self.friction if f is not None))
+        return self.barrier_energy(x) + float(sum(f.energy(p) for f in self.friction if f is not None)) \
+            + sum(c.friction_energy(p) for c in self.ipc)
 
     def nodal_forces(self, x: PETSc.Vec) -> list[tuple]:
         """Per obstacle: active nodes and the force (n, 3) the obstacle exerts on each, -dE/dx_v."""
@@ -165,16 +182,16 @@ class ContactTerm(ArrayTerm):
         for act, force in self.nodal_forces(x):
             keep = mine[act] >= 0
             np.add.at(rows, mine[act][keep], -force[keep])
-        if self.selfc is not None:
-            rows[self.surface.owned_local] += self.selfc.gradient(self.surface.positions(x))[self.surface.owned]
+        for c in self.ipc:
+            rows[self.surface.owned_local] += c.gradient(self.surface.positions(x))[self.surface.owned]
 
     def add_hessian(self, x: PETSc.Vec, A: PETSc.Mat, constrained: np.ndarray) -> None:
         p = self.surface.positions(x)
         gaps = self._gaps(p)
         owned = np.zeros(self.surface.size, bool)
         owned[self.surface.owned] = True
-        if self.selfc is not None:
-            self._add_self_hessian(A, p, owned, constrained)
+        for c in self.ipc:
+            self._add_ipc_hessian(c, A, p, owned, constrained)
         area = self.surface.area
         for (act, d, g, H, _), fr in zip(gaps, self.friction or [None] * len(gaps)):
             if fr is not None:
@@ -189,11 +206,12 @@ class ContactTerm(ArrayTerm):
                 + (w * barrier_first(d, self.dhat))[:, None, None] * H
             self._add_blocks(A, act, psd_blocks(blocks), constrained)
 
-    def _add_self_hessian(self, A: PETSc.Mat, p: np.ndarray, owned: np.ndarray, constrained: np.ndarray) -> None:
-        """Self-contact's Hessian rows of the owned nodes. It couples nodes no element joins: it is assembled
+    def _add_ipc_hessian(self, c: IpcSurfaces, A: PETSc.Mat, p: np.ndarray, owned: np.ndarray,
+                         constrained: np.ndarray) -> None:
+        """Triangle contact's Hessian rows of the owned nodes. It couples nodes no element joins: it is assembled
         into its own matrix and added with MatAXPY, which widens A's pattern (inserting new nonzeros into an
         assembled parallel A crashed PETSc on 2 ranks)."""
-        H = self.selfc.hessian(p)
+        H = c.hessian(p)
         to_global = lambda i: 3 * self.surface.blocks[i // 3] + i % 3        # noqa: E731
         rows, cols = to_global(H.row), to_global(H.col)
         keep = owned[H.row // 3] & (H.data != 0.0) & ~np.isin(rows, constrained) & ~np.isin(cols, constrained)
@@ -221,13 +239,14 @@ class ContactTerm(ArrayTerm):
         then sits at a larger gap, away from the barrier's singularity (IPC's adaptive barrier stiffness)."""
         if smallest < TOO_CLOSE * self.dhat and self.kappa < MAX_RAISE * self.kappa0:
             self.kappa *= 2.0
-            if self.selfc is not None:
-                self.selfc.stiffness *= 2.0
+            for c in self.ipc:
+                c.stiffness *= 2.0
 
     def max_step(self, x: PETSc.Vec, dx: PETSc.Vec) -> float:
+        if self.blocked:
+            return 0.0
         p0, dp = self.surface.positions(x), self.surface.displacement(dx)
-        own = self.selfc.safe_fraction(p0, dp) if self.selfc is not None else 1.0
-        return min([own] + [ob.safe_fraction(p0, dp) for ob in self.obstacles])
+        return min([c.safe_fraction(p0, dp) for c in self.ipc] + [ob.safe_fraction(p0, dp) for ob in self.obstacles])
 
     # --- what results.json and probes.csv report -----------------------------------------------------------
     def _friction_forces(self, p: np.ndarray) -> np.ndarray:
@@ -236,7 +255,7 @@ class ContactTerm(ArrayTerm):
         for f in self.friction:
             if f is not None:
                 np.add.at(out, f.nodes, -f.gradient(p))
-        return out
+        return out + sum((c.friction_forces(p) for c in self.ipc), np.zeros_like(out))
 
     def friction_work(self, x: PETSc.Vec) -> float:
         """The energy friction dissipated over the current step, up to the state x (J): the slip times the mean
@@ -248,8 +267,7 @@ class ContactTerm(ArrayTerm):
 
     def min_distance(self, x: PETSc.Vec) -> float:
         p = self.surface.positions(x)
-        own = self.selfc.min_distance(p) if self.selfc is not None else np.inf
-        return min([own] + [float(ob.distance(p).min()) for ob in self.obstacles])
+        return min([c.min_distance(p) for c in self.ipc] + [float(ob.distance(p).min()) for ob in self.obstacles])
 
     def intersection(self, x: PETSc.Vec) -> str | None:
         """Why the state at x is not intersection-free (a surface node on or inside an obstacle), or None."""
@@ -260,6 +278,8 @@ class ContactTerm(ArrayTerm):
                 return f"the surface meets obstacle {ob.name!r} ({int(np.sum(d <= 0))} nodes at or inside it)"
         if self.selfc is not None and self.selfc.intersects(p):
             return "the surface intersects itself"
+        if self.filec is not None and self.filec.intersects(p):
+            return "the surface meets an obstacle file (" + ", ".join(ob.name for ob in self.files) + ")"
         return None
 
     def report(self, x: PETSc.Vec) -> dict:
@@ -276,22 +296,14 @@ class ContactTerm(ArrayTerm):
                             "area": float(self.surface.face_areas()[touching[self.surface.faces].all(axis=1)].sum()),
                             "max_pressure": float(pressure.max(initial=0.0)),
                             "active_points": int(len(act))}
+        if self.filec is not None:
+            out.update(self.filec.obstacle_reports(p))
         if self.selfc is not None:
-            out["self"] = self._self_report(p)
+            out["self"] = self.selfc.report(p, self.selfc.gradient(p))
         smallest = self.min_distance(x)
         self.intersection_free = self.intersection_free and smallest > 0.0
         return {"contact": out, "min_distance": smallest, "intersection_free": self.intersection_free,
                 "contact_distance": self.dhat, "barrier_stiffness": self.kappa}
-
-    def _self_report(self, p: np.ndarray) -> dict:
-        """results.json contact.self: the pushes' sum (zero: internal), area, largest pressure, active nodes."""
-        g = self.selfc.gradient(p)
-        push = np.linalg.norm(g, axis=1)
-        active = push > 0.0
-        faces = active[self.surface.faces].all(axis=1)
-        return {"force": (-g.sum(axis=0)).tolist(), "area": float(self.surface.face_areas()[faces].sum()),
-                "max_pressure": float((push[active] / self.surface.area[active]).max(initial=0.0)),
-                "active_points": int(active.sum())}
 
     def record(self) -> dict[str, float]:
         """probes.csv columns after every accepted step: each obstacle's force and the smallest gap."""
@@ -311,4 +323,9 @@ class ContactTerm(ArrayTerm):
                 continue                           # beyond the barrier's reach: it holds nothing at the start
             near = d <= d.min() + 0.5 * self.dhat
             rows.append(values[near].ravel() if ob.friction > 0 else np.einsum("ij,ij->i", g[near], values[near]))
+        for k, ob in enumerate(self.files):            # a file: the nodes it pushes at rest, along the push
+            push = self.filec.only(self.surface.rest, k)
+            near = np.linalg.norm(push, axis=1) > 0.0
+            n = push[near] / np.linalg.norm(push[near], axis=1)[:, None]
+            rows.append(values[near].ravel() if ob.friction > 0 else np.einsum("ij,ij->i", n, values[near]))
         return np.concatenate(rows) if rows else np.zeros(0)
