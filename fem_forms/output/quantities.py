@@ -12,6 +12,7 @@ at those nodes.
 from __future__ import annotations
 
 from dolfinx import fem
+from mpi4py import MPI
 import numpy as np
 import ufl
 
@@ -93,7 +94,29 @@ class Quantities:
             return from_nodes(self._nodal("cauchy_stress"), measures.principal_values, (3,), name)
         if name in measures.STRAINS_OF_F:
             return from_nodes(self._nodal("deformation_gradient"), measures.STRAINS_OF_F[name], (3, 3), name)
+        if name == "contact_pressure":
+            return contact_pressure(self.model)
         raise KeyError(name)                   # the scene reader refuses unknown names before this
+
+
+def contact_pressure(model) -> fem.Function:
+    """The contacts' pressure (Pa) at the mesh's vertices, zero off the contact, as a P1 Function: the barriers'
+    pushes per touching area, gathered onto the corner nodes (physics/contact/pressure.py)."""
+    from scipy.spatial import cKDTree
+    from fem_forms.physics.contact.pressure import vertex_pressure
+    V1 = fem.FunctionSpace(model.mesh, ("Lagrange", 1))
+    f = fem.Function(V1, name="contact_pressure")
+    xyz = V1.tabulate_dof_coordinates()
+    for term in model.terms.with_role("contact"):
+        s = term.surface
+        dist, node = cKDTree(s.rest).query(xyz)
+        mine = dist <= 1e-9 * term.diagonal                  # this rank's vertices on the surface
+        corner = np.zeros(s.size, np.int32)
+        corner[node[mine]] = 1
+        model.mesh.comm.Allreduce(MPI.IN_PLACE, corner, op=MPI.MAX)      # a vertex of any rank
+        push = term.nodal_pressure(model.unknown.vector) * s.area
+        f.x.array[mine] += vertex_pressure(s, push, corner.astype(bool))[node[mine]]
+    return f
 
 
 def p1_tensor(f: fem.Function, name: str) -> fem.Function:

@@ -106,6 +106,8 @@ def _parse_scene(data: dict, base_dir: Path, source: Path | None) -> Scene:
             raise InputError(f"{name}: only for analysis = {' or '.join(repr(o.name) for o in owners)} "
                              f"(this scene's analysis is {sc.analysis!r})")
         setattr(sc, name, _section(t, mine or first, base_dir))
+    if "contact_pressure" in (sc.output.fields or []) and getattr(sc, "contact", None) is None:
+        raise InputError("output.fields: 'contact_pressure' needs a [contact] section (nothing touches without)")
     if analysis.check is not None:
         analysis.check(sc)
     t.done()

@@ -180,3 +180,28 @@ def test_bad_contact_input_is_refused_in_one_line(tmp_path, capsys, name, extra,
     lines = err.strip().splitlines()
     assert code == 2 and len(lines) == 1 and fragment in lines[0], err
     assert not wrote
+
+
+def test_the_contact_pressure_field_is_the_blocks_weight_over_its_base(tmp_path):
+    """output.fields = ["contact_pressure"] on P2: at the bottom's vertices the block's weight over its base,
+    rho g H (the pushes of the edge nodes gathered onto the corners: alone they zigzag), zero elsewhere."""
+    import fem_forms as ff
+    from fem_forms.equilibrium import solve_static
+    scene = block_scene(output={"picture": False, "fields": ["contact_pressure"]})
+    code, r, _, out = run_scene(tmp_path, scene)
+    assert code == 0 and "contact_pressure" in (out / "fields.xdmf").read_text()
+    result = solve_static(ff.Scene.from_dict(scene))
+    field = result.quantities.field("contact_pressure")
+    z = field.function_space.tabulate_dof_coordinates()[:, 2]
+    bottom = np.isclose(z, 0.0)
+    assert np.abs(field.x.array[~bottom]).max() < 1e-6 * 981
+    p = field.x.array[bottom]
+    assert np.mean(p) == pytest.approx(1000 * 9.81 * 0.1, rel=0.02)        # rho g H: measured +0.6 %
+    assert np.all(np.abs(p / (1000 * 9.81 * 0.1) - 1.0) < 0.1)            # measured 940 to 1049 Pa
+
+
+def test_asking_contact_pressure_without_contact_is_refused(tmp_path, capsys):
+    scene = block_scene(output={"fields": ["contact_pressure"]})
+    del scene["contact"]
+    code, err, wrote = run(tmp_path, scene, capsys)
+    assert code == 2 and "output.fields: 'contact_pressure' needs a [contact] section" in err and not wrote

@@ -305,6 +305,17 @@ class ContactTerm(ArrayTerm):
         return {"contact": out, "min_distance": smallest, "intersection_free": self.intersection_free,
                 "contact_distance": self.dhat, "barrier_stiffness": self.kappa}
 
+    def nodal_pressure(self, x: PETSc.Vec) -> np.ndarray:
+        """(n,) the contact pressure at each surface node (Pa): the barriers' push on it (obstacles and the
+        part's own pieces, friction left out) per its share of the rest surface; the same on every rank."""
+        p = self.surface.positions(x)
+        push = np.zeros(self.surface.size)
+        for act, d, *_ in self._gaps(p):
+            np.add.at(push, act, -self.kappa * self.surface.area[act] * barrier_first(d, self.dhat))
+        for c in self.ipc:
+            push += np.linalg.norm(c.full_gradient(p, friction=False)[:c.n], axis=1)
+        return push / self.surface.area
+
     def record(self) -> dict[str, float]:
         """probes.csv columns after every accepted step: each obstacle's force and the smallest gap."""
         rep = self.report(self.state)

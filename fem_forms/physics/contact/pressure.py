@@ -1,0 +1,35 @@
+"""The contact pressure at the surface's corner nodes (the mesh's vertices), from the barriers' nodal pushes.
+On degree 2 the pushes follow the consistent nodal loads (corners carry almost nothing, edge nodes a third of
+a triangle's load each): push per node area would zigzag from node to node. Each other node's push and
+touching area are handed to its corner neighbours (half to each end of an edge, a quarter to each corner of
+a quadrilateral: the P1 hat functions' values there) before the division."""
+from __future__ import annotations
+
+import numpy as np
+
+from fem_forms.meshes.boundary_surface import BoundarySurface
+
+
+def vertex_pressure(surface: BoundarySurface, push: np.ndarray, corner: np.ndarray) -> np.ndarray:
+    """(n,) the pressure (Pa) at the corner nodes (`corner` marks them), 0 at the others: the pushes (N, (n,))
+    over the rest area of the surface triangles whose nodes all push, both gathered onto the corners."""
+    touching = push > 0.0
+    tri = surface.faces[touching[surface.faces].all(axis=1)]
+    area = np.zeros(surface.size)
+    for k in range(3):
+        np.add.at(area, tri[:, k], surface.face_areas()[touching[surface.faces].all(axis=1)] / 3.0)
+    e = surface.edges()
+    share = {}                                  # other node -> its corner neighbours
+    for a, b in e:
+        if corner[a] and not corner[b]:
+            share.setdefault(b, []).append(a)
+        elif corner[b] and not corner[a]:
+            share.setdefault(a, []).append(b)
+    force, held = np.where(corner, push, 0.0), np.where(corner, area, 0.0)
+    for node, corners in share.items():
+        np.add.at(force, corners, push[node] / len(corners))
+        np.add.at(held, corners, area[node] / len(corners))
+    out = np.zeros(surface.size)
+    ok = corner & (held > 0.0)
+    out[ok] = force[ok] / held[ok]
+    return out
