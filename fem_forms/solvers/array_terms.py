@@ -67,6 +67,9 @@ class ArrayTerms:
         if w.norm(PETSc.NormType.INFINITY) > 0.0:
             if self._H is None:
                 self._H = fpetsc.create_matrix(self.tangent, "aij")
+                # its first assembly squeezes out the unused preallocation: a contact that spreads to new
+                # nodes later adds new nonzeros (a finger pressed on a ball failed here with PETSc error 63)
+                self._H.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
             self._H.zeroEntries()
             for t in self.terms:
                 t.add_hessian(x, self._H, np.empty(0, PETSc.IntType))
