@@ -82,6 +82,12 @@ class ImplicitStepper:
             if system.scene.discretization.formulation != "mixed" else "direct"
         self.iterative = linear.choose(linear_kind, m.dofs) == "iterative"
         self.user_options = dict(options or {})
+        # contact: the barrier's and friction's stiffness change with every iteration (a node sticking or
+        # slipping, touching or not): a kept tangent lacks them, and full Newton steps cycle between stick and
+        # slip (a block sticking on a slope: 49 iterations a step, most in failed 50-iteration attempts; 11
+        # with the energy line search first, full Newton as the retry where round-off stalls the line search)
+        self.contact = bool(m.terms.with_role("contact"))
+        self.searches = ("bt", "basic") if self.contact and system.energy is not None else ("basic", "bt")
         self.driver = snes.SNESDriver(self.problem, self._options(), linear_kind,
                                       near_nullspace=lambda: linear.rigid_body_modes(m.V),
                                       reuse_factor=not self.iterative, keep_preconditioner=True)
@@ -98,8 +104,8 @@ class ImplicitStepper:
         step on the benchmark beam (benchmarks/dynamic_steps.md); refreshed by the rule in _refresh().
         Iterative (CG + GAMG; GMRES where damping leaves no energy): a fresh tangent at every Newton
         iteration, the multigrid hierarchy kept across iterations and steps by the driver's cost rule."""
-        opts = {"snes_linesearch_type": "basic"}
-        if not self.iterative:
+        opts = {"snes_linesearch_type": self.searches[0]}
+        if not self.iterative and not self.contact:
             opts.update({"snes_lag_preconditioner": 100, "snes_lag_preconditioner_persists": True,
                          "snes_lag_jacobian": 100, "snes_lag_jacobian_persists": True})
         opts.update(self.user_options)
@@ -126,10 +132,10 @@ class ImplicitStepper:
         if why is not None and self._fall_back(rec):        # CG failed on a fresh hierarchy: MUMPS, same dt
             rec, why = self._again(rec, dt)
         if why is not None and self.line_search_retry:
-            drv.user_options["snes_linesearch_type"] = "bt"     # the energy line search, same dt
+            drv.user_options["snes_linesearch_type"] = self.searches[1]     # the other line search, same dt
             drv.rebuild()
             rec, why = self._again(rec, dt)
-            drv.user_options["snes_linesearch_type"] = "basic"
+            drv.user_options["snes_linesearch_type"] = self.searches[0]
             drv.rebuild()
         if why is not None:
             self.last_why = why
