@@ -71,6 +71,7 @@ class ArrayTerms:
                 # nodes later adds new nonzeros (a finger pressed on a ball failed here with PETSc error 63)
                 self._H.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
             self._H.zeroEntries()
+            self._H.assemble()                   # assembled, as MatAXPY (triangle contact's Hessian) needs
             for t in self.terms:
                 t.add_hessian(x, self._H, np.empty(0, PETSc.IntType))
             self._H.assemble()

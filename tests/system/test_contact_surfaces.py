@@ -99,3 +99,15 @@ def test_a_table_file_gives_the_same_answer_on_two_ranks(tmp_path):
     assert two["mpi_ranks"] == 2 and two["intersection_free"]
     assert np.allclose(two["contact"]["table"]["force"], serial["contact"]["table"]["force"], rtol=0, atol=1e-6)
     assert two["min_distance"] == pytest.approx(serial["min_distance"], rel=1e-6)
+
+
+def test_a_block_pressed_onto_a_table_file_by_its_top_pushes_back_what_the_press_exerts(tmp_path):
+    """The top moved down (a support's increment: the residual's lifting takes the triangle pairs' Hessian): the
+    table's force (from the barrier) balances the press's reaction (from the elastic residual)."""
+    scene = block_scene(fix=[{"name": "press", "where": {"axis": "z", "at": 0.1}, "value": [0.0, 0.0, -0.002]}],
+                        load=[], **table(tmp_path, friction=0.5))
+    scene["solver"] = {"steps": 2}
+    code, r, _, _ = run_scene(tmp_path, scene)
+    assert code == 0 and r["converged"] and r["intersection_free"]
+    force, press = np.array(r["contact"]["table"]["force"]), np.array(r["reactions"]["press"])
+    assert np.allclose(force, -press, rtol=0, atol=1e-6 * abs(force[2])) and force[2] > 0
