@@ -137,3 +137,25 @@ def test_soft_figure_two_ranks_same_design(tmp_path, figure):
     assert one["elastic_iterations"][0]["toppling_angle_deg"] < MARGIN <= one["deformed"]["toppling_angle_deg"]
     assert one["carved_fraction"] == pytest.approx(two["carved_fraction"], rel=1e-12)
     assert np.allclose(one["deformed"]["center_of_mass"], two["deformed"]["center_of_mass"], rtol=1e-9)
+
+
+def test_soft_figure_resting_on_a_floor_sags_as_when_clamped(tmp_path):
+    """elastic = true with no [[fix]]: a figure leaning 3 cm rests on a frictional floor ([contact]) and sags
+    under its weight. Its sole cannot slide (mu 1) and its heel stays down, so it stands as the clamped one
+    does: the same toppling angle within 0.2 deg, the deformed CoM within 0.3 mm; the floor carries m g. A
+    [contact] floor without elastic = true is refused (the rigid balance meets its ground by tolerance)."""
+    figure = balance_shapes.leaning_figure(tmp_path / "fig.msh", h=0.008, lean=0.03)
+    code, clamped, _, _ = run_scene(tmp_path / "clamped", soft(figure, goal="check"))
+    floor = dict(soft(figure, goal="check"), fix=[])
+    floor["contact"] = {"distance": 1e-4, "obstacle": [{"name": "floor", "shape": "plane", "point": [0, 0, -5e-5],
+                                                       "normal": [0, 0, 1], "friction": 1.0}]}
+    code2, rests, _, _ = run_scene(tmp_path / "floor", floor)
+    assert code == 0 and code2 == 0
+    a, b = clamped["deformed"], rests["deformed"]
+    assert a["stands"] and b["stands"] and b["toppling_angle_deg"] == pytest.approx(a["toppling_angle_deg"], abs=0.2)
+    assert np.allclose(b["center_of_mass"], a["center_of_mass"], atol=3e-4)        # measured 0.06 deg, 0.11 mm
+    assert b["contact"]["floor"]["force"][2] == pytest.approx(rests["mass"] * G, rel=1e-6)
+    assert b["intersection_free"] and 0 < b["min_distance"] < 1e-4
+    rigid = dict(floor, balance=dict(floor["balance"], elastic=False))
+    code, _, _, _ = run_scene(tmp_path / "rigid", rigid)
+    assert code == 2

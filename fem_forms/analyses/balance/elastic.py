@@ -122,6 +122,7 @@ def sag_design(scene: Scene, gravity: np.ndarray, setting: Callable[[object], Se
         bent = rest.deformed(sag.model.u)
         numbers = evaluate(bent, st, solid, rest)
         numbers["max_displacement"] = result.max_displacement
+        numbers.update(result.contact or {})              # resting on a [contact] floor: its force, the gap
         entry = {"static_solve": k + 1, "max_displacement": result.max_displacement,
                  "newton_iterations": result.report.newton_iterations,
                  "carved_fraction": numbers["carved_fraction"], "stability_margin": numbers["stability_margin"],

@@ -7,6 +7,7 @@ import math
 
 from fem_forms.errors import InputError
 from fem_forms.scene.analyses import Analysis
+from fem_forms.scene.analyses.contact_section import CONTACT
 from fem_forms.scene.reader import Key, Section, Table, Variants
 
 GOAL = Key("goal", "string", "check: report only; stand, spin, swim, swing: carve the interior so the part "
@@ -22,7 +23,8 @@ COMMON_KEYS = (
         minimum=0, exclusive_maximum=90),
     Key("shell", "number", "cells closer than this to the surface stay solid (the wall kept)", default=0.004,
         unit="m", minimum=0),
-    Key("elastic", "boolean", "evaluate and design on the shape deformed under gravity (held by [[fix]])",
+    Key("elastic", "boolean", "evaluate and design on the shape deformed under gravity (held by [[fix]] or "
+        "resting on a [contact] floor)",
         default=False),
     Key("fill_density", "number", "density of carved cells (0: empty; else a second, lighter material)",
         default=0.0, unit="kg/m^3", minimum=0),
@@ -96,8 +98,13 @@ def _check(scene) -> None:
         raise InputError(f"balance.fill_stiffness: missing: with elastic = true the fill (fill_density = "
                          f"{b.fill_density}) is a second material; give its Young's modulus over the solid's, "
                          f"E_fill / E")
-    if b.elastic and not scene.fix:
-        raise InputError("balance.elastic = true: needs [[fix]] supports that hold the part (e.g. its foot)")
+    contact = getattr(scene, "contact", None)
+    if b.elastic and not scene.fix and contact is None:
+        raise InputError("balance.elastic = true: needs [[fix]] supports that hold the part (e.g. its foot) or a "
+                         "[contact] floor it rests on")
+    if contact is not None and not b.elastic:
+        raise InputError("contact: for balance only with elastic = true (the rigid part meets its ground at "
+                         "balance.contact_tolerance)")
 
 
 ANALYSIS = Analysis(
@@ -105,7 +112,8 @@ ANALYSIS = Analysis(
     doc="mass properties, and carving the interior so the part stands, spins, floats upright or rocks back",
     runner="fem_forms.analyses.balance:run",
     sections=(Section("balance", "what must balance and how the interior may be carved", BalanceSpec,
-                      keys=COMMON_KEYS, variants=VARIANTS, rules=_rules),),
+                      keys=COMMON_KEYS, variants=VARIANTS, rules=_rules),
+              CONTACT),                  # [contact]: elastic = true, the sag resting on a floor instead of clamps
     outputs=("results.json", "void.stl", "outer.stl", "density.xdmf", "balance.png", "solid.vtu (when carved)"),
     check=_check,
 )
