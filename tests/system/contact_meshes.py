@@ -54,18 +54,6 @@ def box_surface(path, lo, hi, open_face: bool = False) -> str:
 def two_blocks(path, gap: float, h: float) -> str:
     """A slab [-0.1, 0.2] x [-0.05, 0.15] x [-0.05, 0] and a 0.1 m cube [0, 0.1]^2 x [gap, 0.1 + gap] above it:
     two solids in one mesh (the cube rests on the slab through self-contact)."""
-    gmsh.initialize()
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        occ = gmsh.model.occ
-        occ.addBox(-0.1, -0.05, -0.05, 0.3, 0.2, 0.05)
-        occ.addBox(0.0, 0.0, gap, 0.1, 0.1, 0.1)
-        occ.synchronize()
-        gmsh.model.addPhysicalGroup(3, [v[1] for v in gmsh.model.getEntities(3)], 1)
-        gmsh.option.setNumber("Mesh.MeshSizeMax", h)
-        gmsh.option.setNumber("Mesh.MeshSizeMin", h)
-        gmsh.model.mesh.generate(3)
-        gmsh.write(str(path))
-    finally:
-        gmsh.finalize()
-    return str(path)
+    from fem_forms.meshes.occ_parts import write_part
+    return str(write_part(path, lambda occ: [(3, occ.addBox(-0.1, -0.05, -0.05, 0.3, 0.2, 0.05)),
+                                             (3, occ.addBox(0.0, 0.0, gap, 0.1, 0.1, 0.1))], h))

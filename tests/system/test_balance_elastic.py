@@ -139,7 +139,7 @@ def test_soft_figure_two_ranks_same_design(tmp_path, figure):
     assert np.allclose(one["deformed"]["center_of_mass"], two["deformed"]["center_of_mass"], rtol=1e-9)
 
 
-def test_soft_figure_resting_on_a_floor_sags_as_when_clamped(tmp_path):
+def test_soft_figure_resting_on_a_floor_sags_as_when_clamped(tmp_path, capsys):
     """elastic = true with no [[fix]]: a figure leaning 3 cm rests on a frictional floor ([contact]) and sags
     under its weight. Its sole cannot slide (mu 1) and its heel stays down, so it stands as the clamped one
     does: the same toppling angle within 0.2 deg, the deformed CoM within 0.3 mm; the floor carries m g. A
@@ -157,5 +157,5 @@ def test_soft_figure_resting_on_a_floor_sags_as_when_clamped(tmp_path):
     assert b["contact"]["floor"]["force"][2] == pytest.approx(rests["mass"] * G, rel=1e-6)
     assert b["intersection_free"] and 0 < b["min_distance"] < 1e-4
     rigid = dict(floor, balance=dict(floor["balance"], elastic=False))
-    code, _, _, _ = run_scene(tmp_path / "rigid", rigid)
-    assert code == 2
+    code, _, err, _ = helpers.run_scene(tmp_path, rigid, capsys)
+    assert code == 2 and "contact: for balance only with elastic = true" in err

@@ -12,6 +12,8 @@ BASE = {"mesh": {"cells": [4, 1, 1]}, "material": {"E": 1e6, "nu": 0.3, "rho": 1
 HEATED_END = {"boundary": [{"where": {"axis": "x", "at": 0.0}, "temperature": 1.0}]}
 NEEDS = {"thermal": {"thermal": {"conductivity": 1.0, "specific_heat": 1.0, **HEATED_END}}}
 COMPLETE = {"thermal": {**HEATED_END, "specific_heat": 1.0}, "contact": {"self": True}}
+# tables of other sections a section needs in one analysis (balance reads [contact] with elastic = true only)
+ALONG = {("balance", "contact"): {"balance": {"elastic": True}}}
 REQUIRED = {"vector": [0.0, 0.0, 1.0], "number": 1.0, "integer": 1, "string": "a"}
 
 
@@ -39,7 +41,8 @@ def test_every_section_of_an_analysis_parses(name):
         if section.name not in NEEDS.get(name, {}):
             assert getattr(scene, section.name) == section.missing()    # absent: its default
         data = required_only(section.keys) | COMPLETE.get(section.name, {})
-        parsed = getattr(Scene.from_dict(base | {"analysis": name, section.name: data}), section.name)
+        along = ALONG.get((name, section.name), {})
+        parsed = getattr(Scene.from_dict(base | along | {"analysis": name, section.name: data}), section.name)
         assert isinstance(parsed, section.spec)
 
 

@@ -67,13 +67,20 @@ class SagModel:
         n = len(stiffness)
         self.factor.x.array[self.factor.function_space.dofmap.list.array[:n]] = stiffness
         self.factor.x.scatter_forward()
-        result = solve_static(self.scene, model=self.model)
+        result = self._sag()
         if not result.report.converged:                  # retry from the rest shape before giving up
             self.model.u.x.array[:] = 0.0
-            result = solve_static(self.scene, model=self.model)
+            result = self._sag()
         if not result.report.converged:
             raise SolveError(f"balance: the sag under gravity did not converge: {result.report.message}")
         return result
+
+
+    def _sag(self) -> StaticResult:
+        """One static sag, the contact term (if any) restarted at pseudo-time 0."""
+        for term in self.model.terms.with_role("contact"):
+            term.resume(0.0)                         # each sag's pseudo-time starts at 0 (friction's slip eps)
+        return solve_static(self.scene, model=self.model)
 
 
 class _Deferred:

@@ -68,7 +68,8 @@ class ContactTerm(ArrayTerm):
         self.friction_at_start = np.zeros((self.surface.size, 3))
         self._start_positions = self.surface.rest.copy()
         self._scale()
-        for i, ob in enumerate(self.obstacles):
+        analytic = [i for i, o in enumerate(self.spec.obstacle) if o.shape != "file"]
+        for i, ob in zip(analytic, self.obstacles):
             d = ob.distance(self.surface.rest)
             if d.min() <= 0.0:
                 raise InputError(f"contact.obstacle[{i}] ({ob.name}): intersects or touches the part at the start "
@@ -107,7 +108,8 @@ class ContactTerm(ArrayTerm):
         that changed since the last call was accepted at the last call's time: the step now starts there."""
         x = self.state.array_r
         moved = self._lagged_at is None or len(x) != len(self._lagged_at) or not np.array_equal(x, self._lagged_at)
-        if self.surface.comm.allreduce(moved, op=MPI.LOR):      # one decision for all ranks
+        moved = self.surface.comm.allreduce(moved, op=MPI.LOR)      # one decision for all ranks
+        if moved:
             self.friction_at_start = self._friction_forces(self.surface.positions(self.state))
             self.start_time, self._lagged_at = self.time, x.copy()
         self.time = t
@@ -159,9 +161,12 @@ class ContactTerm(ArrayTerm):
         return float(push + sum(c.barrier_energy(p) for c in self.ipc))
 
     def energy_value(self, x: PETSc.Vec) -> float:
+        """The barriers' and friction's energy at x, rank 0's value on every rank: ipctk sums on several threads,
+        so ranks differ in the last digits, and an energy line search must decide alike on all of them."""
         p = self.surface.positions(x)
-        return self.barrier_energy(x) + float(sum(f.energy(p) for f in self.friction if f is not None)) \
+        value = self.barrier_energy(x) + float(sum(f.energy(p) for f in self.friction if f is not None)) \
             + sum(c.friction_energy(p) for c in self.ipc)
+        return self.surface.comm.bcast(value, root=0)
 
     def nodal_forces(self, x: PETSc.Vec) -> list[tuple]:
         """Per obstacle: active nodes and the force (n, 3) the obstacle exerts on each, -dE/dx_v."""
