@@ -14,10 +14,10 @@ def vertex_pressure(surface: BoundarySurface, push: np.ndarray, corner: np.ndarr
     """(n,) the pressure (Pa) at the corner nodes (`corner` marks them), 0 at the others: the pushes (N, (n,))
     over the rest area of the surface triangles whose nodes all push, both gathered onto the corners."""
     touching = push > 0.0
-    tri = surface.faces[touching[surface.faces].all(axis=1)]
+    whole = touching[surface.faces].all(axis=1)         # triangles whose nodes all push
     area = np.zeros(surface.size)
     for k in range(3):
-        np.add.at(area, tri[:, k], surface.face_areas()[touching[surface.faces].all(axis=1)] / 3.0)
+        np.add.at(area, surface.faces[whole, k], surface.face_areas()[whole] / 3.0)
     e = surface.edges()
     share = {}                                  # other node -> its corner neighbours
     for a, b in e:

@@ -46,8 +46,8 @@ class ContactTerm(ArrayTerm):
     def set_spec(self, spec) -> None:
         self.spec = spec
         self.obstacles = [make_obstacle(ob) for ob in spec.obstacle if ob.shape != "file"]
-        self.files = [FileObstacle(ob, f"contact.obstacle[{i}]") for i, ob in enumerate(spec.obstacle)
-                      if ob.shape == "file"]
+        self.file_index = [i for i, ob in enumerate(spec.obstacle) if ob.shape == "file"]   # their scene index
+        self.files = [FileObstacle(spec.obstacle[i], f"contact.obstacle[{i}]") for i in self.file_index]
         for ob in self.obstacles + self.files:
             ob.move_to(self.time)
 
@@ -68,7 +68,7 @@ class ContactTerm(ArrayTerm):
         self.friction_at_start = np.zeros((self.surface.size, 3))
         self._start_positions = self.surface.rest.copy()
         self._scale()
-        analytic = [i for i, o in enumerate(self.spec.obstacle) if o.shape != "file"]
+        analytic = [i for i in range(len(self.spec.obstacle)) if i not in self.file_index]
         for i, ob in zip(analytic, self.obstacles):
             d = ob.distance(self.surface.rest)
             if d.min() <= 0.0:
@@ -97,7 +97,7 @@ class ContactTerm(ArrayTerm):
         h = float(np.mean(np.linalg.norm(rest[e[:, 0]] - rest[e[:, 1]], axis=1)))
         self.kappa = self.kappa0 = self.modulus / (h * pressure_at_half(self.dhat))
         self.selfc = IpcSurfaces(self.surface, self.dhat) if self.spec.self else None
-        for ob, i in zip(self.files, [i for i, o in enumerate(self.spec.obstacle) if o.shape == "file"]):
+        for ob, i in zip(self.files, self.file_index):
             ob.refine(h, f"contact.obstacle[{i}]")
         self.filec = IpcSurfaces(self.surface, self.dhat, self.files, self_pairs=False) if self.files else None
         for c in self.ipc:                         # the same push at dhat / 2 between triangles
@@ -187,8 +187,10 @@ class ContactTerm(ArrayTerm):
         for act, force in self.nodal_forces(x):
             keep = mine[act] >= 0
             np.add.at(rows, mine[act][keep], -force[keep])
-        for c in self.ipc:
-            rows[self.surface.owned_local] += c.gradient(self.surface.positions(x))[self.surface.owned]
+        if self.ipc:
+            p = self.surface.positions(x)                   # one gather for all triangle contacts
+            for c in self.ipc:
+                rows[self.surface.owned_local] += c.gradient(p)[self.surface.owned]
 
     def add_hessian(self, x: PETSc.Vec, A: PETSc.Mat, constrained: np.ndarray) -> None:
         p = self.surface.positions(x)
