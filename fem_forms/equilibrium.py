@@ -49,6 +49,7 @@ class StaticResult:
     def summary(self) -> dict:
         r = self.report
         heat = {} if self.model.temperature is None else {"max_temperature": max_value(self.model.temperature)}
+        inside = self.model.probe_materials() if self.probes else {}
         return {**heat,
             "analysis": "static",
             "title": self.model.scene.title,
@@ -75,8 +76,10 @@ class StaticResult:
             "physics": self.model.physics,
             "peak_memory_mb": peak_memory_mb(self.model.mesh.comm),
             "warnings": self.model.warnings,
+            "materials": self.model.materials_report(),
             "probes": {n: {"point": self.model.scene.output.probes[n], "displacement": v,
-                           **self.probe_stresses.get(n, {})} for n, v in self.probes.items()},
+                           "material": inside.get(n), **self.probe_stresses.get(n, {})}
+                       for n, v in self.probes.items()},
             **self.reactions,
             **({"cavities": self.cavities} if self.cavities else {}),
             **self.contact,
@@ -103,8 +106,8 @@ def solve_temperature(model: Model) -> None:
     its thermal strain ramped by the load factor); SolveError if the heat solve fails."""
     scene = model.scene
     T = model.temperature
-    forms = HeatForms(scene.thermal, scene.material.rho, model.loaded, T, model.state.old["temperature"],
-                      False, scene.discretization.quadrature)
+    forms = HeatForms(scene.thermal, scene.materials, model.loaded, T, model.state.old["temperature"],
+                      False, scene.discretization.quadrature, regions=model.context.materials)
     out = HeatSolver(forms, State({"temperature": T}), linear_kind=scene.solver.linear).solve()
     if not out.accepted:
         raise SolveError(f"{scene.title}: the steady heat problem did not converge ({out.why})")

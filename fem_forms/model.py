@@ -9,6 +9,7 @@ from mpi4py import MPI
 import ufl
 
 from fem_forms.materials import Material
+from fem_forms.materials.hyperelastic import SMALL_STRAIN_MODELS
 from fem_forms.meshes import LoadedMesh, load_mesh
 from fem_forms.output.probes import ProbeSet
 from fem_forms.physics.admissibility import SmallestValue
@@ -120,7 +121,7 @@ class Model:
         for term in self.terms.with_role("contact"):     # checked apart from the step filter that prevents it
             if why := term.intersection(self.unknown.vector):
                 return why
-        if self.scene.material.model == "linear" and self.scene.analysis == "static":
+        if self.scene.material.model in SMALL_STRAIN_MODELS and self.scene.analysis == "static":
             return None                                  # small-strain theory: J has no meaning
         jmin = self.min_jacobian()
         if not jmin > 0:
@@ -148,11 +149,21 @@ class Model:
         forms alone (its energy would silently be left out)."""
         self.terms.only_ufl(analysis)
 
+    def materials_report(self) -> list[dict]:
+        """results.json "materials": name, cells, volume (m^3) and mass (kg) of each material."""
+        return self.context.materials.summary(self.parameters.density, self.dx.metadata()["quadrature_degree"])
+
+    def probe_materials(self) -> dict[str, str]:
+        """The material each probe lies in (by name)."""
+        regions = self.context.materials
+        ids = self.probes.evaluate(regions.field(list(range(len(regions.materials))), "material"))
+        return {n: regions.materials[int(round(v[0]))].name for n, v in ids.items()}
+
     def set_values(self, scene: Scene) -> None:
         """Take the material constants, density, load and support values of `scene` (same mesh, same
         kinds of terms): only Constants and Functions change, no form is compiled."""
         self.terms.set_values(scene)
-        self.parameters.set_density(scene.material.rho)
+        self.parameters.set_density(self.context.materials.cell_values([m.rho for m in scene.materials]))
         for i, fix in enumerate(scene.fix):
             for c in fix.components:
                 self.load.rescale((i, c), fix.value[c])
@@ -186,9 +197,10 @@ def build_model(scene: Scene, material=None, comm: MPI.Comm = MPI.COMM_WORLD,
         u = unknown = u_form = fem.Function(V, name="displacement")
         pressure, bc_space = None, V
         v = ufl.TestFunction(V)
-        nu = scene.material.nu
+        soft = max(scene.materials, key=lambda m: m.nu if m.nu is not None else -1.0)
+        nu = soft.nu
         if material is None and nu is not None and nu >= NEARLY_INCOMPRESSIBLE_NU:
-            warnings.append(f"material.nu = {nu}: nearly incompressible in the displacement formulation "
+            warnings.append(f"{soft.key}.nu = {nu}: nearly incompressible in the displacement formulation "
                             "locks (too stiff); set [discretization] formulation = \"mixed\"")
     physics = scene_physics(scene, loaded, u_form, bc_space, material, pressure=pressure)
     context, terms = physics.context, physics.terms

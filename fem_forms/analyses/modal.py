@@ -93,6 +93,7 @@ class ModalResult:
             "rigid_modes": self.rigid_modes,
             "unstable_modes": int(np.sum(self.omega2 < 0)),
             "total_mass": self.total_mass,
+            "materials": m.materials_report(),
             "effective_mass_fraction": None if emf is None else emf.tolist(),
             "effective_mass_fraction_sum": None if emf is None else emf.sum(axis=0).tolist(),
             "eigensolver": {"type": "krylovschur", "st": "sinvert", "target": self.target,

@@ -6,6 +6,7 @@ import copy
 import dataclasses
 
 from dolfinx import fem
+import numpy as np
 from petsc4py import PETSc
 
 from fem_forms.errors import InputError
@@ -23,6 +24,8 @@ def bind_constants(material: Material, mesh) -> Material:
         value = getattr(material, f.name)
         if isinstance(value, (int, float)) and not isinstance(value, bool):
             object.__setattr__(bound, f.name, fem.Constant(mesh, PETSc.ScalarType(value)))
+        elif isinstance(value, tuple) and len(value) == 36:            # a 6 x 6 stiffness (orthotropic)
+            object.__setattr__(bound, f.name, fem.Constant(mesh, np.reshape(value, (6, 6)).astype(PETSc.ScalarType)))
     return bound
 
 
@@ -34,9 +37,18 @@ def set_parameters(bound: Material, new: Material) -> None:
     for f in dataclasses.fields(new):
         target = getattr(bound, f.name)
         if isinstance(target, fem.Constant):
-            target.value = getattr(new, f.name)
+            target.value = np.reshape(getattr(new, f.name), target.value.shape)
 
 
 def parameter_value(x) -> float:
     """A material parameter as a float, whether it is a number or a fem.Constant."""
     return float(x.value) if isinstance(x, fem.Constant) else float(x)
+
+
+def parameter_values(x):
+    """A material parameter as a float, or as the array of a DG0 parameter field's local values."""
+    if isinstance(x, fem.Function):
+        return np.asarray(x.x.array, dtype=float)
+    if isinstance(x, fem.Constant) and np.ndim(x.value):
+        return np.asarray(x.value, dtype=float)
+    return parameter_value(x)

@@ -3,11 +3,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-from typing import Callable, Protocol
+from typing import Callable, ClassVar, Protocol
 
 import ufl
 
 from fem_forms.errors import InputError
+from fem_forms.materials.anisotropic import Orthotropic, make_orthotropic
 from fem_forms.keys import Key, check_range
 from fem_forms.kinematics import (biot_from_invariants, biot_invariants, green_strain, invariants, small_invariants,
                                   small_strain)
@@ -18,6 +19,14 @@ class Material(Protocol):
     through invariants, faster to compile); a material that has it gets its residual from it, so it must be
     exactly the derivative of psi (the energy line search uses psi)."""
     def psi(self, F) -> ufl.core.expr.Expr: ...
+
+
+SMALL_STRAIN_MODELS = ("linear", "orthotropic")     # psi of the infinitesimal strain: no finite rotations
+
+
+def is_small_strain(material) -> bool:
+    """Is psi written in the infinitesimal strain (sigma = P, no meaning for det F)?"""
+    return bool(getattr(material, "small_strain", False))
 
 
 def lame_from_young_poisson(E: float, nu: float) -> tuple[float, float]:
@@ -39,6 +48,7 @@ class LinearElastic:
     """Small-strain elasticity: psi = mu eps:eps + lambda/2 (tr eps)^2."""
     mu: float
     lmbda: float
+    small_strain: ClassVar[bool] = True
 
     def __post_init__(self):
         _check_lame(self.mu, self.lmbda)
@@ -180,6 +190,7 @@ MODELS = {
     "neo-hookean": NeoHookean,
     "mooney-rivlin": MooneyRivlin,
     "corotated": Corotated,
+    "orthotropic": Orthotropic,
 }
 
 
@@ -202,11 +213,24 @@ _PARAMETER = {k.name: k for k in PARAMETER_KEYS}
 
 def make_material(model: str, *, E: float | None = None, nu: float | None = None,
                   mu: float | None = None, lmbda: float | None = None,
-                  C10: float | None = None, C01: float | None = None) -> Material:
+                  C10: float | None = None, C01: float | None = None, orthotropic: dict | None = None,
+                  axis1=None, axis2=None) -> Material:
     """Build a named model from (E, nu) or (mu, lambda); Mooney-Rivlin also takes C10, C01
-    (default split C01 = mu/8, C10 = 3 mu/8 of mu = 2 (C10 + C01) when only E, nu are given)."""
+    (default split C01 = mu/8, C10 = 3 mu/8 of mu = 2 (C10 + C01) when only E, nu are given); orthotropic
+    its nine constants (`orthotropic`, by name) in the axes axis1, axis2."""
     if model not in MODELS:
         raise InputError(f"material.model = {model!r}: unknown model (choose from {', '.join(MODELS)})")
+    given = {k: v for k, v in (orthotropic or {}).items() if v is not None}
+    if model == "orthotropic":
+        extra = next((n for n, v in (("E", E), ("nu", nu), ("mu", mu), ("lambda", lmbda), ("C10", C10),
+                                     ("C01", C01)) if v is not None), None)
+        if extra is not None:
+            raise InputError(f"material.{extra}: not for model = 'orthotropic' (give E1 E2 E3 G12 G13 G23 "
+                             "nu12 nu13 nu23)")
+        return make_orthotropic(orthotropic or {}, axis1, axis2)
+    if given or axis1 is not None or axis2 is not None:
+        name = next(iter(given), "axis1" if axis1 is not None else "axis2")
+        raise InputError(f"material.{name}: only for model = 'orthotropic' (model is {model!r})")
     if model != "mooney-rivlin" and (C10 is not None or C01 is not None):
         raise InputError(f"material.{'C10' if C10 is not None else 'C01'}: only for model = 'mooney-rivlin' "
                          f"(model is {model!r})")

@@ -84,6 +84,13 @@ def gather_mesh(mesh, point_shift: np.ndarray | None = None):
     return points, np.vstack([c for _, _, c in parts]), name
 
 
+def gather_cell_values(mesh, values: np.ndarray) -> np.ndarray | None:
+    """One value per owned cell of every rank, on rank 0 in gather_mesh's cell order (None elsewhere)."""
+    ncells = mesh.topology.index_map(mesh.topology.dim).size_local
+    parts = mesh.comm.gather(np.asarray(values)[:ncells], root=0)
+    return np.concatenate(parts) if mesh.comm.rank == 0 else None
+
+
 def boundary_surface(u: fem.Function):
     """Rank 0 gets (points, triangles-or-quads, displacement at points) of the mesh's boundary;
     other ranks get None. Gathering is for the picture only."""

@@ -16,7 +16,7 @@ from mpi4py import MPI
 import numpy as np
 import ufl
 
-from fem_forms.materials import LinearElastic
+from fem_forms.materials.hyperelastic import is_small_strain
 from fem_forms.output import measures, probes
 from fem_forms.output.fields import p1_interpolant
 from fem_forms.output.recovery import Recovery
@@ -32,7 +32,7 @@ def tensor_expressions(model) -> dict:
     ctx = model.context
     F = ctx.F
     P = model.solid.pk1(ctx)    # elastic: pressure and thermal strain included; plastic: at the committed history
-    sigma = P if isinstance(model.material, LinearElastic) else P * F.T / ufl.det(F)
+    sigma = P if is_small_strain(model.material) else P * F.T / ufl.det(F)
     I = ufl.Identity(3)
     return {"deformation_gradient": F, "pk1_stress": P, "pk2_stress": ufl.inv(F) * P,
             "cauchy_stress": sigma, "green_strain": 0.5 * (F.T * F - I),
@@ -96,6 +96,9 @@ class Quantities:
             return from_nodes(self._nodal("deformation_gradient"), measures.STRAINS_OF_F[name], (3, 3), name)
         if name == "contact_pressure":
             return contact_pressure(self.model)
+        if name == "material":
+            regions = self.model.context.materials
+            return regions.field(list(range(len(regions.materials))), "material")
         raise KeyError(name)                   # the scene reader refuses unknown names before this
 
 

@@ -18,7 +18,9 @@ from fem_forms.physics.elastic import ElasticEnergy
 import fem_forms.physics.loads  # noqa: F401 (registers the load terms)
 import fem_forms.physics.cavities  # noqa: F401 (registers the inflation load)
 import fem_forms.physics.contact  # noqa: F401 (registers the [contact] terms)
+from fem_forms.physics.material_fields import MaterialBinding, with_fibers
 from fem_forms.physics.parameters import Parameters
+from fem_forms.physics.regions import MaterialRegions
 from fem_forms.physics import quadrature
 from fem_forms.physics.plastic import plastic_term
 from fem_forms.elements import check_degree
@@ -51,26 +53,33 @@ def scene_physics(scene: Scene, loaded: LoadedMesh, u, bc_space: fem.FunctionSpa
     scene's terms with the material's parameters as Constants, each prepared on the Context, and the supports
     on `bc_space` (sign -1: the inverse problem's unknown is rest minus deformed position)."""
     mesh = loaded.mesh
-    mat = bind_constants(build_material(scene, material), mesh)
+    regions = MaterialRegions(loaded, scene.materials)
+    binding = MaterialBinding(scene.materials, regions) if material is None and regions.several else None
+    mat = binding.material if binding is not None else bind_constants(build_material(scene, material), mesh)
+    if material is None:
+        mat = with_fibers(mat, scene.materials, regions)
     disc, cell = scene.discretization, mesh.topology.cell_name()
     if why := check_degree(cell, disc.degree, disc.quadrature_degree, disc.formulation):
         raise InputError(why)                          # a mesh file's cell, known only now
     dx = ufl.Measure("dx", domain=mesh, metadata=quadrature.metadata(cell, disc.quadrature))
-    parameters = Parameters(mesh, scene.material.rho)
+    parameters = Parameters(mesh, regions.cell_values([m.rho for m in scene.materials]))
     load = LoadFactor(mesh)
     owners: list = []
     bcs = supports(bc_space, loaded, scene.fix, load, sign=bc_sign, owners=owners)
     ctx = make_context(loaded, scene, u, dx, parameters, load, rest_map, pressure)
-    ctx.rest_offset = rest_offset
+    ctx.rest_offset, ctx.materials = rest_offset, regions
     name = scene.material.model if material is None else getattr(as_material(material), "name",
                                                                    type(material).__name__)
-    terms = declare_terms(scene, mat, mesh, name)
+    if binding is not None:
+        name = " + ".join(sorted({m.model for m in scene.materials}))
+    terms = declare_terms(scene, mat, mesh, name, binding)
     for t in terms:
         t.prepare(ctx)
     return Physics(ctx, terms, load, bcs, owners)
 
 
-def declare_terms(scene: Scene, material: Material, mesh, model_name: str | None = None) -> TermList:
+def declare_terms(scene: Scene, material: Material, mesh, model_name: str | None = None,
+                  binding=None) -> TermList:
     """The one place a model's terms are declared: the solid (the scene's material, its plastic solid with
     [material.plasticity]), one term per [[load]] in scene order, then those of each registered scene
     section (SCENE_TERMS) the scene asks for."""
@@ -78,7 +87,7 @@ def declare_terms(scene: Scene, material: Material, mesh, model_name: str | None
     if plastic is not None:
         solid = plastic_term(material, plastic, scene.material.model, mesh, scene.discretization.quadrature)
     else:
-        solid = ElasticEnergy(material, model_name or scene.material.model)
+        solid = ElasticEnergy(material, model_name or scene.material.model, binding)
     terms: list[Term] = [solid]
     for i, spec in enumerate(scene.load):
         terms.append(LOAD_TERMS[spec.type](spec, i, mesh))

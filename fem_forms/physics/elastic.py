@@ -3,7 +3,8 @@ from __future__ import annotations
 
 import ufl
 
-from fem_forms.materials import LinearElastic, Material, mixed_energy
+from fem_forms.materials import Material, mixed_energy
+from fem_forms.materials.hyperelastic import is_small_strain
 from fem_forms.materials.constants import set_parameters
 from fem_forms.materials.stresses import first_piola_kirchhoff
 from fem_forms.physics.terms import Context, Solid
@@ -13,12 +14,19 @@ from fem_forms.physics.thermoelastic import thermoelastic_density
 class ElasticEnergy(Solid):
     """Stored energy of the solid; the material's parameters are Constants (see bind_constants)."""
 
-    def __init__(self, material: Material, model_name: str = "user"):
+    def __init__(self, material: Material, model_name: str = "user", binding=None):
         self.material = material
+        self.binding = binding                 # several materials: their DG0 parameter fields
         self.name = f"elastic ({model_name})"
 
     def set_values(self, scene) -> None:
-        set_parameters(self.material, scene.material.material)
+        base = getattr(self.material, "base", self.material)       # without its fibres
+        if self.binding is not None:
+            self.binding.update(scene.materials)
+        else:
+            set_parameters(base, scene.material.material)
+        if base is not self.material:
+            self.material.update(scene.materials)
 
     def prepare(self, ctx: Context) -> None:
         """A material with its own pk1 (the chain rule through its invariants) gives the residual by hand,
@@ -45,16 +53,35 @@ class ElasticEnergy(Solid):
 
     def density_at(self, ctx: Context, F):
         """psi per rest volume at F, with the context's pressure field and thermal strain where they exist
-        (stresses for output differentiate this with respect to F)."""
+        (stresses for output differentiate this with respect to F; models of several kinds: their sum
+        weighted by each one's cell indicator)."""
+        parts = getattr(self.material, "parts", None)
+        if parts is None:
+            return self._density_of(self.material, ctx, F)
+        terms = [p.indicator * self._density_of(p.material, ctx, F) for p in parts]
+        return sum(terms[1:], terms[0])
+
+    @staticmethod
+    def _density_of(material: Material, ctx: Context, F):
         if ctx.pressure is not None:
+            base = getattr(material, "base", material)            # fibres add to the mixed energy
+
             def psi(G):
-                return mixed_energy(self.material, G, ctx.pressure)
+                value = mixed_energy(base, G, ctx.pressure)
+                return value if base is material else value + material.fiber_psi(G)
         else:
-            psi = self.material.psi
-        return thermoelastic_density(psi, F, ctx, isinstance(self.material, LinearElastic))
+            psi = material.psi
+        return thermoelastic_density(psi, F, ctx, is_small_strain(material))
 
     def energy(self, ctx: Context) -> ufl.Form:
-        return ctx.volume(self.density(ctx))
+        """int psi dX; models of several kinds each over their own cells (one kernel per model)."""
+        parts = getattr(self.material, "parts", None)
+        if parts is None:
+            return ctx.volume(self.density(ctx))
+        dx = ufl.Measure("dx", domain=ctx.mesh, subdomain_data=ctx.materials.tags(), metadata=ctx.dx.metadata())
+        forms = [ctx.volume(self._density_of(p.material, ctx, ctx.F), dx=dx(tuple(i + 1 for i in p.members)))
+                 for p in parts]
+        return sum(forms[1:], forms[0])
 
     def first_variation(self, ctx: Context, v) -> ufl.Form:
         """d/du of the energy in the direction v (the displacement part of the test function), written as

@@ -44,6 +44,7 @@ class Context:
     body_regions: dict = field(default_factory=dict)   # load index -> the dx ids of its cells
     thermal_strain: object = None          # alpha (T - T_ref), a UFL scalar, when temperature is coupled in
     rest_offset: object = None             # rest shape minus mesh (None: the mesh is the rest shape)
+    materials: object = None               # MaterialRegions: which material each cell is made of
 
     @property
     def F(self):

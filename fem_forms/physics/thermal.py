@@ -18,16 +18,23 @@ from fem_forms.physics.quadrature import metadata as quadrature_metadata
 from fem_forms.physics.supports import load_regions, locate_facets
 from fem_forms.scene.analyses.thermal_section import ThermalSpec
 from fem_forms.physics.histories import piecewise_linear
+from fem_forms.physics.regions import MaterialRegions
 
 STEFAN_BOLTZMANN = 5.670374419e-8       # W/(m^2 K^4)
+
+
+def thermal_constant(material, thermal: ThermalSpec, name: str):
+    """A material's own conductivity, specific_heat or expansion, else [thermal]'s (None if neither)."""
+    own = getattr(material, name)
+    return own if own is not None else getattr(thermal, name)
 
 
 class HeatForms:
     """Residual, tangent and Dirichlet conditions of one (steady or backward-Euler) heat step for the
     temperature T; `T_old` is the last committed temperature, `source` a heat source per volume (UFL) or None."""
 
-    def __init__(self, thermal: ThermalSpec, rho: float, loaded: LoadedMesh, T: fem.Function,
-                 T_old: fem.Function, transient: bool, quadrature: int, source=None):
+    def __init__(self, thermal: ThermalSpec, materials: list, loaded: LoadedMesh, T: fem.Function,
+                 T_old: fem.Function, transient: bool, quadrature: int, source=None, regions=None):
         mesh = loaded.mesh
         V = T.function_space
         self.T, self.thermal = T, thermal
@@ -35,8 +42,13 @@ class HeatForms:
         def const(v: float) -> fem.Constant:
             return fem.Constant(mesh, PETSc.ScalarType(v))
 
-        self.k = const(thermal.conductivity)
-        self.capacity = const(rho * (thermal.specific_heat or 0.0))
+        k = [thermal_constant(m, thermal, "conductivity") for m in materials]
+        capacity = [m.rho * (thermal_constant(m, thermal, "specific_heat") or 0.0) for m in materials]
+        if len(materials) == 1:
+            self.k, self.capacity = const(k[0]), const(capacity[0])
+        else:
+            regions = regions or MaterialRegions(loaded, materials)
+            self.k, self.capacity = regions.field(k, "conductivity"), regions.field(capacity, "heat_capacity")
         self.inv_dt = const(0.0)
         rule = quadrature_metadata(mesh.topology.cell_name(), quadrature)
         dx = ufl.Measure("dx", domain=mesh, metadata=rule)

@@ -9,25 +9,43 @@ J_th psi(F / (1 + th)) with J_th = (1 + th)^3. E(T) = E + dE/dT (T - T_ref) scal
 from __future__ import annotations
 
 from dolfinx import fem
+from mpi4py import MPI
+import numpy as np
 from petsc4py import PETSc
 import ufl
 
 from fem_forms.errors import InputError
-from fem_forms.materials.constants import parameter_value
-from fem_forms.physics.thermal import temperature_space
+from fem_forms.materials.constants import parameter_values
+from fem_forms.physics.thermal import temperature_space, thermal_constant
 from fem_forms.physics.terms import Context
 
 
 def young_modulus(material) -> float:
-    """E of a built-in model from its Lame parameters (Mooney-Rivlin: mu = 2 (C10 + C01))."""
+    """E of a built-in model from its Lame parameters (Mooney-Rivlin: mu = 2 (C10 + C01)); with parameter
+    fields (several materials) the largest E over the cells (all ranks): a scale for barrier stiffness."""
+    material = getattr(material, "base", material)                  # fibres aside
+    parts = getattr(material, "parts", None)
+    if parts is not None:
+        return max(young_modulus(p.material) for p in parts)
+    if hasattr(material, "C") and not hasattr(material, "mu"):        # orthotropic: its stiffest direction
+        C = parameter_values(material.C) if not isinstance(material.C, tuple) else np.asarray(material.C)
+        E = np.reshape(C, (-1, 36))[:, [0, 7, 14]]
+        return _largest(E, material.C)
     if hasattr(material, "C10"):
-        mu = 2.0 * (parameter_value(material.C10) + parameter_value(material.C01))
+        mu = 2.0 * (parameter_values(material.C10) + parameter_values(material.C01))
     elif hasattr(material, "mu"):
-        mu = parameter_value(material.mu)
+        mu = parameter_values(material.mu)
     else:
         raise InputError("thermal.modulus_slope: needs a built-in material model (a user psi(F) has no E)")
-    lmbda = parameter_value(material.lmbda)
-    return mu * (3 * lmbda + 2 * mu) / (lmbda + mu)
+    lmbda = parameter_values(material.lmbda)
+    return _largest(np.atleast_1d(mu * (3 * lmbda + 2 * mu) / (lmbda + mu)), material.lmbda)
+
+
+def _largest(values: np.ndarray, parameter) -> float:
+    """The largest of local values, over all ranks when the parameter is a field of a distributed mesh."""
+    mesh = getattr(getattr(parameter, "function_space", None), "mesh", None)
+    local = float(np.max(values)) if np.size(values) else -np.inf
+    return mesh.comm.allreduce(local, op=MPI.MAX) if mesh is not None else local
 
 
 def couple_temperature(scene, ctx: Context, material, degree: int) -> fem.Function:
@@ -42,7 +60,9 @@ def couple_temperature(scene, ctx: Context, material, degree: int) -> fem.Functi
         return fem.Constant(mesh, PETSc.ScalarType(v))
 
     dT = T - const(th.reference_temperature)
-    ctx.thermal_strain = ctx.load.constant * const(th.expansion) * dT
+    alpha = [thermal_constant(m, th, "expansion") for m in scene.materials]
+    expansion = const(alpha[0]) if len(alpha) == 1 else ctx.materials.field(alpha, "expansion")
+    ctx.thermal_strain = ctx.load.constant * expansion * dT
     if th.modulus_slope != 0.0:
         ctx.extra["modulus_factor"] = 1.0 + const(th.modulus_slope / young_modulus(material)) * dT
     ctx.extra["temperature"] = T

@@ -18,11 +18,12 @@ from fem_forms.scene.analyses.inverse import InverseSpec
 from fem_forms.scene.analyses.modal import ModalSpec, SoundSpec
 from fem_forms.scene.analyses.thermal_section import ThermalSpec
 from fem_forms.scene.cavities import cavity_rules
+from fem_forms.scene.materials import MaterialSpec
 from fem_forms.scene.files import parse_assignment, read_toml, set_key
 from fem_forms.scene.reader import AXES, Key, Section, Table, Variants, check_number, check_vector
 from fem_forms.scene.registry import ANALYSIS_KEY
 from fem_forms.scene.spec import (CELL_TYPES, CORE_SECTIONS, GENERATORS, LOAD_TYPES, TITLE, Discretization,
-                                  Fix, Load, MaterialSpec, MeshSpec, OutputSpec, Selector, SolverSpec, fix_names,
+                                  Fix, Load, MeshSpec, OutputSpec, Selector, SolverSpec, fix_names,
                                   prism_rules, quadrature_rules)
 from fem_forms.scene.plasticity import plasticity_rules
 
@@ -38,7 +39,7 @@ class Scene:
     title: str = TITLE.field()
     analysis: str = ANALYSIS_KEY.field()
     mesh: MeshSpec = field(default_factory=MeshSpec)
-    material: MaterialSpec = field(default_factory=MaterialSpec)
+    materials: list = field(default_factory=lambda: [MaterialSpec()])   # [material] or [[material]]
     discretization: Discretization = field(default_factory=Discretization)
     fix: list = field(default_factory=list)
     load: list = field(default_factory=list)
@@ -53,6 +54,15 @@ class Scene:
     thermal: ThermalSpec | None = None     # None: no temperature field
     contact: ContactSpec | None = None     # None: no contact
     source: Path | None = None
+
+    @property
+    def material(self) -> MaterialSpec:
+        """The first material (the only one of a single [material] table)."""
+        return self.materials[0]
+
+    @property
+    def several_materials(self) -> bool:
+        return len(self.materials) > 1
 
     @classmethod
     def from_file(cls, path: str | Path, overrides: dict | None = None) -> "Scene":
@@ -82,22 +92,23 @@ def _parse_scene(data: dict, base_dir: Path, source: Path | None) -> Scene:
     sc.analysis = t.read(ANALYSIS_KEY)
     analysis = registry.get(sc.analysis)
     for section in CORE_SECTIONS:
-        setattr(sc, section.name, _section(t, section, base_dir))
+        setattr(sc, section.attr or section.name, _section(t, section, base_dir))
 
     formulation = sc.discretization.formulation
     if formulation not in analysis.formulations:
         able = " or ".join(repr(a.name) for a in registry.ANALYSES.values() if formulation in a.formulations)
         raise InputError(f"discretization.formulation = {formulation!r}: available for analysis = {able} only")
-    if formulation == "mixed" and sc.material.model in MIXED_TOO_SLOW:
-        raise InputError(f"discretization.formulation = 'mixed': not with material.model = "
-                         f"{sc.material.model!r} (its Taylor-Hood tangent takes minutes to compile with FFCx 0.5); "
+    slow = next((m for m in sc.materials if m.model in MIXED_TOO_SLOW), None)
+    if formulation == "mixed" and slow is not None:
+        raise InputError(f"discretization.formulation = 'mixed': not with {slow.key}.model = "
+                         f"{slow.model!r} (its Taylor-Hood tangent takes minutes to compile with FFCx 0.5); "
                          "use neo-hookean, mooney-rivlin, stvk or linear for mixed, or formulation = 'displacement'")
     fix_names(sc.fix)                                  # repeated support names are refused here
     cavity_rules(sc.load, sc.analysis, sc.solver.control)
     prism_rules(sc.mesh, sc.discretization, sc.load, sc.analysis)
     quadrature_rules(sc.mesh, sc.discretization)
     plasticity_rules(sc)
-    if any(ld.type == "gravity" for ld in sc.load) and sc.material.rho <= 0:
+    if any(ld.type == "gravity" for ld in sc.load) and max(m.rho for m in sc.materials) <= 0:
         raise InputError("material.rho: gravity needs a positive density")
 
     for name, (owners, first) in registry.owned_sections().items():

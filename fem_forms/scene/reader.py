@@ -259,6 +259,8 @@ class Section:
     array: bool = False                         # [[name]]: an array of tables
     required: bool = False
     absent: Callable | None = None              # the value when the table is missing (default: spec())
+    attr: str = ""                              # the Scene attribute it is read into (default: name)
+    either: bool = False                        # a table or an array of tables (read as a list)
 
     def parse(self, data: Any, base_dir: Path = Path(".")) -> Any:
         """The spec (a list of specs for an array of tables) from the table's data."""

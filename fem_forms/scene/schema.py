@@ -129,6 +129,8 @@ def section_schema(section: Section) -> dict:
     table = _object(section.keys, section.variants, section.doc)
     if section.array:
         return {"type": "array", "description": section.doc, "items": table}
+    if section.either:
+        return {"description": section.doc, "oneOf": [table, {"type": "array", "items": table, "minItems": 1}]}
     return table
 
 

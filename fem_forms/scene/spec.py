@@ -4,15 +4,12 @@ unit, doc); the spec dataclasses take their defaults from those declarations. Cr
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 from fem_forms.errors import InputError
-from fem_forms.materials import MODELS, Material, make_material
-from fem_forms.materials.hyperelastic import PARAMETER_KEYS
-from fem_forms.materials.plasticity import make_plasticity
 from fem_forms.elements import MAX_DEGREE as MAX_QUADRATURE_DEGREE, check_degree
-from fem_forms.scene.plasticity import PLASTICITY, material_plasticity_rules
+from fem_forms.scene.materials import MATERIAL
 from fem_forms.scene.reader import Key, Section, Table, Variants
 from fem_forms.scene.selectors import AREA_SELECTORS, Selector, where
 
@@ -130,60 +127,6 @@ def prism_rules(mesh: MeshSpec, disc: "Discretization", loads: list, analysis: s
     if surface:
         raise InputError(f"{surface[0]}: surface loads cannot be applied on a prism mesh (FFCx 0.5.0 cannot "
                          "integrate over prism facets); use tetrahedra or hexahedra")
-
-
-# --- material -------------------------------------------------------------------------------
-MATERIAL_KEYS = (
-    Key("model", "string", "hyperelastic energy density", default="neo-hookean", choices=tuple(MODELS),
-        note=f"unknown model (choose from {', '.join(MODELS)})"),
-    *PARAMETER_KEYS,
-    Key("rho", "number", "mass density (gravity and modal analysis need it)", default=0.0, unit="kg/m^3",
-        minimum=0),
-    PLASTICITY,
-)
-_MAT = {k.name: k for k in MATERIAL_KEYS}
-_PLASTIC = {k.name: k for k in PLASTICITY.keys}
-
-
-@dataclass
-class MaterialSpec:
-    model: str = _MAT["model"].field()
-    E: float | None = None
-    nu: float | None = None
-    mu: float | None = None
-    lmbda: float | None = None
-    C10: float | None = None
-    C01: float | None = None
-    rho: float = _MAT["rho"].field()
-    plasticity_model: str | None = None
-    yield_stress: float | None = None
-    hardening: float = _PLASTIC["hardening"].field()
-    elastic_limit: float | None = None
-    plastic_limit: float | None = None
-    _built: tuple | None = field(default=None, repr=False, compare=False)   # (values, Material)
-
-    @property
-    def material(self) -> Material:
-        """The validated model, built once when the scene is read (again only if a value was changed
-        since, so a changed E can never be silently ignored)."""
-        values = (self.model, self.E, self.nu, self.mu, self.lmbda, self.C10, self.C01)
-        if self._built is None or self._built[0] != values:
-            self._built = (values, make_material(self.model, E=self.E, nu=self.nu, mu=self.mu,
-                                                 lmbda=self.lmbda, C10=self.C10, C01=self.C01))
-        return self._built[1]
-
-    @property
-    def plasticity(self):
-        """The plastic model of [material.plasticity] (VonMises or OBrien), or None."""
-        return make_plasticity(self.plasticity_model, self.yield_stress, self.hardening, self.elastic_limit,
-                               self.plastic_limit)
-
-
-def _material_rules(s: MaterialSpec, t: Table) -> None:
-    if (s.E is not None or s.nu is not None) and (s.mu is not None or s.lmbda is not None):
-        raise InputError(f"{t.path}: give either E and nu or mu and lambda, not both")
-    s.material                                           # builds and validates the model once, now
-    material_plasticity_rules(s, t.data.get("plasticity"))
 
 
 # --- discretization -------------------------------------------------------------------------
@@ -344,12 +287,13 @@ class SolverSpec:
 # fields [output] fields may name (fem_forms/output/quantities.py computes each)
 FIELD_NAMES = ("displacement", "von_mises", "cauchy_stress", "pk1_stress", "pk2_stress", "principal_stresses",
                "green_strain", "biot_strain", "hencky_strain", "infinitesimal_strain", "deformation_gradient",
-               "contact_pressure")
+               "contact_pressure", "material")
 OUTPUT_KEYS = (
     Key("probes", "map", "named points where results are reported", default={},
         item=Key("point", "vector", "[x, y, z]", unit="m", length=3)),
     Key("picture", "boolean", "write a PNG picture", default=True),
-    Key("fields", "selection", "fields for ParaView (XDMF, P1 nodal values of recovered stresses and strains): "
+    Key("fields", "selection", "fields for ParaView (XDMF, P1 nodal values of recovered stresses and strains; "
+        "material: the material index of each cell, in [[material]] order from 0): "
         "a list of names, true (the default list) or false (none)", default=["displacement", "von_mises"],
         choices=FIELD_NAMES),
 )
@@ -368,8 +312,7 @@ TITLE = Key("title", "string", "a name for the scene, shown in pictures and summ
 CORE_SECTIONS = (
     Section("mesh", "the body's shape and its mesh", MeshSpec, keys=(CELL,), variants=MESH_VARIANTS,
             rules=_mesh_rules, required=True),
-    Section("material", "the hyperelastic material: E and nu, or mu and lambda", MaterialSpec,
-            keys=MATERIAL_KEYS, rules=_material_rules, required=True),
+    MATERIAL,
     Section("discretization", "finite elements and quadrature", Discretization, keys=DISCRETIZATION_KEYS,
             rules=_discretization_rules),
     Section("fix", "a support: held displacement components on a boundary", Fix, keys=FIX_KEYS, array=True),

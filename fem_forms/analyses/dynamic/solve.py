@@ -44,6 +44,7 @@ class DynamicResult:
             "analysis": "dynamic", "title": s.scene.title, "dofs": s.model.dofs,
             "converged": self.failure is None, "message": self.failure or "reached the end time",
             "scheme": s.scene.dynamic.scheme, "mass": s.scene.dynamic.mass,
+            "materials": s.model.materials_report(),
             "steps": r.steps, "time_reached": r.time_reached,
             "dt_min": r.dt_min if r.steps else None, "dt_max": r.dt_max if r.steps else None,
             "rejected_steps": r.rejected, "newton_iterations": r.newton_iterations,
@@ -153,8 +154,9 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
     t = 0); checkpoints into out/checkpoint every checkpoint_every steps; `restart` continues from one."""
     t0 = time.perf_counter()
     dyn = scene.dynamic
-    if scene.material.rho <= 0:
-        raise InputError("material.rho: dynamic analysis needs a positive density")
+    for m in scene.materials:
+        if m.rho <= 0:
+            raise InputError(f"{m.key}.rho: dynamic analysis needs a positive density")
     system = build_system(scene)
     if system.model.temperature is not None:
         system.model.temperature.x.array[:] = scene.thermal.initial_temperature

@@ -13,6 +13,7 @@ from dataclasses import replace
 
 from dolfinx import fem
 
+from fem_forms.materials.hyperelastic import SMALL_STRAIN_MODELS
 from fem_forms.physics.damping import ViscousDamping
 from fem_forms.physics.thermal import HeatForms
 from fem_forms.solvers.thermal_step import HeatSolver
@@ -29,10 +30,11 @@ def heat_solver(system, mean_velocity: fem.Function) -> HeatSolver:
     source = None
     if th.damping_heat:
         d = scene.damping
-        viscous = ViscousDamping(model.mesh, d.shear, d.bulk, mean_velocity, scene.material.model == "linear")
+        viscous = ViscousDamping(model.mesh, d.shear, d.bulk, mean_velocity,
+                                 scene.material.model in SMALL_STRAIN_MODELS)
         source = viscous.power_density(replace(model.context, u=old["unknown"]))
-    forms = HeatForms(th, scene.material.rho, model.loaded, model.temperature, old["temperature"], True,
-                      scene.discretization.quadrature, source)
+    forms = HeatForms(th, scene.materials, model.loaded, model.temperature, old["temperature"], True,
+                      scene.discretization.quadrature, source, model.context.materials)
     return HeatSolver(forms, state, commit=False)
 
 

@@ -15,6 +15,7 @@ from fem_forms.errors import InputError
 from fem_forms.meshes import MeshArrays, check_cells, from_arrays, mesh_size
 from fem_forms.output import fields, pictures
 from fem_forms.output.stl import write_stl
+from fem_forms.physics.regions import MaterialRegions
 from fem_forms.scene import Scene
 
 
@@ -56,7 +57,19 @@ def _matched_vertices(spec, pts_target: np.ndarray, size: float) -> np.ndarray |
     return mask
 
 
-def _write_and_inspect(scene: Scene, out: Path, gathered, target, groups, size: float) -> tuple[list, tuple]:
+def _material_groups(scene: Scene, loaded) -> dict | None:
+    """On rank 0, the rows of the gathered cells of each material (several materials only): the rest
+    mesh carries them as volume groups, so its cells keep the materials they had on the target."""
+    if not scene.several_materials:
+        return None
+    index = fields.gather_cell_values(loaded.mesh, MaterialRegions(loaded, scene.materials).index)
+    if index is None:
+        return None
+    return {m.name: np.flatnonzero(index == i) for i, m in enumerate(scene.materials)}
+
+
+def _write_and_inspect(scene: Scene, out: Path, gathered, target, groups, size: float,
+                       cell_groups: dict | None = None) -> tuple[list, tuple]:
     """On rank 0: write the rest shape (volume .msh and STL) and look at it as built: does it cross a support
     plane or intersect itself? Returns (problems, what the picture draws)."""
     problems = []
@@ -65,7 +78,7 @@ def _write_and_inspect(scene: Scene, out: Path, gathered, target, groups, size: 
     drawn = (target[0], points, faces)
     write_ok = True
     try:
-        rest_shape.write_volume_mesh(out / "rest_shape.msh", points, cells, ctype, groups)
+        rest_shape.write_volume_mesh(out / "rest_shape.msh", points, cells, ctype, groups, cell_groups)
         tris = rest_shape.triangles(faces)
         write_stl(out / "rest_shape.stl", points, tris, "rest_shape", ascii=True)
     except OSError as e:
@@ -99,8 +112,9 @@ def check_rest_shape(scene: Scene, res: InverseResult, out: Path) -> ForwardChec
     designed = fields.gather_mesh(mesh, fields.node_values(res.deformed_offset)) \
         if res.deformed_offset is not None else target
     groups = fields.gather_facet_groups(res.loaded)
-    problems, drawn = _write_and_inspect(scene, out, gathered, target, groups, size) if comm.rank == 0 \
-        else ([], None)
+    cell_groups = _material_groups(scene, res.loaded)
+    problems, drawn = _write_and_inspect(scene, out, gathered, target, groups, size, cell_groups) \
+        if comm.rank == 0 else ([], None)
     problems = comm.bcast(problems, root=0)
     pts_rest = comm.bcast(gathered[0] if comm.rank == 0 else None, root=0)
     pts_target = comm.bcast(target[0] if comm.rank == 0 else None, root=0)
@@ -114,7 +128,8 @@ def check_rest_shape(scene: Scene, res: InverseResult, out: Path) -> ForwardChec
 
     def written():                               # called on rank 0, where the gathered arrays are
         points, cells, ctype = gathered
-        arrays = MeshArrays(points, cells, ctype, groups or {}, info={"source": "rest_shape.msh"})
+        arrays = MeshArrays(points, cells, ctype, groups or {}, cell_groups or {},
+                            info={"source": "rest_shape.msh"})
         check_cells(arrays, "rest_shape.msh")
         return arrays
     try:

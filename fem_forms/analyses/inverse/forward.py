@@ -26,7 +26,7 @@ from fem_forms.analyses.inverse.stability import Inertia, assemble_tangent, iner
 from fem_forms.equilibrium import StaticResult, solve_static
 from fem_forms.meshes import LoadedMesh
 from fem_forms.model import build_model
-from fem_forms.scene import MeshSpec, Scene
+from fem_forms.scene import MeshSpec, Scene, Selector
 from fem_forms.solvers import acceptance, continuation, snes
 from fem_forms.solvers.linear import rigid_body_modes
 
@@ -74,6 +74,9 @@ def forward_scene(scene: Scene, rest_mesh: Path, dofs: int) -> Scene:
     fscene.analysis = "static"
     fscene.mesh = MeshSpec(generator="file", file=rest_mesh)
     fscene.output.probes = {}
+    if fscene.several_materials:                # each material's cells, carried over as a volume group
+        for m in fscene.materials:
+            m.where = Selector("group", group=m.name, key=f"{m.key}.where")
     if fscene.solver.linear == "auto" and dofs >= CHECK_ITERATIVE_ABOVE_DOFS:
         fscene.solver.linear = "iterative-then-direct"
         # GAMG graph squared on the finest level only, threshold 0.01: on the Chen arm 265 CG iterations

@@ -68,7 +68,7 @@ def solve_thermal(scene: Scene, on_frame: Callable | None = None, comm: MPI.Comm
     T.x.array[:] = th.initial_temperature
     state = State({"temperature": T})
     transient = scene.dynamic is not None
-    forms = HeatForms(th, scene.material.rho, loaded, T, state.old["temperature"], transient, disc.quadrature)
+    forms = HeatForms(th, scene.materials, loaded, T, state.old["temperature"], transient, disc.quadrature)
     solver = HeatSolver(forms, state, scene.solver.petsc, scene.solver.linear)
     probes.evaluate(T, scene.output.probes)                       # a probe outside the mesh is bad input
     result = ThermalResult(scene, loaded, T, forms.physics)

@@ -18,7 +18,7 @@ def contact_terms(scene, mesh) -> list[Term]:
         raise InputError("contact: not with solver.control = 'arc-length' or a volume-controlled cavity yet (their "
                          "bordered Newton solve has no step filter); use load control and a cavity pressure")
     try:
-        modulus = young_modulus(scene.material.material)
+        modulus = max(young_modulus(m.material) for m in scene.materials)
     except InputError:
         raise InputError("contact: needs a built-in material model (its modulus scales the barrier)") from None
     return [ContactTerm(scene.contact, modulus)]

@@ -87,6 +87,9 @@ def _rules(s: BalanceSpec, t: Table) -> None:
 
 def _check(scene) -> None:
     b = scene.balance
+    if scene.several_materials:
+        raise InputError("material: balance design with several materials is not implemented yet (one "
+                         "[material] table)")
     if scene.material.rho <= 0:
         raise InputError("material.rho: balance design needs a positive density")
     if b.fill_density >= scene.material.rho and b.goal != "check":

@@ -62,8 +62,9 @@ def _sound_rules(s: SoundSpec, t: Table) -> None:
 
 
 def _check(scene) -> None:
-    if scene.material.rho <= 0:
-        raise InputError("material.rho: modal analysis needs a positive density")
+    for m in scene.materials:
+        if m.rho <= 0:
+            raise InputError(f"{m.key}.rho: modal analysis needs a positive density")
 
 
 ANALYSIS = Analysis(

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from fem_forms.errors import InputError
+from fem_forms.scene.materials import THERMAL_CONSTANTS
 from fem_forms.scene.reader import Key, Section, Table
 from fem_forms.scene.selectors import AREA_SELECTORS, Selector, where
 
@@ -30,7 +31,8 @@ BOUNDARY_KEYS = (
 )
 
 THERMAL_KEYS = (
-    Key("conductivity", "number", "thermal conductivity k", unit="W/(m K)", required=True, exclusive_minimum=0),
+    Key("conductivity", "number", "thermal conductivity k (required unless every material gives its own)",
+        unit="W/(m K)", exclusive_minimum=0),
     Key("specific_heat", "number", "specific heat c (transient heat needs it, with material.rho)",
         unit="J/(kg K)", exclusive_minimum=0),
     Key("expansion", "number", "linear thermal expansion coefficient alpha", default=0.0, unit="1/K"),
@@ -69,7 +71,7 @@ class ThermalBoundary:
 @dataclass
 class ThermalSpec:
     """[thermal]: conduction, heat capacity, expansion, E(T) and the boundary conditions."""
-    conductivity: float
+    conductivity: float | None = None
     specific_heat: float | None = None
     expansion: float = _T["expansion"].field()
     reference_temperature: float = _T["reference_temperature"].field()
@@ -117,12 +119,24 @@ def check_coupled(scene) -> None:
     """Rules across sections for any analysis with [thermal]."""
     th = scene.thermal
     if th is None:
+        given = next(((m, k) for m in scene.materials for k in THERMAL_CONSTANTS if getattr(m, k) is not None),
+                     None)
+        if given is not None:
+            raise InputError(f"{given[0].key}.{given[1]}: needs a [thermal] section (no temperature field without)")
         return
     transient = scene.analysis == "dynamic" or (scene.analysis == "thermal" and scene.dynamic is not None)
-    if transient and th.specific_heat is None:
-        raise InputError("thermal.specific_heat: missing (required for transient heat)")
-    if transient and scene.material.rho <= 0:
-        raise InputError("material.rho: transient heat needs a positive density")
+    for m in scene.materials:
+        if m.conductivity is None and th.conductivity is None:
+            raise InputError(f"thermal.conductivity: missing (required: {m.key} gives no conductivity of "
+                             "its own)")
+        if transient and m.specific_heat is None and th.specific_heat is None:
+            raise InputError("thermal.specific_heat: missing (required for transient heat"
+                             + (f"; {m.key} gives none of its own)" if scene.several_materials else ")"))
+        if transient and m.rho <= 0:
+            raise InputError(f"{m.key}.rho: transient heat needs a positive density")
+    if scene.several_materials and th.modulus_slope != 0.0:
+        raise InputError("thermal.modulus_slope: not implemented for several materials (one E(T) slope for "
+                         "materials of different E has no meaning yet)")
     if th.damping_heat and scene.analysis != "dynamic":
         raise InputError(f"thermal.damping_heat: only for analysis = 'dynamic' (this scene's is {scene.analysis!r})")
     if th.damping_heat and not (scene.damping.shear or scene.damping.bulk):

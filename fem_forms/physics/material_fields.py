@@ -1,0 +1,102 @@
+"""Several materials in one energy: the materials of one model share its psi(F) with DG0 parameter fields
+(one form, one kernel: as fast as one material); materials of different models each integrate their own
+psi over their cells (a dx subdomain per model), and their psi sum, weighted by DG0 indicators, where one
+expression is needed (stresses for output)."""
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass
+import dataclasses
+
+from dolfinx import fem
+import numpy as np
+import ufl
+
+from petsc4py import PETSc
+
+from fem_forms.materials import Material
+from fem_forms.materials.anisotropic import FiberReinforced, unit
+from fem_forms.physics.regions import MaterialRegions
+
+
+def _numeric_fields(material) -> list[str]:
+    """The parameters bound as fields: numbers, and tuples of numbers (a stiffness matrix)."""
+    def numeric(v):
+        return (isinstance(v, (int, float)) and not isinstance(v, bool)) or (
+            isinstance(v, tuple) and all(isinstance(x, (int, float)) for x in v))
+    return [f.name for f in dataclasses.fields(material) if numeric(getattr(material, f.name))]
+
+
+@dataclass
+class MaterialPart:
+    """The materials (scene indices) sharing one model, its psi with DG0 parameters, and its cells."""
+    material: Material
+    members: list[int]
+    fields: dict                       # parameter name -> DG0 Function
+    indicator: fem.Function            # 1 on the part's cells, 0 elsewhere
+    dx: ufl.Measure | None = None      # the part's cells (set by the solid on its Context's measure)
+
+
+class MaterialMix:
+    """Models of different kinds side by side: psi(F) = sum_parts indicator_p psi_p(F) (the energy itself
+    integrates each part over its own cells, see ElasticEnergy)."""
+
+    def __init__(self, parts: list[MaterialPart]):
+        self.parts = parts
+
+    def psi(self, F):
+        terms = [p.indicator * p.material.psi(F) for p in self.parts]
+        return sum(terms[1:], terms[0])
+
+
+class MaterialBinding:
+    """The scene's materials bound to a mesh: `material` is what the solid's energy uses (one model with
+    DG0 parameters, or a MaterialMix); `update` takes new values without compiling anything."""
+
+    def __init__(self, specs: list, regions: MaterialRegions):
+        self.regions = regions
+        built = [s.material for s in specs]
+        kinds: dict = {}
+        for i, m in enumerate(built):
+            kinds.setdefault(type(m), []).append(i)
+        self.parts = []
+        for members in kinds.values():
+            first = built[members[0]]
+            bound = copy.copy(first)
+            fields = {}
+            for name in _numeric_fields(first):
+                fields[name] = regions.field(self._values(built, members, name), name)
+                object.__setattr__(bound, name, fields[name])
+            indicator = regions.field([1.0 if i in members else 0.0 for i in range(len(built))], "indicator")
+            self.parts.append(MaterialPart(bound, members, fields, indicator))
+        self.material = self.parts[0].material if len(self.parts) == 1 else MaterialMix(self.parts)
+
+    @staticmethod
+    def _values(built: list, members: list[int], name: str) -> list:
+        """One value per material: the members' own, the first member's on the other materials' cells."""
+        own = {i: np.asarray(getattr(built[i], name), dtype=float) for i in members}
+        return [own.get(i, own[members[0]]) for i in range(len(built))]
+
+    def update(self, specs: list) -> None:
+        """New parameter values (the same models on the same cells)."""
+        built = [s.material for s in specs]
+        for part in self.parts:
+            for name, f in part.fields.items():
+                self.regions.fill(f, self._values(built, part.members, name))
+
+
+def with_fibers(material: Material, specs: list, regions: MaterialRegions):
+    """The solid's material plus the fibre families of the materials that have [material] fibers (each
+    on its own cells when there are several materials), or `material` as it is when none has."""
+    families = []
+    for i, m in enumerate(specs):
+        if m.fiber_direction is None:
+            continue
+        mesh = regions.mesh
+        families.append({
+            "direction": fem.Constant(mesh, unit(m.fiber_direction, m.key)),
+            "E": fem.Constant(mesh, PETSc.ScalarType(m.fiber_E)),
+            "k2": fem.Constant(mesh, PETSc.ScalarType(m.fiber_k2)), "kind": m.fiber_model, "index": i,
+            "indicator": regions.field([1.0 if j == i else 0.0 for j in range(len(specs))], "fibers")
+            if regions.several else None})
+    return FiberReinforced(material, families) if families else material

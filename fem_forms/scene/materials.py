@@ -1,0 +1,182 @@
+"""The [material] section: one table, or an array of tables [[material]] each claiming its cells (`where`),
+with its energy density, density and thermal constants. Read into scene.materials (a list, one entry for a
+single table); scene.material is the first, for what a whole part shares (the model's name in messages)."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from fem_forms.errors import InputError
+from fem_forms.materials import MODELS, Material, make_material
+from fem_forms.materials.anisotropic import FIBER_MODELS, ORTHOTROPIC_CONSTANTS
+from fem_forms.materials.hyperelastic import PARAMETER_KEYS, SMALL_STRAIN_MODELS
+from fem_forms.materials.plasticity import make_plasticity
+from fem_forms.scene.plasticity import PLASTICITY, material_plasticity_rules
+from fem_forms.scene.reader import Key, Section, Table
+from fem_forms.scene.selectors import Selector, where
+
+REGION_KINDS = ("box", "group")
+ORTHOTROPIC_DOCS = {"E": "Young's modulus", "G": "shear modulus", "n": "Poisson's ratio"}
+THERMAL_CONSTANTS = ("conductivity", "specific_heat", "expansion")   # per material, else [thermal]'s
+MATERIAL_KEYS = (
+    Key("name", "string", "the material's name in results and messages", default="material"),
+    where("the cells of this material: a gmsh volume group { group = ... } or the cells whose centroid "
+          "lies in { box = [[x0, y0, z0], [x1, y1, z1]] }; absent: every cell no other material claims",
+          required=False, kinds=REGION_KINDS),
+    Key("model", "string", "hyperelastic energy density", default="neo-hookean", choices=tuple(MODELS),
+        note=f"unknown model (choose from {', '.join(MODELS)})"),
+    *PARAMETER_KEYS,
+    Key("rho", "number", "mass density (gravity and modal analysis need it)", default=0.0, unit="kg/m^3",
+        minimum=0),
+    Key("conductivity", "number", "thermal conductivity k of this material (default: thermal.conductivity)",
+        unit="W/(m K)", exclusive_minimum=0),
+    Key("specific_heat", "number", "specific heat c of this material (default: thermal.specific_heat)",
+        unit="J/(kg K)", exclusive_minimum=0),
+    Key("expansion", "number", "linear thermal expansion coefficient of this material (default: "
+        "thermal.expansion)", unit="1/K"),
+    *(Key(n, "number", f"orthotropic: {ORTHOTROPIC_DOCS[n[0]]} {n[1:]}", unit="" if n[0] == "n" else "Pa")
+      for n in ORTHOTROPIC_CONSTANTS),
+    Key("axis1", "vector", "orthotropic: material axis 1 (global frame)", length=3),
+    Key("axis2", "vector", "orthotropic: material axis 2, perpendicular to axis1 (axis3 = axis1 x axis2)",
+        length=3),
+    Key("fibers", "table", "fibre reinforcement of a finite-strain model, active in tension only", keys=(
+        Key("direction", "vector", "fibre direction in the rest shape", length=3, attr="fiber_direction"),
+        Key("E", "number", "fibre stiffness: Young's modulus added along the fibres (small strain)",
+            unit="Pa", exclusive_minimum=0, attr="fiber_E"),
+        Key("model", "string", "holzapfel: k1/(2 k2) (exp(k2 (I4-1)^2) - 1), k1 = E/4; quadratic: E/8 (I4-1)^2",
+            default="holzapfel", choices=FIBER_MODELS, attr="fiber_model"),
+        Key("k2", "number", "holzapfel: exponential stiffening (dimensionless)", default=1.0,
+            exclusive_minimum=0, attr="fiber_k2"))),
+    PLASTICITY,
+)
+_MAT = {k.name: k for k in MATERIAL_KEYS}
+_PLASTIC = {k.name: k for k in PLASTICITY.keys}
+
+
+@dataclass
+class MaterialSpec:
+    name: str = _MAT["name"].field()
+    where: Selector | None = None
+    model: str = _MAT["model"].field()
+    E: float | None = None
+    nu: float | None = None
+    mu: float | None = None
+    lmbda: float | None = None
+    C10: float | None = None
+    C01: float | None = None
+    rho: float = _MAT["rho"].field()
+    conductivity: float | None = None
+    specific_heat: float | None = None
+    expansion: float | None = None
+    E1: float | None = None
+    E2: float | None = None
+    E3: float | None = None
+    G12: float | None = None
+    G13: float | None = None
+    G23: float | None = None
+    nu12: float | None = None
+    nu13: float | None = None
+    nu23: float | None = None
+    axis1: list | None = None
+    axis2: list | None = None
+    fiber_direction: list | None = None
+    fiber_E: float | None = None
+    fiber_model: str = "holzapfel"
+    fiber_k2: float = 1.0
+    plasticity_model: str | None = None
+    yield_stress: float | None = None
+    hardening: float = _PLASTIC["hardening"].field()
+    elastic_limit: float | None = None
+    plastic_limit: float | None = None
+    key: str = "material"                      # the scene key, for messages: material or material[i]
+    _built: tuple | None = field(default=None, repr=False, compare=False)   # (values, Material)
+
+    @property
+    def material(self) -> Material:
+        """The validated model, built once when the scene is read (again only if a value was changed
+        since, so a changed E can never be silently ignored)."""
+        ortho = {n: getattr(self, n) for n in ORTHOTROPIC_CONSTANTS}
+        values = (self.model, self.E, self.nu, self.mu, self.lmbda, self.C10, self.C01, tuple(ortho.values()),
+                  self.axis1, self.axis2)
+        if self._built is None or self._built[0] != values:
+            try:
+                built = make_material(self.model, E=self.E, nu=self.nu, mu=self.mu, lmbda=self.lmbda,
+                                      C10=self.C10, C01=self.C01, orthotropic=ortho, axis1=self.axis1,
+                                      axis2=self.axis2)
+            except InputError as e:                    # the models name "material."; say which one
+                raise InputError(str(e).replace("material", self.key, 1)) from None
+            self._built = (values, built)
+        return self._built[1]
+
+    @property
+    def plasticity(self):
+        """The plastic model of [material.plasticity] (VonMises or OBrien), or None."""
+        return make_plasticity(self.plasticity_model, self.yield_stress, self.hardening, self.elastic_limit,
+                               self.plastic_limit)
+
+
+def _material_rules(s: MaterialSpec, t: Table) -> None:
+    s.key = t.path
+    if (s.E is not None or s.nu is not None) and (s.mu is not None or s.lmbda is not None):
+        raise InputError(f"{t.path}: give either E and nu or mu and lambda, not both")
+    s.material                                           # builds and validates the model once, now
+    _fiber_rules(s, t)
+    if t.path != "material" and t.has("plasticity"):
+        raise InputError(f"{t.key('plasticity')}: plasticity is for a single [material] table only "
+                         "(not implemented for several materials)")
+    material_plasticity_rules(s, t.data.get("plasticity"))
+
+
+def _fiber_rules(s: MaterialSpec, t: Table) -> None:
+    """[material] fibers: a direction and a stiffness, on a finite-strain model."""
+    if not t.has("fibers"):
+        return
+    key = t.key("fibers")
+    for name, value in (("direction", s.fiber_direction), ("E", s.fiber_E)):
+        if value is None:
+            raise InputError(f"{key}.{name}: missing (fibres need a direction and a stiffness E)")
+    if s.model in SMALL_STRAIN_MODELS:
+        raise InputError(f"{key}: for a finite-strain model (neo-hookean, mooney-rivlin, stvk, corotated); "
+                         f"{t.key('model')} is {s.model!r} (use model = 'orthotropic' for small-strain anisotropy)")
+    if not any(s.fiber_direction):
+        raise InputError(f"{key}.direction: must not be the zero vector")
+    if t.data["fibers"].get("k2") is not None and s.fiber_model != "holzapfel":
+        raise InputError(f"{key}.k2: only for model = 'holzapfel'")
+
+
+def _materials_rules(materials: list[MaterialSpec]) -> None:
+    """Across the materials: distinct names, at most one without `where` (it takes the rest)."""
+    names = [m.name for m in materials]
+    for i, m in enumerate(materials):
+        if m.name in names[:i]:
+            raise InputError(f"{m.key}.name = {m.name!r}: another material has this name")
+    small = [m for m in materials if m.model in SMALL_STRAIN_MODELS]
+    if small and len(small) < len(materials):
+        other = next(m for m in materials if m.model not in SMALL_STRAIN_MODELS)
+        raise InputError(f"{other.key}.model = {other.model!r}: small-strain ('linear') and finite-strain models "
+                         f"cannot be mixed in one part ({small[0].key} is 'linear')")
+    open_ended = [m for m in materials if m.where is None]
+    if len(materials) > 1 and len(open_ended) > 1:
+        raise InputError(f"{open_ended[1].key}.where: missing (only one material may leave out `where`: "
+                         f"it takes every cell no other material claims; {open_ended[0].key} already does)")
+
+
+class MaterialSection(Section):
+    """[material] as one table or as an array of tables [[material]]: always read into a list."""
+
+    def parse(self, data: Any, base_dir: Path = Path(".")) -> list[MaterialSpec]:
+        if isinstance(data, list):
+            if not data:
+                raise InputError("material: an empty array of tables (give at least one [[material]])")
+            specs = [self._one(Table(d, f"material[{i}]", base_dir)) for i, d in enumerate(data)]
+        else:
+            specs = [self._one(Table(data, "material", base_dir))]
+        _materials_rules(specs)
+        return specs
+
+
+MATERIAL = MaterialSection(
+    "material", "the material(s): one [material] table, or [[material]] tables each claiming its cells with "
+    "`where` (E and nu, or mu and lambda; density; thermal constants)", MaterialSpec, keys=MATERIAL_KEYS,
+    rules=_material_rules, required=True, attr="materials", either=True)

@@ -1,0 +1,111 @@
+"""Anisotropic materials against closed forms:
+- small-strain orthotropic: a block in uniaxial tension along each material axis strains as the compliance
+  matrix of the nine engineering constants says (E_k along, -nu_kj / E_k across), the axes turned so that
+  each one in turn lies along the pull; constants that make the stiffness indefinite are refused;
+- fibre reinforcement: a bar pulled along its fibres is E_m + E_f stiff, across them (fibres shortened:
+  no compression stiffness) E_m; fibres on one layer only stiffen that layer (transformed section)."""
+import numpy as np
+import pytest
+
+import fem_forms as ff
+from fem_forms.errors import InputError
+
+SIGMA = 1.0e5                                                    # Pa
+ORTHO = {"E1": 2.2e9, "E2": 1.5e9, "E3": 1.0e9, "G12": 0.8e9, "G13": 0.6e9, "G23": 0.5e9,
+         "nu12": 0.35, "nu13": 0.3, "nu23": 0.4}
+
+
+def pulled_block(material: dict, sigma=SIGMA) -> dict:
+    """A 2 x 1 x 0.5 m block on rollers on three faces, pulled along x by sigma: uniaxial stress."""
+    return {"mesh": {"size": [2.0, 1.0, 0.5], "cells": [2, 2, 2]}, "material": material,
+            "discretization": {"degree": 1},
+            "fix": [{"where": {"axis": a, "at": 0.0}, "components": [a]} for a in "xyz"],
+            "load": [{"type": "traction", "where": {"axis": "x", "at": 2.0}, "value": [sigma, 0.0, 0.0]}],
+            "output": {"picture": False, "probes": {"corner": [2.0, 1.0, 0.5]}}}
+
+
+def strains(material: dict, sigma=SIGMA) -> np.ndarray:
+    s = ff.solve_static(ff.Scene.from_dict(pulled_block(material, sigma))).summary()
+    assert s["converged"]
+    return np.array(s["probes"]["corner"]["displacement"]) / np.array([2.0, 1.0, 0.5])
+
+
+def compliance() -> np.ndarray:
+    """The 3 x 3 normal block of the compliance in the material axes (textbook form)."""
+    E = [ORTHO["E1"], ORTHO["E2"], ORTHO["E3"]]
+    nu = {(0, 1): ORTHO["nu12"], (0, 2): ORTHO["nu13"], (1, 2): ORTHO["nu23"]}
+    S = np.diag([1 / e for e in E])
+    for (i, j), v in nu.items():
+        S[i, j] = S[j, i] = -v / E[i]
+    return S
+
+
+# (axis1, axis2) and the material axis that lies along x, then along y and z
+TURNS = [(([1, 0, 0], [0, 1, 0]), (0, 1, 2)),
+         (([0, 1, 0], [1, 0, 0]), (1, 0, 2)),
+         (([0, 1, 0], [0, 0, 1]), (2, 0, 1))]
+
+
+@pytest.mark.parametrize("axes, order", TURNS)
+def test_orthotropic_uniaxial_tension_along_each_axis(axes, order):
+    eps = strains({"model": "orthotropic", **ORTHO, "axis1": axes[0], "axis2": axes[1]})
+    S = compliance()
+    along = order[0]
+    expected = [S[along, k] * SIGMA for k in order]             # global x, y, z strains
+    assert eps == pytest.approx(expected, rel=1e-9)
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"nu12": 1.3}, r"\|nu12\| must be below sqrt\(E1 / E2\)"),
+    ({"E1": 1e9, "E2": 1e9, "E3": 1e9, "nu12": 0.7, "nu13": 0.7, "nu23": 0.7}, "indefinite"),
+    ({"G13": 0.0}, "G13 = 0.0: must be positive"),
+    ({"axis2": [1.0, 1.0, 0.0]}, "must be perpendicular to axis1"),
+    ({"E": 1e9}, "not for model = 'orthotropic'"),
+])
+def test_orthotropic_constants_that_are_not_positive_definite_are_refused(change, message):
+    material = {"model": "orthotropic", **ORTHO, "axis1": [1, 0, 0], "axis2": [0, 1, 0], **change}
+    with pytest.raises(InputError, match=message):
+        ff.solve_static(ff.Scene.from_dict(pulled_block(material)))
+
+
+E_M, NU_M, E_F = 1.0e6, 0.3, 4.0e6
+
+
+@pytest.mark.parametrize("kind", ["holzapfel", "quadratic"])
+def test_a_bar_is_stiff_along_its_fibres_and_soft_across(kind):
+    sigma = 50.0                                                   # strain 1e-5: small-strain closed forms
+    along = strains({"model": "neo-hookean", "E": E_M, "nu": NU_M,
+                     "fibers": {"direction": [1.0, 0.0, 0.0], "E": E_F, "model": kind}}, sigma)
+    assert along[0] == pytest.approx(sigma / (E_M + E_F), rel=1e-4)
+    assert along[1] == pytest.approx(-NU_M * sigma / (E_M + E_F), rel=1e-4)
+    across = strains({"model": "neo-hookean", "E": E_M, "nu": NU_M,
+                      "fibers": {"direction": [0.0, 1.0, 0.0], "E": E_F, "model": kind}}, sigma)
+    assert across[0] == pytest.approx(sigma / E_M, rel=1e-4)       # fibres along y shorten: inactive
+
+
+def test_fibres_stiffen_the_layers_they_reinforce_in_tension_only():
+    """The cantilever of test_materials, all soft (nu = 0), with fibres along x in some layers:
+    - a sandwich whose outer thirds are reinforced, stretched along x by its ends, pulls back with
+      strain (E_soft + 2/3 E_f) B H (each layer carries its share);
+    - fibres in the lower half, which the tip load shortens, carry nothing: the beam bends as a homogeneous
+      soft one, P L^3 / (3 E_soft B H^3 / 12)."""
+    from system import test_materials as tm
+    fibers = {"direction": [1.0, 0.0, 0.0], "E": E_F}
+    soft = {"model": "neo-hookean", "E": tm.E_SOFT, "nu": 0.0, "rho": 1000.0}
+    d = tm.layered(cells=(8, 1, 6))
+    d["material"] = [{"name": "core", **soft},
+                     {"name": "skin_low", **soft, "fibers": fibers,
+                      "where": {"box": [[0, 0, 0], [tm.L, tm.B, tm.H / 3]]}},
+                     {"name": "skin_high", **soft, "fibers": fibers,
+                      "where": {"box": [[0, 0, 2 * tm.H / 3], [tm.L, tm.B, tm.H]]}}]
+    strain = 1e-4
+    d["load"] = []
+    d["fix"].append({"name": "pull", "where": {"axis": "x", "at": tm.L}, "value": [strain * tm.L, 0.0, 0.0]})
+    s = ff.solve_static(ff.Scene.from_dict(d)).summary()
+    force = strain * (tm.E_SOFT + 2 / 3 * E_F) * tm.B * tm.H           # plane sections: every layer at `strain`
+    assert s["reactions"]["pull"][0] == pytest.approx(force, rel=1e-4)
+    d = tm.layered("neo-hookean", "neo-hookean")
+    d["material"][1].update({"E": tm.E_SOFT, "fibers": fibers})
+    s = ff.solve_static(ff.Scene.from_dict(d)).summary()
+    EI_soft = tm.E_SOFT * tm.B * tm.H ** 3 / 12
+    assert -s["probes"]["tip"]["displacement"][2] == pytest.approx(tm.P * tm.L ** 3 / (3 * EI_soft), rel=0.01)
