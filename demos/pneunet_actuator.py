@@ -3,14 +3,15 @@
 A silicone body 100 x 20 x 15 mm (neo-Hookean, E = 100 kPa, nu = 0.49) with six chambers joined by a channel
 (one closed cavity, demos/geometry/pneunet.py) is clamped at x = 0 and inflated by injecting air: the scene
 prescribes the injected volume and the solver finds the chamber pressure with the displacement. The upper
-part lengthens, the solid base layer does not: the actuator curls down. The tip angle is the rotation about
+part lengthens, the solid base does not (its lowest 2 mm a ten times stiffer silicone, a second [[material]]
+on the mesh's volume group "layer"): the actuator curls down. The tip angle is the rotation about
 y of the end face, from two probes at its top and bottom edges.
 
 One point per accepted load step: from probes.csv when the static run writes it (`<probe>_ux..`, `chambers_
 pressure`, `chambers_volume`), else recorded here after each accepted step. Run:
 `.venv/bin/python demos/pneunet_actuator.py [OUT_DIR] [H]` (H the cell size in m, default 0.006). Writes
 the mesh, results.json, fields.xdmf (every step), curve.csv, curve.png (tip angle and pressure against
-injected volume) and stroke.gif (the deformed actuator at every accepted step, true scale).
+injected volume; tip angle against pressure) and stroke.gif (the deformed actuator at every accepted step, true scale).
 """
 import csv
 import math
@@ -70,7 +71,7 @@ def from_probes_csv(path: Path, v0: float) -> list:
 ff.quiet_jit()
 if comm.rank == 0:
     out.mkdir(parents=True, exist_ok=True)
-    pneunet.build(out / "pneunet.msh", h)
+    pneunet.build(out / "pneunet.msh", h, layer=pneunet.LAYER)
 comm.barrier()
 scene = ff.Scene.from_file(here / "scenes" / "pneunet.toml", overrides={"mesh.file": str(out / "pneunet.msh")})
 model, rows, frames = build_model(scene), [], []
@@ -92,7 +93,7 @@ if comm.rank == 0:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(6, 4))
+    fig, (ax, ax3) = plt.subplots(1, 2, figsize=(10, 4))
     ax.plot(curve[:, 0] * 1e6, curve[:, 2], "o-", color="C0")
     ax.set_xlabel("injected volume [ml]")
     ax.set_ylabel("tip angle [deg]", color="C0")
@@ -100,6 +101,10 @@ if comm.rank == 0:
     ax2.plot(curve[:, 0] * 1e6, curve[:, 1] / 1e3, "s--", color="C3")
     ax2.set_ylabel("chamber pressure [kPa]", color="C3")
     ax.set_title(scene.title, fontsize=9)
+    ax3.plot(curve[:, 1] / 1e3, curve[:, 2], "o-", color="C2")      # what a pressure regulator would set
+    ax3.set_xlabel("chamber pressure [kPa]")
+    ax3.set_ylabel("tip angle [deg]")
+    ax3.set_title("tip angle against pressure", fontsize=9)
     fig.tight_layout()
     fig.savefig(out / "curve.png", dpi=120)
     write_gif(out / "stroke.gif", frames, "PneuNet", fps=8, label="{:.1f} ml injected")

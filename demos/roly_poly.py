@@ -8,6 +8,10 @@ that centre. Solid, the CoM is above it (the toy falls over); `goal = "swing"` f
 contact region (the rocking surface), then carves the interior (a 3 mm wall kept) so that the CoM lies on
 the vertical through the sphere's centre and at least R sin(5 deg) below it, with the largest righting
 moment m g d sin(tilt). Prints the rocking centre and radius and the CoM's depth below the centre.
+
+A toy 5 cm tall cannot be saved by hollowing (the wall alone holds the CoM too high); with
+`fill_density = 7850` the carved cavity is filled with steel (its surface: ballast/void.stl), a ballast
+that brings the CoM below the centre again.
 """
 from pathlib import Path
 import sys
@@ -15,6 +19,9 @@ import sys
 import fem_forms as ff
 from fem_forms.analyses import run_analysis
 from fem_forms.meshes.occ_parts import write_part
+
+
+STEEL = 7850.0            # kg/m^3: the ballast filling the carved cavity of the taller toy
 
 
 def toy(occ, R: float = 0.05, H: float = 0.04) -> list:
@@ -40,6 +47,15 @@ def main(out: Path) -> None:
           f"{d['com_offset_from_center_vertical']:.3e} m, mass {d['mass']:.6f} kg, carved fraction "
           f"{d['carved_fraction']:.4f}")
     print(f"picture: {out / 'swing' / 'balance.png'}")
+    # a taller toy (H = 5 cm): no hollowing brings its CoM low enough; a steel ballast in a carved cavity does
+    tall = {**scene, "title": "tall roly-poly, steel ballast",
+            "mesh": {"generator": "file", "file": str(write_part(out / "tall.msh", lambda occ: toy(occ, H=0.05),
+                                                                   0.006))},
+            "balance": {**scene["balance"], "fill_density": STEEL}}
+    d = run_analysis(ff.Scene.from_dict(tall), out / "ballast")
+    print(f"ballasted (H = 5 cm, steel {STEEL:.0f} kg/m^3 in the cavity): CoM depth below the centre "
+          f"{d['com_depth_below_center']:.6f} m, off its vertical {d['com_offset_from_center_vertical']:.3e} m, "
+          f"mass {d['mass']:.6f} kg, ballast fraction {d['carved_fraction']:.4f} -> {out / 'ballast' / 'void.stl'}")
 
 
 if __name__ == "__main__":

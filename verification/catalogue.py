@@ -11,7 +11,7 @@ from time_histories import (cantilever_tip_static, damped_fit, first_mode_share,
                             rayleigh_decay_per_cycle, rayleigh_zeta)
 import targets
 from targets import uniaxial_neo_hookean, hydrostatic_neo_hookean, cantilever_gravity_sag, cantilever_frequency, bar_conduction, thick_sphere_outer_displacement
-from targets import ogden_sphere_maximum, ogden_sphere_pressure
+from targets import ogden_sphere_maximum, ogden_sphere_pressure, bimetal_curvature
 
 
 class NotAvailable(Exception):
@@ -255,6 +255,14 @@ CASES = [
          [Row("tip sag -u_z at (1, 0.025, 0.025)", lambda r: cantilever_gravity_sag(),
               lambda r, ref: -probe("tip", "displacement", 2)(r, ref), 0.01, "m")],
          notes="P2 tetrahedra 20x2x2; the clamp's local 3-D effects and the mesh are inside 1 %."),
+    Case("bimetal_strip", "Steel-brass bimetal strip heated uniformly by 100 K (two materials)",
+         "S. Timoshenko, Analysis of bi-metal thermostats, J. Opt. Soc. Am. 11 (1925) 233-255",
+         "bimetal_strip.toml",
+         [Row("tip deflection -u_z = kappa L^2 / 2",
+              bimetal_curvature(0.001, 0.001, 2e11, 1e11, 1.2e-5, 1.9e-5, 100.0) * 0.1**2 / 2,
+              lambda r, ref: -probe("tip", "displacement", 2)(r, ref), 0.01, "m")],
+         notes="[[material]] steel below (box), brass above (the rest); linear, nu = 0; Q2 hexahedra 25x1x4, one "
+               "layer of cells per 0.5 mm; the temperature is the steady solution with one end held at 100 K."),
     Case("modal_cantilever", "Cantilever bending frequencies, modes 1-2 in y and z",
          "Euler-Bernoulli, 1 + cos(bL) cosh(bL) = 0 (Blevins, Formulas for Natural Frequency and Mode "
          "Shape, Van Nostrand Reinhold, 1979, table 8-1)", "modal_cantilever.toml",

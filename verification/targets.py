@@ -38,6 +38,13 @@ def cantilever_gravity_sag(L=1.0, h=0.05, E=1e9, rho=1000.0, g=9.81) -> float:
     return w * L**4 / (8 * E * I) + w * L**2 / (2 * (5 / 6) * (E / 2) * A)
 
 
+def bimetal_curvature(h1: float, h2: float, E1: float, E2: float, a1: float, a2: float, dT: float) -> float:
+    """Timoshenko (1925), Analysis of bi-metal thermostats, J. Opt. Soc. Am. 11, 233: curvature of a strip
+    of layer 1 (thickness h1, below) on layer 2 (h2) heated uniformly by dT."""
+    m, n, h = h1 / h2, E1 / E2, h1 + h2
+    return 6 * (a2 - a1) * dT * (1 + m)**2 / (h * (3 * (1 + m)**2 + (1 + m * n) * (m**2 + 1 / (m * n))))
+
+
 def cantilever_frequency(mode: int, L=1.0, t=0.025, E=1e8, rho=1000.0) -> float:
     """Euler-Bernoulli clamped-free bending frequency of mode 1, 2, ... (square section t x t)."""
     return cantilever_beta_l(mode)**2 / (2 * math.pi * L**2) * math.sqrt(E * t**2 / 12 / rho)

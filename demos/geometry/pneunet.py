@@ -4,8 +4,10 @@ A silicone body L x W x H (x along the length, z up) with six chambers in its up
 channel along x at the chambers' floor; chambers and channel are cut out of the body as one closed cavity
 (no inlet: the cavity never opens to the outside). Below the chambers a solid layer of thickness `base` is
 the stiff side that does not stretch: inflating the chambers lengthens the top, and the actuator curls
-down towards its base. Named groups: surfaces "cavity" (every chamber and channel wall), "clamp" (x = 0),
-"outer" (the rest of the outside), volume "body".
+down towards its base. With `layer` > 0 the lowest `layer` metres of the base are a volume of their own
+(a harder silicone, a fabric: the strain-limiting layer, given its own [[material]]). Named groups: surfaces
+"cavity" (every chamber and channel wall), "clamp" (x = 0), "outer" (the rest of the outside), volumes
+"body" and (with a layer) "layer".
 
     python demos/geometry/pneunet.py [--h 0.003] [--out pneunet.msh]
 """
@@ -20,6 +22,8 @@ L, W, H = 0.100, 0.020, 0.015
 # (2 mm side and top walls with a 4 mm base balloon past their pressure maximum at 11.7 kPa and 73 degrees)
 CHAMBERS, CHAMBER_X, PITCH, FIRST_X = 6, 0.010, 0.014, 0.010
 SIDE, TOP, BASE = 0.003, 0.0025, 0.006
+# the strain-limiting layer of the demo: the lowest 2 mm of the base, a harder silicone
+LAYER = 0.002
 # channel joining the chambers: 4 mm wide, 2 mm high, on the chambers' floor, from the first to the last
 CHANNEL_W, CHANNEL_H = 0.004, 0.002
 
@@ -34,9 +38,10 @@ def chamber_boxes(occ, side: float = SIDE, top: float = TOP, base: float = BASE)
     return boxes
 
 
-def build(out: Path, h: float = 0.003, **walls: float) -> Path:
-    """Write the actuator's tetrahedral mesh (cell size about h, metres) to `out`; `walls`: side, top, base
-    thicknesses other than the defaults."""
+def build(out: Path, h: float = 0.003, layer: float = 0.0, **walls: float) -> Path:
+    """Write the actuator's tetrahedral mesh (cell size about h, metres) to `out`; `layer`: the thickness of
+    a bottom layer meshed as a volume group of its own (0: none); `walls`: side, top, base thicknesses other
+    than the defaults."""
     gmsh.initialize()
     try:
         gmsh.option.setNumber("General.Terminal", 0)
@@ -45,14 +50,19 @@ def build(out: Path, h: float = 0.003, **walls: float) -> Path:
         boxes = chamber_boxes(occ, **walls)
         cavity, _ = occ.fuse(boxes[:1], boxes[1:])          # one cavity: chambers joined by the channel
         body, _ = occ.cut([(3, occ.addBox(0, 0, 0, L, W, H))], cavity)
-        occ.synchronize()
         assert len(body) == 1, f"expected one solid, got {body}"
-        volume = body[0][1]
-        gmsh.model.addPhysicalGroup(3, [volume], 1)
-        gmsh.model.setPhysicalName(3, 1, "body")
-        names = {}
+        if layer > 0:                                # split off the bottom layer, bonded (one conforming mesh)
+            parts, _ = occ.fragment(body, [(3, occ.addBox(0, 0, 0, L, W, layer))])
+            body = [p for p in parts if p[0] == 3]
+        occ.synchronize()
         eps = 1e-5                                   # OCC pads bounding boxes by about 1e-7
-        for _, s in gmsh.model.getBoundary([(3, volume)], oriented=False):
+        lower = [t for _, t in body if gmsh.model.getBoundingBox(3, t)[5] < layer + eps]
+        upper = [t for _, t in body if t not in lower]
+        for k, (name, tags) in enumerate((("body", upper), ("layer", lower))):
+            if tags:
+                gmsh.model.setPhysicalName(3, gmsh.model.addPhysicalGroup(3, tags, 1 + k), name)
+        names = {}
+        for _, s in gmsh.model.getBoundary(body, oriented=False):      # of the union: no interface
             x0, y0, z0, x1, y1, z1 = gmsh.model.getBoundingBox(2, s)
             if x1 < eps:
                 names[s] = "clamp"
@@ -75,6 +85,7 @@ def build(out: Path, h: float = 0.003, **walls: float) -> Path:
 if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--h", type=float, default=0.003)
+    ap.add_argument("--layer", type=float, default=0.0)
     ap.add_argument("--out", type=Path, default=Path("pneunet.msh"))
     args = ap.parse_args()
-    print(build(args.out, args.h))
+    print(build(args.out, args.h, args.layer))

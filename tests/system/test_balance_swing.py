@@ -14,10 +14,11 @@ R, MARGIN = 0.05, 5.0
 CHORD = 0.015            # straight-sided tetrahedra inscribed in the sphere (h = 6 mm): CoM within 1.5 %
 
 
-def run(tmp_path, mesh):
+def run(tmp_path, mesh, fill_density=0.0):
     d = {"title": "roly-poly", "analysis": "balance", "mesh": {"generator": "file", "file": str(mesh)},
          "material": {"model": "neo-hookean", "E": 1e6, "nu": 0.3, "rho": 1000.0},
-         "balance": {"goal": "swing", "shell": 0.003, "contact_tolerance": 0.01, "margin_angle": MARGIN}}
+         "balance": {"goal": "swing", "shell": 0.003, "contact_tolerance": 0.01, "margin_angle": MARGIN,
+                     "fill_density": fill_density}}
     tmp_path.mkdir(parents=True, exist_ok=True)
     return helpers.run_scene(tmp_path, d)
 
@@ -55,3 +56,20 @@ def test_roly_poly_carved_to_swing_back(tmp_path):
 def test_too_tall_to_swing_exits_3(tmp_path):
     code, d, _, _ = run(tmp_path, balance_shapes.roly_poly(tmp_path / "tall.msh", R=R, H=0.1, h=0.008))
     assert code == 3 and d is None
+
+
+def test_a_steel_ballast_rights_a_roly_poly_that_hollowing_cannot(tmp_path):
+    """H = 5 cm: no hollowing brings the CoM low enough (exit 3); carving the bottom and filling the cavity
+    with steel (fill_density 7800 > rho) does, and the mass is the shell's plus the ballast's."""
+    H, STEEL = 0.05, 7800.0
+    mesh = balance_shapes.roly_poly(tmp_path / "rp.msh", R=R, H=H, h=0.008)
+    code, d, _, _ = run(tmp_path / "hollow", mesh)
+    assert code == 3 and d is None
+    code, d, _, _ = run(tmp_path / "ballast", mesh, fill_density=STEEL)
+    assert code == 0
+    c = np.array(d["center_of_mass"])
+    assert -c[2] >= R * math.sin(math.radians(MARGIN)) * (1 - 1e-6)
+    volume = 2 / 3 * math.pi * R**3 + math.pi * R * R * H
+    f = d["carved_fraction"]
+    assert 0 < f < 1
+    assert d["mass"] == pytest.approx(volume * (1000.0 * (1 - f) + STEEL * f), rel=CHORD)

@@ -102,6 +102,13 @@ def test_roly_poly_demo(demo):
     assert height > 0 and depth >= R * math.sin(math.radians(5.0)) - 1e-6
     assert offset <= _band(math.sqrt(2 * (2 * R)**2 + (R + H)**2))
     assert (out / "swing" / "balance.png").stat().st_size > 0
+    # the taller toy (H = 5 cm, beyond hollowing: tests/system/test_balance_swing.py) righted by steel
+    depth, _, mass, f = grab(rf"ballasted .*CoM depth below the centre ({NUMBER}) m, off its vertical ({NUMBER}) m, "
+                             rf"mass ({NUMBER}) kg, ballast fraction ({NUMBER})", text)
+    assert depth >= R * math.sin(math.radians(5.0)) - 1e-6
+    volume = 2 / 3 * math.pi * R**3 + math.pi * R * R * 0.05
+    assert mass == pytest.approx(volume * (1200.0 * (1 - f) + 7850.0 * f), rel=0.015)      # chords: 1.5 %
+    assert (out / "ballast" / "void.stl").stat().st_size > 0
 
 
 def test_soft_figure_demo(demo):

@@ -11,7 +11,7 @@ BASE = {"mesh": {"cells": [4, 1, 1]}, "material": {"E": 1e6, "nu": 0.3, "rho": 1
 # tables an analysis cannot run without, and keys a table needs beyond its required ones (cross-key rules)
 HEATED_END = {"boundary": [{"where": {"axis": "x", "at": 0.0}, "temperature": 1.0}]}
 NEEDS = {"thermal": {"thermal": {"conductivity": 1.0, "specific_heat": 1.0, **HEATED_END}}}
-COMPLETE = {"thermal": {**HEATED_END, "specific_heat": 1.0}, "contact": {"self": True}}
+COMPLETE = {"thermal": {**HEATED_END, "conductivity": 1.0, "specific_heat": 1.0}, "contact": {"self": True}}
 # tables of other sections a section needs in one analysis (balance reads [contact] with elastic = true only)
 ALONG = {("balance", "contact"): {"balance": {"elastic": True}}}
 REQUIRED = {"vector": [0.0, 0.0, 1.0], "number": 1.0, "integer": 1, "string": "a"}

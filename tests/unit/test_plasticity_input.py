@@ -61,5 +61,5 @@ def test_plasticity_is_refused_outside_static_and_dynamic():
 
 
 def test_schema_lists_the_plasticity_keys():
-    keys = scene_schema()["properties"]["material"]["properties"]["plasticity"]["properties"]
+    keys = scene_schema()["properties"]["material"]["oneOf"][0]["properties"]["plasticity"]["properties"]
     assert set(keys) == {"model", "yield_stress", "hardening", "elastic_limit", "plastic_limit"}

@@ -32,6 +32,9 @@ def table_schema(section: Section) -> dict:
         # a narrower declaration of a table another analysis owns (thermal's [dynamic]): in its analysis's rule
         s = next(r["then"]["properties"][section.name] for r in SCHEMA["allOf"]
                  if section.name in r["then"].get("properties", {}))
+    if section.either:                           # [material]: a table, or an array of the same tables
+        assert s["oneOf"][1]["items"] == s["oneOf"][0]
+        return s["oneOf"][0]
     return s["items"] if section.array else s
 
 
@@ -117,7 +120,7 @@ def test_schema_defaults_equal_the_parsed_defaults(tmp_path):
     for section in all_sections():
         for data, keys in minimal_cases(section, tmp_path):
             spec = section.parse([data] if section.array else data, tmp_path)
-            spec = spec[0] if section.array else spec
+            spec = spec[0] if section.array or section.either else spec
             flat = [sub for k in keys for sub in (k.keys if k.kind == "table" else (k,))]
             for k in flat:
                 if not k.required and k.default is not None and k.name not in data:
@@ -127,6 +130,7 @@ def test_schema_defaults_equal_the_parsed_defaults(tmp_path):
     assert scene.analysis == SCHEMA["properties"]["analysis"]["default"]
     assert scene.discretization.degree == table_schema(CORE_SECTIONS[2])["properties"]["degree"]["default"]
     assert scene.mesh.size == SCHEMA["properties"]["mesh"]["properties"]["size"]["default"]
+    assert scene.material.model == table_schema(CORE_SECTIONS[1])["properties"]["model"]["default"]
 
 
 @pytest.mark.parametrize("path", SCENE_FILES, ids=[p.name for p in SCENE_FILES])

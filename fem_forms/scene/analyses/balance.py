@@ -26,7 +26,8 @@ COMMON_KEYS = (
     Key("elastic", "boolean", "evaluate and design on the shape deformed under gravity (held by [[fix]] or "
         "resting on a [contact] floor)",
         default=False),
-    Key("fill_density", "number", "density of carved cells (0: empty; else a second, lighter material)",
+    Key("fill_density", "number", "density of carved cells (0: empty; below rho a lighter fill; above rho a "
+        "ballast, e.g. steel shot or lead in a hollow)",
         default=0.0, unit="kg/m^3", minimum=0),
     Key("fill_stiffness", "number", "elastic: Young's modulus of the carved cells over the solid's, E_fill / E "
         "(the solid's energy density scaled: same model and Poisson ratio); required when fill_density > 0",
@@ -92,9 +93,9 @@ def _check(scene) -> None:
                          "[material] table)")
     if scene.material.rho <= 0:
         raise InputError("material.rho: balance design needs a positive density")
-    if b.fill_density >= scene.material.rho and b.goal != "check":
-        raise InputError(f"balance.fill_density = {b.fill_density}: must be below material.rho "
-                         f"({scene.material.rho}) to move mass by carving")
+    if b.fill_density == scene.material.rho and b.goal != "check":
+        raise InputError(f"balance.fill_density = {b.fill_density}: equals material.rho: carving would move "
+                         "no mass (lighter fills hollow the part, heavier ones ballast it)")
     if b.goal == "swim" and b.waterline is None:
         raise InputError("balance.waterline: missing (required for goal = 'swim')")
     if b.elastic and b.fill_density > 0 and b.fill_stiffness is None:
