@@ -21,6 +21,7 @@ from fem_forms.output.quantities import Quantities
 from fem_forms.output.guard import attempt
 from fem_forms.output.reactions import reaction_report
 from fem_forms.physics import rigid_motion
+from fem_forms.physics.histories import piecewise_linear
 from fem_forms.scene import Scene
 from fem_forms.physics.path_constraint import ArcLength
 from fem_forms.solvers import arc_length, continuation, snes
@@ -135,9 +136,10 @@ def load_path(model: Model) -> tuple:
     dynamic analysis), prescribed displacements still scale with lambda, and every history corner is a
     step end."""
     timed = [t for t in model.loads if t.history]
+    held = [(i, f) for i, f in enumerate(model.scene.fix) if f.history]   # supports following their own history
     for t in model.loads:                     # every load's own factor at 1, as a new model has it (the rest-
         t.factor.value = 1.0                  # state checks see the full loads): none is left where an earlier
-    if not timed:                             # run of this model put it; set_load moves them along the histories
+    if not timed and not held:                # run of this model put it; set_load moves them along the histories
         contact = model.terms.with_role("contact")
         if not contact:
             return model.load.set, ()
@@ -147,13 +149,18 @@ def load_path(model: Model) -> tuple:
             for term in contact:
                 term.update(lam)
         return set_factor, ()
-    t_end = max(t.history[-1][0] for t in timed)
+    histories = [t.history for t in timed] + [f.history for _, f in held]
+    t_end = max(h[-1][0] for h in histories)
 
     def set_load(lam: float) -> None:
         model.load.set(lam)
         model.load.constant.value = 1.0
+        for i, fix in held:
+            factor = piecewise_linear(fix.history, lam * t_end)
+            for c in fix.components:
+                model.load.set_one((i, c), factor)
         model.terms.update(lam * t_end)
-    stops = tuple(sorted({p[0] / t_end for t in timed for p in t.history if 0 < p[0] < t_end}))
+    stops = tuple(sorted({p[0] / t_end for h in histories for p in h if 0 < p[0] < t_end}))
     return set_load, stops
 
 
@@ -196,8 +203,9 @@ def follow_path(model: Model, load_scale: float, linear_kind: str,
 def load_span(model: Model) -> float:
     """The pseudo-time at load factor 1: the span of the [[load]] histories (time = lambda x span, as
     `load_path` moves the loads), 1 without any history (time = the load factor)."""
-    timed = [t for t in model.loads if t.history]
-    return max(t.history[-1][0] for t in timed) if timed else 1.0
+    spans = [t.history[-1][0] for t in model.loads if t.history] + [f.history[-1][0] for f in model.scene.fix
+                                                                     if f.history]
+    return max(spans) if spans else 1.0
 
 
 def solve_static(scene: Scene, material=None, model: Model | None = None,

@@ -11,7 +11,7 @@ from time_histories import (cantilever_tip_static, damped_fit, first_mode_share,
                             rayleigh_decay_per_cycle, rayleigh_zeta)
 import targets
 from targets import uniaxial_neo_hookean, hydrostatic_neo_hookean, cantilever_gravity_sag, cantilever_frequency, bar_conduction, thick_sphere_outer_displacement
-from targets import ogden_sphere_maximum, ogden_sphere_pressure, bimetal_curvature
+from targets import ogden_sphere_maximum, ogden_sphere_pressure, bimetal_curvature, prony_relaxation
 
 
 class NotAvailable(Exception):
@@ -263,6 +263,14 @@ CASES = [
               lambda r, ref: -probe("tip", "displacement", 2)(r, ref), 0.01, "m")],
          notes="[[material]] steel below (box), brass above (the rest); linear, nu = 0; Q2 hexahedra 25x1x4, one "
                "layer of cells per 0.5 mm; the temperature is the steady solution with one end held at 100 K."),
+    Case("prony_relaxation", "Stress relaxation of a two-term Prony bar held at constant stretch for 3 s",
+         "linear viscoelasticity, the Prony series of the relaxation modulus (W. N. Findley, J. S. Lai, K. Onaran, "
+         "Creep and Relaxation of Nonlinear Viscoelastic Materials, North-Holland, 1976, ch. 5)",
+         "prony_relaxation.toml",
+         [Row("held force at t = 3 s", 1e6 * 1e-4 * 0.01 * prony_relaxation(3.0, 0.001, [[0.3, 0.01], [0.2, 1.0]]),
+              lambda r, ref: float(r["reactions"]["pull"][0]), 1e-6, "N")],
+         notes="g = 0.3, 0.2; tau = 0.01 s, 1 s; ramp 1 ms; Simo's recursive update is exact for a strain linear "
+               "in time over each step, so the force is right to round-off whatever the (adaptive) load steps."),
     Case("modal_cantilever", "Cantilever bending frequencies, modes 1-2 in y and z",
          "Euler-Bernoulli, 1 + cos(bL) cosh(bL) = 0 (Blevins, Formulas for Natural Frequency and Mode "
          "Shape, Van Nostrand Reinhold, 1979, table 8-1)", "modal_cantilever.toml",

@@ -45,6 +45,14 @@ def bimetal_curvature(h1: float, h2: float, E1: float, E2: float, a1: float, a2:
     return 6 * (a2 - a1) * dT * (1 + m)**2 / (h * (3 * (1 + m)**2 + (1 + m * n) * (m**2 + 1 / (m * n))))
 
 
+def prony_relaxation(t: float, t_r: float, prony: list) -> float:
+    """Relaxation of a strain ramped over t_r then held, over its instantaneous elastic value (linear
+    viscoelasticity with the Prony series [[g_i, tau_i], ...]: W. N. Findley, J. S. Lai, K. Onaran, Creep and
+    Relaxation of Nonlinear Viscoelastic Materials, North-Holland, 1976, ch. 5)."""
+    g_inf = 1 - sum(g for g, _ in prony)
+    return (g_inf * t_r + sum(g * tau * (math.exp(-(t - t_r) / tau) - math.exp(-t / tau)) for g, tau in prony)) / t_r
+
+
 def cantilever_frequency(mode: int, L=1.0, t=0.025, E=1e8, rho=1000.0) -> float:
     """Euler-Bernoulli clamped-free bending frequency of mode 1, 2, ... (square section t x t)."""
     return cantilever_beta_l(mode)**2 / (2 * math.pi * L**2) * math.sqrt(E * t**2 / 12 / rho)

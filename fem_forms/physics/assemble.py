@@ -24,6 +24,7 @@ from fem_forms.physics.regions import MaterialRegions
 from fem_forms.physics import quadrature
 from fem_forms.physics.plastic import plastic_term
 from fem_forms.elements import check_degree
+from fem_forms.physics.viscoelastic import ViscoelasticSolid
 from fem_forms.physics.supports import LoadFactor, body_regions, load_regions, supports
 from fem_forms.physics.terms import Context, LOAD_TERMS, SCENE_TERMS, Term, TermList
 from fem_forms.scene import Scene
@@ -86,6 +87,9 @@ def declare_terms(scene: Scene, material: Material, mesh, model_name: str | None
     plastic = scene.material.plasticity if model_name in (None, scene.material.model) else None
     if plastic is not None:
         solid = plastic_term(material, plastic, scene.material.model, mesh, scene.discretization.quadrature)
+    elif scene.material.prony is not None and model_name in (None, scene.material.model):
+        solid = ViscoelasticSolid(material, scene.material.model, scene.material.prony, mesh,
+                                  scene.discretization.quadrature)
     else:
         solid = ElasticEnergy(material, model_name or scene.material.model, binding)
     terms: list[Term] = [solid]

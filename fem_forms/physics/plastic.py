@@ -118,7 +118,7 @@ class PlasticSolid(Solid):
         """Register the history with the State: commit() evaluates the new history at the accepted u."""
         eps_p, alpha = self.new_history(ctx)
         for f, expr in ((self.eps_p, eps_p), (self.alpha, alpha)):
-            state.add_history(f.name, f, _evaluator(f, expr, self.points))
+            state.add_history(f.name, f, quadrature_update(f, expr, self.points))
 
     def outside_theory(self, ctx: Context) -> str | None:
         """Small strain only: a displacement gradient above 1 somewhere is no small-strain answer (past the
@@ -299,7 +299,7 @@ def plastic_term(material, plastic, model_name: str, mesh, degree: int) -> Plast
     return cls(material, plastic, model_name, mesh, degree, green=model_name in ("stvk", "neo-hookean"))
 
 
-def _evaluator(f: fem.Function, expr, points: np.ndarray):
+def quadrature_update(f: fem.Function, expr, points: np.ndarray):
     """update() for State.add_history: expr at the quadrature points of every local cell, laid out in
     f's array through its dofmap (cell by cell, point by point, components innermost)."""
     V = f.function_space

@@ -146,6 +146,11 @@ class LoadFactor:
         for c, v in self._scaled.values():
             c.value = lam * v
 
+    def set_one(self, key, factor: float) -> None:
+        """One scaled Constant at factor x its full value (a support following its own history)."""
+        c, v = self._scaled[key]
+        c.value = factor * v
+
 
 def supports(V: fem.FunctionSpace, loaded: LoadedMesh, fixes: list[Fix], load: LoadFactor,
              sign: float = 1.0, owners: list | None = None) -> list:

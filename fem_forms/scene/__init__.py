@@ -18,7 +18,7 @@ from fem_forms.scene.analyses.inverse import InverseSpec
 from fem_forms.scene.analyses.modal import ModalSpec, SoundSpec
 from fem_forms.scene.analyses.thermal_section import ThermalSpec
 from fem_forms.scene.cavities import cavity_rules
-from fem_forms.scene.materials import MaterialSpec
+from fem_forms.scene.materials import MaterialSpec, viscoelastic_rules
 from fem_forms.scene.files import parse_assignment, read_toml, set_key
 from fem_forms.scene.reader import AXES, Key, Section, Table, Variants, check_number, check_vector
 from fem_forms.scene.registry import ANALYSIS_KEY
@@ -104,10 +104,14 @@ def _parse_scene(data: dict, base_dir: Path, source: Path | None) -> Scene:
                          f"{slow.model!r} (its Taylor-Hood tangent takes minutes to compile with FFCx 0.5); "
                          "use neo-hookean, mooney-rivlin, stvk or linear for mixed, or formulation = 'displacement'")
     fix_names(sc.fix)                                  # repeated support names are refused here
+    timed = next((i for i, f in enumerate(sc.fix) if f.history is not None), None)
+    if timed is not None and sc.analysis != "static":
+        raise InputError(f"fix[{timed}].history: for analysis = 'static' only (this scene's is {sc.analysis!r})")
     cavity_rules(sc.load, sc.analysis, sc.solver.control)
     prism_rules(sc.mesh, sc.discretization, sc.load, sc.analysis)
     quadrature_rules(sc.mesh, sc.discretization)
     plasticity_rules(sc)
+    viscoelastic_rules(sc)
     if any(ld.type == "gravity" for ld in sc.load) and max(m.rho for m in sc.materials) <= 0:
         raise InputError("material.rho: gravity needs a positive density")
 

@@ -48,6 +48,11 @@ MATERIAL_KEYS = (
             default="holzapfel", choices=FIBER_MODELS, attr="fiber_model"),
         Key("k2", "number", "holzapfel: exponential stiffening (dimensionless)", default=1.0,
             exclusive_minimum=0, attr="fiber_k2"))),
+    Key("viscoelastic", "table", "finite-strain generalized Maxwell (Simo 1987): the stress relaxes from its "
+        "instantaneous value (E) to g_inf = 1 - sum g_i of it; static, with a load or support history (its "
+        "pseudo-time is then time)", keys=(
+            Key("prony", "points", "[g_i, tau_i] pairs: relative modulus and relaxation time", unit="-, s",
+                length=2, min_items=1, attr="prony", note="must list [g, tau] pairs"),)),
     PLASTICITY,
 )
 _MAT = {k.name: k for k in MATERIAL_KEYS}
@@ -84,6 +89,7 @@ class MaterialSpec:
     fiber_E: float | None = None
     fiber_model: str = "holzapfel"
     fiber_k2: float = 1.0
+    prony: list | None = None
     plasticity_model: str | None = None
     yield_stress: float | None = None
     hardening: float = _PLASTIC["hardening"].field()
@@ -122,6 +128,7 @@ def _material_rules(s: MaterialSpec, t: Table) -> None:
         raise InputError(f"{t.path}: give either E and nu or mu and lambda, not both")
     s.material                                           # builds and validates the model once, now
     _fiber_rules(s, t)
+    _prony_rules(s, t)
     if t.path != "material" and t.has("plasticity"):
         raise InputError(f"{t.key('plasticity')}: plasticity is for a single [material] table only "
                          "(not implemented for several materials)")
@@ -143,6 +150,45 @@ def _fiber_rules(s: MaterialSpec, t: Table) -> None:
         raise InputError(f"{key}.direction: must not be the zero vector")
     if t.data["fibers"].get("k2") is not None and s.fiber_model != "holzapfel":
         raise InputError(f"{key}.k2: only for model = 'holzapfel'")
+
+
+def _prony_rules(s: MaterialSpec, t: Table) -> None:
+    """[material.viscoelastic]: relative moduli in (0, 1) summing below 1, positive relaxation times."""
+    if not t.has("viscoelastic"):
+        return
+    key = f"{t.key('viscoelastic')}.prony"
+    if s.prony is None:
+        raise InputError(f"{key}: missing (give [[g_i, tau_i], ...])")
+    for i, (g, tau) in enumerate(s.prony):
+        if not 0 < g < 1:
+            raise InputError(f"{key}[{i}] = {[g, tau]}: the relative modulus g must lie in (0, 1)")
+        if tau <= 0:
+            raise InputError(f"{key}[{i}] = {[g, tau]}: the relaxation time tau must be positive")
+    if sum(g for g, _ in s.prony) >= 1:
+        raise InputError(f"{key}: the relative moduli sum to {sum(g for g, _ in s.prony):.6g}; they must sum "
+                         "below 1 (g_inf = 1 - sum g_i is the long-term modulus, positive)")
+
+
+def viscoelastic_rules(scene) -> None:
+    """What [material.viscoelastic] needs from the rest of the scene, refused when the scene is read."""
+    visco = next((m for m in scene.materials if m.prony is not None), None)
+    if visco is None:
+        return
+    key = f"{visco.key}.viscoelastic"
+    if scene.several_materials:
+        raise InputError(f"{key}: for a single [material] table only (not implemented for several materials)")
+    if scene.analysis != "static":
+        raise InputError(f"{key}: for analysis = 'static' only (this scene's is {scene.analysis!r}; dynamics with "
+                         "viscoelasticity is not implemented yet)")
+    if visco.plasticity_model is not None:
+        raise InputError(f"{key}: not with [material.plasticity] (not implemented together)")
+    if scene.discretization.formulation != "displacement":
+        raise InputError(f"{key}: the mixed formulation is not implemented with viscoelasticity; use "
+                         "formulation = 'displacement'")
+    if scene.analysis == "static" and not (any(ld.history for ld in scene.load)
+                                           or any(f.history for f in scene.fix)):
+        raise InputError(f"{key}: a static scene needs time: give a [[load]] or [[fix]] history ([time, factor] "
+                         "pairs; the load steps' pseudo-time is then time in seconds)")
 
 
 def _materials_rules(materials: list[MaterialSpec]) -> None:

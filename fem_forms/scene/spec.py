@@ -179,6 +179,9 @@ FIX_KEYS = (
     Key("components", "axes", "displacement components held", default=["x", "y", "z"]),
     Key("value", "vector", "prescribed displacement of the held components", default=[0.0, 0.0, 0.0],
         unit="m", length=3),
+    Key("history", "points", "static: [time, factor] pairs scaling value over the pseudo-time of the load steps, "
+        "piecewise linear, held after the last (e.g. stretch, then hold: relaxation); default: with the load "
+        "factor", length=2, min_items=1, note="must list [time, factor] pairs"),
 )
 _FIX = {k.name: k for k in FIX_KEYS}
 
@@ -189,6 +192,7 @@ class Fix:
     components: list = _FIX["components"].field()
     value: list = _FIX["value"].field()
     name: str | None = None
+    history: list | None = None        # [[t, factor], ...] (static), else value scales with the load factor
 
 
 def fix_names(fixes: list[Fix]) -> list[str]:
@@ -241,6 +245,11 @@ class Load:
     volume: float | None = None    # volume added to an inflated cavity (volume control)
     name: str | None = None        # an inflated cavity's name
     history: list | None = None    # [[t, factor], ...] piecewise linear; None: constant 1
+
+
+def _fix_rules(fix: Fix, t: Table) -> None:
+    if fix.history is not None and any(b[0] <= a[0] for a, b in zip(fix.history, fix.history[1:])):
+        raise InputError(f"{t.key('history')}: times must increase")
 
 
 def _load_rules(ld: Load, t: Table) -> None:
@@ -315,7 +324,8 @@ CORE_SECTIONS = (
     MATERIAL,
     Section("discretization", "finite elements and quadrature", Discretization, keys=DISCRETIZATION_KEYS,
             rules=_discretization_rules),
-    Section("fix", "a support: held displacement components on a boundary", Fix, keys=FIX_KEYS, array=True),
+    Section("fix", "a support: held displacement components on a boundary", Fix, keys=FIX_KEYS, array=True,
+            rules=_fix_rules),
     Section("load", "a load: gravity, dead traction or follower pressure", Load, keys=(LOAD_HISTORY,),
             variants=LOAD_VARIANTS, rules=_load_rules, array=True),
     Section("solver", "Newton, load stepping and the linear solver", SolverSpec, keys=SOLVER_KEYS),

@@ -1,0 +1,103 @@
+"""A viscoelastic solid: finite-strain generalized Maxwell (Simo 1987; Holzapfel, Nonlinear Solid Mechanics,
+2000, sec. 6.10) on any hyperelastic model psi(F).
+
+The second Piola-Kirchhoff stress is S = g_inf S0 + sum_i Q_i, with S0 = 2 dpsi/dC the elastic stress of the
+instantaneous response (E), g_inf = 1 - sum g_i the long-term share, and each Prony term's non-equilibrium
+stress Q_i relaxing with its time tau_i: dQ_i/dt + Q_i / tau_i = g_i dS0/dt. Over a step dt with S0 linear in
+time (Simo's recursive update, exact for a piecewise linear S0):
+    Q_i,n+1 = a_i Q_i,n + b_i (S0,n+1 - S0,n),   a_i = exp(-dt / tau_i),   b_i = g_i (1 - a_i) / (dt / tau_i).
+So within a step S = (g_inf + sum b_i) S0(u) + H with H = sum_i (a_i Q_i,n - b_i S0,n) known: the step's
+residual is the gradient of  int (g_inf + sum b_i) psi(F) + H : E(F) dX  (E the Green strain; the small strain
+for a small-strain model, whose S0 is sigma): a conservative step energy (energy line search), the history
+on quadrature spaces of the dx rule, updated on accepted steps and rolled back on rejected ones. Between
+steps a = 1, b = g (dt = 0): the energy's stress is then the committed g_inf S0 + sum Q_i (stress output)."""
+from __future__ import annotations
+
+import math
+
+from dolfinx import fem
+import numpy as np
+from petsc4py import PETSc
+import ufl
+
+from fem_forms.kinematics import green_strain, small_strain
+from fem_forms.materials.hyperelastic import is_small_strain
+from fem_forms.physics.elastic import ElasticEnergy
+from fem_forms.physics.plastic import quadrature_rule, quadrature_scheme, quadrature_update
+from fem_forms.physics.terms import Context
+from fem_forms.state import State
+
+
+class ViscoelasticSolid(ElasticEnergy):
+    """The elastic solid with Prony terms [g_i, tau_i]; every value a fem.Constant."""
+
+    def __init__(self, material, model_name: str, prony: list, mesh, degree: int):
+        super().__init__(material, model_name)
+        self.name = f"viscoelastic ({model_name}, {len(prony)} Prony terms)"
+
+        def const(v: float) -> fem.Constant:
+            return fem.Constant(mesh, PETSc.ScalarType(v))
+        self.g = [const(g) for g, _ in prony]
+        self.tau = [const(tau) for _, tau in prony]
+        self.a = [const(1.0) for _ in prony]
+        self.b = [const(g) for g, _ in prony]
+        self.points, _ = quadrature_rule(mesh, degree)
+        Qt = fem.FunctionSpace(mesh, ufl.TensorElement("Quadrature", mesh.ufl_cell(), degree, shape=(3, 3),
+                                                       quad_scheme=quadrature_scheme(mesh, degree)))
+        self.Q = [fem.Function(Qt, name=f"prony_stress_{i}") for i in range(len(prony))]
+        self.S0 = fem.Function(Qt, name="elastic_stress_committed")
+        self.t, self.t_committed = 0.0, 0.0
+
+    def set_values(self, scene) -> None:
+        super().set_values(scene)
+        for (g, tau), cg, ctau in zip(scene.material.prony, self.g, self.tau):
+            cg.value, ctau.value = g, tau
+        self.update(self.t)
+
+    def prepare(self, ctx: Context) -> None:
+        self.residual_by_hand = False                  # the step energy has the history term: ufl.derivative
+
+    def strain(self, F):
+        return small_strain(F) if is_small_strain(self.material) else green_strain(F)
+
+    def elastic_stress(self, ctx: Context, F):
+        """S0: the instantaneous elastic second Piola-Kirchhoff stress (sigma for a small-strain model)."""
+        F = ufl.variable(F)
+        P = ufl.diff(super().density_at(ctx, F), F)
+        return P if is_small_strain(self.material) else ufl.inv(F) * P
+
+    def density_at(self, ctx: Context, F):
+        """The step energy per rest volume: (g_inf + sum b_i) psi(F) + H : E(F)."""
+        scale = 1 - sum(self.g) + sum(self.b)
+        H = sum(a * Q - b * self.S0 for a, b, Q in zip(self.a, self.b, self.Q))
+        return scale * super().density_at(ctx, F) + ufl.inner(H, self.strain(F))
+
+    def energy(self, ctx: Context) -> ufl.Form:
+        return ctx.volume(self.density(ctx))
+
+    def pk1(self, ctx: Context):
+        F = ufl.variable(ctx.F)
+        return ufl.diff(self.density_at(ctx, F), F)
+
+    def attach(self, state: State, ctx: Context) -> None:
+        """Each Prony stress and the committed S0 as history variables, updated at the accepted u."""
+        S0 = self.elastic_stress(ctx, ctx.F)
+        for i, (a, b, Q) in enumerate(zip(self.a, self.b, self.Q)):
+            state.add_history(Q.name, Q, quadrature_update(Q, a * Q + b * (S0 - self.S0), self.points))
+        stress = quadrature_update(self.S0, S0, self.points)
+
+        def committed() -> np.ndarray:                 # the last update: the step is over (dt back to 0)
+            values = stress()
+            self.t_committed = self.t
+            self.update(self.t)
+            return values
+        state.add_history(self.S0.name, self.S0, committed)
+
+    def update(self, t: float) -> None:
+        """The step's coefficients a_i, b_i for dt = t - the last committed time."""
+        self.t = t
+        dt = t - self.t_committed
+        for g, tau, a, b in zip(self.g, self.tau, self.a, self.b):
+            x = dt / float(tau.value)
+            a.value = math.exp(-x)
+            b.value = float(g.value) * (-math.expm1(-x) / x if x > 0 else 1.0)

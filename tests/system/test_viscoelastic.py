@@ -1,0 +1,131 @@
+"""Viscoelasticity ([material.viscoelastic] prony = [[g_i, tau_i], ...]) against closed forms of linear
+viscoelasticity (e.g. Findley, Lai & Onaran, Creep and Relaxation of Nonlinear Viscoelastic Materials, 1976,
+ch. 5), a bar in uniaxial stress on rollers, the static analysis's pseudo-time being time:
+- stress relaxation: stretched by a ramp then held, the bar's force follows
+  E eps / t_r [g_inf t_r + sum g_i tau_i (exp(-(t - t_r)/tau_i) - exp(-t/tau_i))] at every step (Simo's update
+  is exact for a strain linear in time over each step, so to round-off);
+- creep of a standard linear solid (one Prony term) under a load ramped then held: the strain follows the
+  creep compliance J(t) = 1/E_inf - (1/E_inf - 1/E) exp(-t/tau_c), tau_c = tau / g_inf, convolved with the ramp;
+- at a finite stretch (neo-Hookean, 50 %) the held force relaxes by the same function of time from the
+  elastic force of that stretch (a run without viscoelasticity)."""
+import json
+import math
+
+import numpy as np
+import pytest
+
+import fem_forms as ff
+from fem_forms.errors import InputError
+from helpers import mpirun, run_scene, toml_dumps
+
+E, NU = 1.0e6, 0.3
+PRONY = [[0.3, 0.01], [0.2, 1.0]]
+G_INF = 1 - sum(g for g, _ in PRONY)
+AREA = 0.01                                                   # the bar's section, m^2
+
+
+def bar(model="linear", prony=PRONY, fix_history=None, load=None, steps=20, **over) -> dict:
+    """A 1 x 0.1 x 0.1 m bar on rollers at x = 0, y = 0, z = 0: uniaxial stress along x."""
+    fix = [{"where": {"axis": a, "at": 0.0}, "components": [a]} for a in "xyz"]
+    if fix_history is not None:
+        stretch, history = fix_history
+        fix.append({"name": "pull", "where": {"axis": "x", "at": 1.0}, "components": ["x"],
+                    "value": [stretch, 0.0, 0.0]} | ({"history": history} if history else {}))
+    material = {"model": model, "E": E, "nu": NU}
+    if prony is not None:
+        material["viscoelastic"] = {"prony": prony}
+    d = {"mesh": {"size": [1.0, 0.1, 0.1], "cells": [2, 1, 1]}, "material": material,
+         "discretization": {"degree": 1}, "fix": fix, "load": load or [], "solver": {"steps": steps},
+         "output": {"picture": False, "fields": False, "probes": {"end": [1.0, 0.1, 0.1]}}}
+    d.update(over)
+    return d
+
+
+def path(out) -> np.ndarray:
+    return np.genfromtxt(out / "probes.csv", delimiter=",", names=True)
+
+
+def relaxation(t: float, t_r: float) -> float:
+    """Force over E eps A of a strain ramped over t_r, then held (linear viscoelasticity, the Prony series)."""
+    if t <= t_r:
+        return (G_INF * t + sum(g * tau * -math.expm1(-t / tau) for g, tau in PRONY)) / t_r
+    return (G_INF * t_r + sum(g * tau * (math.exp(-(t - t_r) / tau) - math.exp(-t / tau)) for g, tau in PRONY)) / t_r
+
+
+def test_stress_relaxation_at_constant_stretch_follows_the_prony_series(tmp_path):
+    eps, t_r = 1e-4, 1e-3
+    code, s, err, out = run_scene(tmp_path, bar(fix_history=(eps, [[0.0, 0.0], [t_r, 1.0], [3.0, 1.0]])))
+    assert code == 0, err
+    rows = path(out)
+    assert rows["time"][-1] == pytest.approx(3.0) and len(rows) >= 5
+    expected = [E * eps * AREA * relaxation(t, t_r) for t in rows["time"]]
+    assert rows["pull_Fx"] == pytest.approx(expected, rel=1e-8, abs=1e-12)
+    assert s["reactions"]["pull"][0] == pytest.approx(E * eps * AREA * relaxation(3.0, t_r), rel=1e-8)
+    assert s["reactions"]["pull"][0] < 0.52 * E * eps * AREA                  # relaxed near g_inf = 0.5
+
+
+def test_a_standard_linear_solid_creeps_under_a_held_load(tmp_path):
+    g, tau, sigma = 0.4, 0.5, 100.0
+    e_inf, t_c = (1 - g) * E, tau / (1 - g)
+    t_r, t_end = 1e-3 * t_c, 5 * t_c
+    load = [{"type": "traction", "where": {"axis": "x", "at": 1.0}, "value": [sigma, 0.0, 0.0],
+             "history": [[0.0, 0.0], [t_r, 1.0], [t_end, 1.0]]}]
+    d = bar(prony=[[g, tau]], load=load, steps=100)
+    d["solver"]["max_step"] = 0.01
+    code, _, err, out = run_scene(tmp_path, d)
+    assert code == 0, err
+    rows = path(out)
+
+    def strain(t):                                  # the creep compliance convolved with the ramp
+        decay = (math.exp(-(t - t_r) / t_c) - math.exp(-t / t_c)) if t > t_r else -math.expm1(-t / t_c)
+        return sigma / t_r * (min(t, t_r) / e_inf - (1 / e_inf - 1 / E) * t_c * decay)
+    later = rows["time"] > t_r
+    assert rows["end_ux"][later] == pytest.approx([strain(t) for t in rows["time"][later]], rel=1e-4)
+    assert rows["end_ux"][-1] == pytest.approx(sigma / e_inf, rel=0.01)          # nearly crept out
+
+
+def test_a_finite_stretch_relaxes_from_its_elastic_force(tmp_path):
+    stretch, t_r = 0.5, 1e-6
+    elastic = ff.solve_static(ff.Scene.from_dict(bar("neo-hookean", None, (stretch, None))))
+    force = elastic.summary()["reactions"]["pull"][0]
+    history = [[0.0, 0.0], [t_r, 1.0], [1.0, 1.0]]
+    code, _, err, out = run_scene(tmp_path, bar("neo-hookean", fix_history=(stretch, history), steps=10))
+    assert code == 0, err
+    rows = path(out)
+    held = rows["time"] > t_r
+    expected = [force * (G_INF + sum(g * math.exp(-(t - t_r) / tau) for g, tau in PRONY))
+                for t in rows["time"][held]]
+    assert rows["pull_Fx"][held] == pytest.approx(expected, rel=1e-3)
+
+
+@pytest.mark.mpi
+def test_two_ranks_relax_as_one(tmp_path):
+    d = bar(fix_history=(1e-4, [[0.0, 0.0], [1e-3, 1.0], [1.0, 1.0]]))
+    d["mesh"]["cells"] = [6, 2, 2]
+    (tmp_path / "scene.toml").write_text(toml_dumps(d))
+    one = ff.solve_static(ff.Scene.from_dict(d)).summary()
+    p = mpirun(["-m", "fem_forms", "run", str(tmp_path / "scene.toml"), "--out", str(tmp_path / "out")])
+    assert p.returncode == 0, p.stderr[-2000:]
+    two = json.loads((tmp_path / "out" / "results.json").read_text())
+    assert two["reactions"]["pull"][0] == pytest.approx(one["reactions"]["pull"][0], rel=1e-9)
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"prony": [[0.6, 1.0], [0.5, 2.0]]}, "sum to 1.1; they must sum below 1"),
+    ({"prony": [[1.2, 1.0]]}, r"the relative modulus g must lie in \(0, 1\)"),
+    ({"prony": [[0.2, 0.0]]}, "the relaxation time tau must be positive"),
+    ({"fix_history": None}, "a static scene needs time"),
+    ({"analysis": "modal"}, "for analysis = 'static' only"),
+    ({"discretization": {"degree": 2, "formulation": "mixed"}}, "the mixed formulation is not implemented"),
+])
+def test_bad_viscoelastic_input_is_refused_in_one_line(change, message):
+    args = {"fix_history": (1e-4, [[0.0, 0.0], [1.0, 1.0]])}
+    over = dict(change)
+    args["prony"] = over.pop("prony", PRONY)
+    if "fix_history" in over:
+        args["fix_history"] = over.pop("fix_history")
+    d = bar(model="neo-hookean", **args, **over)
+    if d.get("analysis") == "modal":
+        d["material"]["rho"] = 1000.0
+    with pytest.raises(InputError, match=message):
+        ff.Scene.from_dict(d)
