@@ -295,7 +295,10 @@ class ArrayTerm(Term):
 def add_entries(A: PETSc.Mat, rows: np.ndarray, cols: np.ndarray, values: np.ndarray,
                 constrained: np.ndarray) -> None:
     """Add the (row, col, value) triplets (global indices, any rank's rows) into A, except those in a
-    constrained row or column. The entries must lie in A's sparsity pattern."""
+    constrained row or column. Entries outside A's pattern are allocated: a MatAXPY that widened A (triangle
+    contact) resets A's options, and an obstacle's friction block added after it stopped with PETSc error 63
+    (a ring on a floor, squeezed until its inner walls met)."""
+    A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
     keep = ~(np.isin(rows, constrained) | np.isin(cols, constrained))
     rows, cols, values = rows[keep], cols[keep], values[keep]
     order = np.argsort(rows, kind="stable")

@@ -127,18 +127,46 @@ def test_a_squeezed_ring_whose_inner_walls_meet_stays_intersection_free(tmp_path
     assert code == 0 and self_intersections(surface.points.astype(float), surface.cells_dict["triangle"]) > 0
 
 
+def ring_on_floor(mesh: str) -> dict:
+    """The squeezed ring with no bottom strip: it rests on a frictional floor (an obstacle) while its inner walls
+    meet (self-contact): both kinds of contact in one scene."""
+    d = ring_scene(mesh, True)
+    d["fix"] = [d["fix"][1]]
+    d["contact"]["obstacle"] = [{"name": "floor", "shape": "plane", "point": [0.0, 0.0, -0.0201],
+                                 "normal": [0.0, 0.0, 1.0], "friction": 0.5}]
+    return d
+
+
+@pytest.fixture(scope="module")
+def ring_on_floor_run(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("ring_floor")
+    mesh = ring(folder / "ring.msh", 0.02, 0.015, 0.01, 0.003)
+    code, r, err, _ = run_scene(folder, ring_on_floor(mesh))
+    assert code == 0, err
+    return mesh, r
+
+
+def test_a_ring_on_a_floor_squeezed_until_its_walls_meet(ring_on_floor_run):
+    """Self-contact and an obstacle together: the floor carries exactly what the press pushes (no clamp below),
+    the inner walls touch, nothing crosses. (Before: the obstacle's friction block, added after the walls'
+    Hessian had widened the matrix, stopped the run with PETSc error 63.)"""
+    _, r = ring_on_floor_run
+    assert r["converged"] and r["intersection_free"] and 0 < r["min_distance"] < 2e-4
+    assert np.array(r["contact"]["floor"]["force"]) == pytest.approx(-np.array(r["reactions"]["top"]), abs=1e-9)
+    assert r["contact"]["self"]["active_points"] > 20
+
+
 @pytest.mark.mpi
-def test_self_contact_gives_the_same_squeeze_on_two_ranks(tmp_path):
-    mesh = ring(tmp_path / "ring.msh", 0.02, 0.015, 0.01, 0.003)
-    (tmp_path / "one").mkdir()
-    code, serial, _, _ = run_scene(tmp_path / "one", ring_scene(mesh, True))
+def test_self_contact_and_a_floor_give_the_same_squeeze_on_two_ranks(tmp_path, ring_on_floor_run):
+    mesh, serial = ring_on_floor_run
     path = tmp_path / "scene.toml"
-    path.write_text(toml_dumps(ring_scene(mesh, True)))
+    path.write_text(toml_dumps(ring_on_floor(mesh)))
     proc = mpirun(["-m", "fem_forms", "run", str(path), "--out", str(tmp_path / "two"), "-q"])
     assert proc.returncode == 0, proc.stderr
     two = json.loads((tmp_path / "two" / "results.json").read_text())
     assert two["mpi_ranks"] == 2 and two["intersection_free"]
-    assert two["reactions"]["top"][2] == pytest.approx(serial["reactions"]["top"][2], rel=1e-6)   # measured 2e-9
+    assert two["reactions"]["top"][2] == pytest.approx(serial["reactions"]["top"][2], rel=1e-6)   # measured 6e-11
+    assert two["contact"]["floor"]["force"][2] == pytest.approx(serial["contact"]["floor"]["force"][2], rel=1e-6)
     assert two["contact"]["self"]["active_points"] == serial["contact"]["self"]["active_points"]
 
 
