@@ -73,3 +73,25 @@ def test_a_steel_ballast_rights_a_roly_poly_that_hollowing_cannot(tmp_path):
     f = d["carved_fraction"]
     assert 0 < f < 1
     assert d["mass"] == pytest.approx(volume * (1000.0 * (1 - f) + STEEL * f), rel=CHORD)
+
+
+def test_a_heavy_dome_of_a_second_material_rights_the_tall_toy(tmp_path):
+    """Several materials in balance design: the H = 5 cm toy whose dome (z < 0) is a material three times
+    denser than its head is carved (hollowed) until it swings back, which one material cannot. Its mass lies
+    between the 3 mm shell's and the solid toy's of those densities (closed forms, within the chords' 1.5 %)."""
+    H, HEAVY, LIGHT = 0.05, 3000.0, 1000.0
+    mesh = balance_shapes.roly_poly(tmp_path / "rp.msh", R=R, H=H, h=0.008)
+    d = {"title": "two-material roly-poly", "analysis": "balance", "mesh": {"generator": "file", "file": str(mesh)},
+         "material": [{"name": "head", "E": 1e6, "nu": 0.3, "rho": LIGHT},
+                      {"name": "dome", "E": 1e6, "nu": 0.3, "rho": HEAVY,
+                       "where": {"box": [[-R, -R, -R], [R, R, 0.0]]}}],
+         "balance": {"goal": "swing", "shell": 0.003, "contact_tolerance": 0.01, "margin_angle": MARGIN}}
+    code, r, err, _ = helpers.run_scene(tmp_path, d)
+    assert code == 0, err
+    vh, vc = 2 / 3 * math.pi * R**3, math.pi * R * R * H
+    solid = HEAVY * vh + LIGHT * vc
+    assert r["before"]["mass"] == pytest.approx(solid, rel=CHORD)
+    height = (HEAVY * vh * -3 * R / 8 + LIGHT * vc * H / 2) / solid            # the solid toy's CoM
+    assert r["before"]["center_of_mass"][2] == pytest.approx(height, abs=4e-3 * R)     # measured 2.3e-3 R
+    assert -r["center_of_mass"][2] >= R * math.sin(math.radians(MARGIN)) * (1 - 1e-6)
+    assert r["mass"] < solid

@@ -22,6 +22,7 @@ from fem_forms.errors import SolveError
 from fem_forms.meshes import load_mesh, mesh_size
 from fem_forms.output import results
 from fem_forms.output.fields import node_values
+from fem_forms.physics.regions import MaterialRegions
 from fem_forms.scene import Scene
 
 
@@ -31,8 +32,13 @@ def _gravity(scene: Scene) -> np.ndarray:
     return np.asarray(g, dtype=float)
 
 
-def setting(scene: Scene, mesh) -> Setting:
-    return Setting(scene.balance, scene.material.rho, _gravity(scene), mesh_size(mesh))
+def setting(scene: Scene, mesh, loaded=None) -> Setting:
+    """The design's densities (one per owned cell of `loaded` with several materials), gravity and size."""
+    rho = scene.material.rho
+    if scene.several_materials:
+        regions = MaterialRegions(loaded, scene.materials)
+        rho = regions.cell_values([m.rho for m in scene.materials])[:regions.n_owned]
+    return Setting(scene.balance, rho, _gravity(scene), mesh_size(mesh))
 
 
 def _rigid(scene: Scene, st: Setting, body: Body) -> dict:
@@ -58,8 +64,9 @@ def run(scene: Scene, out, echo: bool = False) -> dict:
         r = sag_design(scene, _gravity(scene), lambda mesh: setting(scene, mesh))
         mesh, body, st = r["mesh"], r["rest"], r["setting"]
     else:
-        mesh = load_mesh(scene.mesh).mesh
-        st = setting(scene, mesh)
+        loaded = load_mesh(scene.mesh)
+        mesh = loaded.mesh
+        st = setting(scene, mesh, loaded)
         body = Body.rest(mesh, b.shell)
         r = _rigid(scene, st, body)
     after = r["after"]

@@ -107,8 +107,9 @@ class Body:
         h = self.nodes @ direction
         return self.mesh.comm.allreduce(float(h.min()) if len(h) else np.inf, op=MPI.MIN)
 
-    def density(self, solid: np.ndarray, rho: float, fill: float) -> np.ndarray:
-        """Density per owned cell for the solid fractions of the carvable ones."""
-        d = np.full(len(self.ids), rho)
-        d[self.carvable] = fill + (rho - fill) * solid
+    def density(self, solid: np.ndarray, rho, fill: float) -> np.ndarray:
+        """Density per owned cell for the solid fractions of the carvable ones (`rho`: one density, or one
+        per owned cell)."""
+        d = np.broadcast_to(np.asarray(rho, dtype=float), self.ids.shape).copy()
+        d[self.carvable] = fill + (d[self.carvable] - fill) * solid
         return d

@@ -20,7 +20,7 @@ from fem_forms.errors import SolveError
 class Setting:
     """What the goals need besides the cells: densities, gravity, the [balance] spec, the part's size."""
     spec: object                 # BalanceSpec
-    rho: float
+    rho: float | np.ndarray      # the solid's density: one, or one per owned cell (several materials)
     gravity: np.ndarray
     size: float
 
@@ -44,14 +44,16 @@ def problem(body: Body, st: Setting) -> goals.Problem | None:
     comm = body.mesh.comm
     M0 = fixed_moments(body, st)
     c = body.carvable
-    parts = comm.gather((body.ids[c], body.moments[c], body.centroids()[c]), root=0)
+    rho = np.broadcast_to(st.rho, c.shape)[c]
+    parts = comm.gather((body.ids[c], body.moments[c], body.centroids()[c], rho), root=0)
     if comm.rank != 0:
         return None
     ids = np.concatenate([p[0] for p in parts])
     order = np.argsort(ids)
     D = np.vstack([p[1] for p in parts])[order]
     cen = np.vstack([p[2] for p in parts])[order]
-    return goals.Problem((st.rho - st.spec.fill_density) * D.T, M0, cen, st.size)
+    rho = np.concatenate([p[3] for p in parts])[order]
+    return goals.Problem((rho - st.spec.fill_density) * D.T, M0, cen, st.size)
 
 
 def scatter(body: Body, s_root: np.ndarray | None) -> np.ndarray:
@@ -78,7 +80,7 @@ def rocking_center(body: Body, st: Setting) -> tuple[np.ndarray, float]:
 
 
 def full_moments(body: Body, st: Setting) -> np.ndarray:
-    return total_moments(np.full(len(body.ids), st.rho), body.moments, body.mesh.comm)
+    return total_moments(np.broadcast_to(st.rho, body.ids.shape).astype(float), body.moments, body.mesh.comm)
 
 
 def design(body: Body, st: Setting, rest: Body | None = None,

@@ -88,12 +88,13 @@ def _rules(s: BalanceSpec, t: Table) -> None:
 
 def _check(scene) -> None:
     b = scene.balance
-    if scene.several_materials:
-        raise InputError("material: balance design with several materials is not implemented yet (one "
-                         "[material] table)")
-    if scene.material.rho <= 0:
-        raise InputError("material.rho: balance design needs a positive density")
-    if b.fill_density == scene.material.rho and b.goal != "check":
+    if scene.several_materials and b.elastic:
+        raise InputError("balance.elastic: not with several materials yet (one [material] table; rigid balance "
+                         "design takes several)")
+    for m in scene.materials:
+        if m.rho <= 0:
+            raise InputError(f"{m.key}.rho: balance design needs a positive density")
+    if all(b.fill_density == m.rho for m in scene.materials) and b.goal != "check":
         raise InputError(f"balance.fill_density = {b.fill_density}: equals material.rho: carving would move "
                          "no mass (lighter fills hollow the part, heavier ones ballast it)")
     if b.goal == "swim" and b.waterline is None:
