@@ -137,6 +137,8 @@ def load_path(model: Model) -> tuple:
     step end."""
     timed = [t for t in model.loads if t.history]
     held = [(i, f) for i, f in enumerate(model.scene.fix) if f.history]   # supports following their own history
+    if hasattr(model.solid, "restart"):       # a solid with time (viscoelastic) starts again at t = 0, at rest
+        model.solid.restart(model.state)
     for t in model.loads:                     # every load's own factor at 1, as a new model has it (the rest-
         t.factor.value = 1.0                  # state checks see the full loads): none is left where an earlier
     if not timed and not held:                # run of this model put it; set_load moves them along the histories
@@ -246,13 +248,20 @@ def solve_static(scene: Scene, material=None, model: Model | None = None,
     return result
 
 
+VISCO_ENERGY = ("energy: not reported for a viscoelastic solid (its free energy holds the Prony branches' "
+                "share, which the step energy the solver minimises is not)")
+
+
 def post_process(result: StaticResult) -> None:
     """The answer numbers of the model's current state (energy, largest displacement, probes, recovered
     stresses, reactions) into `result`. A solve that converged calls it at full load; the static analysis
     calls it for a continuation stopped at a limit point, its loads set back to the last accepted factor."""
     model, report = result.model, result.report
     model.sync_displacement()
-    if model.energy is not None and model.solid.energy(model.context) is not None:   # von Mises: none
+    if getattr(model.solid, "prony_terms", 0):        # its step energy is no stored energy: not reported
+        if VISCO_ENERGY not in model.warnings:
+            model.warnings.append(VISCO_ENERGY)
+    elif model.energy is not None and model.solid.energy(model.context) is not None:   # von Mises: none
         result.energy = model.mesh.comm.allreduce(fem.assemble_scalar(model.compiled("energy")), op=MPI.SUM) \
             + sum(t.energy_value(model.unknown.vector) for t in model.terms.arrays)
     result.max_displacement = max_norm(model.u)

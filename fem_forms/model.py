@@ -4,8 +4,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from dolfinx import fem
+from dolfinx import fem, geometry
 from mpi4py import MPI
+import numpy as np
 import ufl
 
 from fem_forms.materials import Material
@@ -154,10 +155,18 @@ class Model:
         return self.context.materials.summary(self.parameters.density, self.dx.metadata()["quadrature_degree"])
 
     def probe_materials(self) -> dict[str, str]:
-        """The material each probe lies in (by name)."""
-        regions = self.context.materials
-        ids = self.probes.evaluate(regions.field(list(range(len(regions.materials))), "material"))
-        return {n: regions.materials[int(round(v[0]))].name for n, v in ids.items()}
+        """The material each probe lies in (by name): on an interface, the first listed of those whose cells
+        contain it (the same on any number of ranks)."""
+        regions, names = self.context.materials, self.probes.names
+        if not names:
+            return {}
+        tree = geometry.BoundingBoxTree(self.mesh, self.mesh.topology.dim)
+        X = self.probes.X
+        cells = geometry.compute_colliding_cells(self.mesh, geometry.compute_collisions(tree, X), X)
+        first = np.array([min((int(regions.index[c]) for c in cells.links(i)), default=len(regions.materials))
+                          for i in range(len(names))], dtype=np.int32)
+        self.mesh.comm.Allreduce(MPI.IN_PLACE, first, op=MPI.MIN)
+        return {n: regions.materials[int(i)].name for n, i in zip(names, first)}
 
     def set_values(self, scene: Scene) -> None:
         """Take the material constants, density, load and support values of `scene` (same mesh, same

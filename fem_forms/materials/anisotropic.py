@@ -129,7 +129,11 @@ class FiberReinforced:
         return self.base.psi(F) + self.fiber_psi(F)
 
     def update(self, specs: list) -> None:
-        """New fibre values from the scene's materials (the same families)."""
+        """New fibre values from the scene's materials (the same families: other fibres need a new model)."""
+        now = [(i, m.fiber_model) for i, m in enumerate(specs) if m.fiber_direction is not None]
+        if now != [(f["index"], f["kind"]) for f in self.families]:
+            raise InputError("material: fibres added, removed or of another model need a new model (new values "
+                             "of direction, E and k2 do not)")
         for f in self.families:
             m = specs[f["index"]]
             f["direction"].value = unit(m.fiber_direction, m.key)

@@ -29,6 +29,16 @@ def von_mises(sigma) -> ufl.core.expr.Expr:
     return ufl.sqrt(1.5 * ufl.inner(s, s))
 
 
+def _smallest(value) -> float:
+    """A parameter's value: a number, a Constant, or the smallest of a DG0 field over all ranks."""
+    field = getattr(value, "x", None)
+    if field is None:
+        return float(getattr(value, "value", value))
+    from mpi4py import MPI
+    local = float(field.array.min()) if field.array.size else float("inf")
+    return value.function_space.mesh.comm.allreduce(local, op=MPI.MIN)
+
+
 def mixed_energy(material: Material, F, p):
     """Perturbed-Lagrangian energy of the u-p formulation: psi|_(lambda=0)(F) + p theta(F) - p^2/(2 lambda).
     Stationary in p at p = lambda theta, where it equals psi(F); finite as lambda grows (nu -> 1/2),
@@ -36,7 +46,7 @@ def mixed_energy(material: Material, F, p):
     if not hasattr(material, "volumetric") or not hasattr(material, "lmbda"):
         raise InputError("discretization.formulation = 'mixed': needs a built-in material model "
                          "(a user psi(F) has no volumetric part to split off)")
-    if float(getattr(material.lmbda, "value", material.lmbda)) <= 0:   # a number or a Constant
+    if _smallest(material.lmbda) <= 0:
         raise InputError("discretization.formulation = 'mixed': needs lambda > 0 (nu > 0); it is meant "
                          "for nearly incompressible materials")
     deviatoric = copy.copy(material)                 # lambda = 0, without re-validating Constants

@@ -1,7 +1,6 @@
 """Several materials in one energy: the materials of one model share its psi(F) with DG0 parameter fields
-(one form, one kernel: as fast as one material); materials of different models each integrate their own
-psi over their cells (a dx subdomain per model), and their psi sum, weighted by DG0 indicators, where one
-expression is needed (stresses for output)."""
+(one form, one kernel: as fast as one material); materials of different models add their psi weighted by DG0
+indicators (each model evaluated everywhere, counted on its own cells)."""
 from __future__ import annotations
 
 import copy
@@ -14,6 +13,7 @@ import ufl
 
 from petsc4py import PETSc
 
+from fem_forms.errors import InputError
 from fem_forms.materials import Material
 from fem_forms.materials.anisotropic import FiberReinforced, unit
 from fem_forms.physics.regions import MaterialRegions
@@ -38,11 +38,11 @@ class MaterialPart:
 
 
 class MaterialMix:
-    """Models of different kinds side by side: psi(F) = sum_parts indicator_p psi_p(F) (the energy itself
-    integrates each part over its own cells, see ElasticEnergy)."""
+    """Models of different kinds side by side: psi(F) = sum_parts indicator_p psi_p(F)."""
 
     def __init__(self, parts: list[MaterialPart]):
         self.parts = parts
+        self.small_strain = all(getattr(p.material, "small_strain", False) for p in parts)
 
     def psi(self, F):
         terms = [p.indicator * p.material.psi(F) for p in self.parts]
@@ -70,15 +70,20 @@ class MaterialBinding:
             indicator = regions.field([1.0 if i in members else 0.0 for i in range(len(built))], "indicator")
             self.parts.append(MaterialPart(bound, members, fields, indicator))
         self.material = self.parts[0].material if len(self.parts) == 1 else MaterialMix(self.parts)
+        self.layout = [(s.model, s.where) for s in specs]           # what new values may not change
 
     @staticmethod
     def _values(built: list, members: list[int], name: str) -> list:
         """One value per material: the members' own, the first member's on the other materials' cells."""
         own = {i: np.asarray(getattr(built[i], name), dtype=float) for i in members}
+        own = {i: v.reshape(6, 6) if v.size == 36 else v for i, v in own.items()}     # a stiffness matrix
         return [own.get(i, own[members[0]]) for i in range(len(built))]
 
     def update(self, specs: list) -> None:
-        """New parameter values (the same models on the same cells)."""
+        """New parameter values (the same models on the same cells; anything else needs a new model)."""
+        if [(s.model, s.where) for s in specs] != self.layout:
+            raise InputError("material: a material's model or cells changed: that needs a new model (new values "
+                             "of its constants do not)")
         built = [s.material for s in specs]
         for part in self.parts:
             for name, f in part.fields.items():

@@ -20,6 +20,7 @@ import numpy as np
 from petsc4py import PETSc
 import ufl
 
+from fem_forms.errors import InputError
 from fem_forms.kinematics import green_strain, small_strain
 from fem_forms.materials.hyperelastic import is_small_strain
 from fem_forms.physics.elastic import ElasticEnergy
@@ -48,11 +49,31 @@ class ViscoelasticSolid(ElasticEnergy):
         self.S0 = fem.Function(Qt, name="elastic_stress_committed")
         self.t, self.t_committed = 0.0, 0.0
 
+    @property
+    def prony_terms(self) -> int:
+        return len(self.g)
+
     def set_values(self, scene) -> None:
+        prony = scene.material.prony or []
+        if len(prony) != len(self.g):
+            raise InputError(f"material.viscoelastic.prony: {len(prony)} terms where the model has {len(self.g)} "
+                             "(a new number of Prony terms needs a new model)")
         super().set_values(scene)
-        for (g, tau), cg, ctau in zip(scene.material.prony, self.g, self.tau):
+        for (g, tau), cg, ctau in zip(prony, self.g, self.tau):
             cg.value, ctau.value = g, tau
         self.update(self.t)
+
+    def restart(self, state: State) -> None:
+        """Back to t = 0 at rest: no displacement, no Prony stress, no committed elastic stress (a new solve of
+        this model)."""
+        for f in (*self.Q, self.S0, state.fields["unknown"]):
+            f.x.array[:] = 0.0
+            f.x.scatter_forward()
+        for name in (*(f.name for f in self.Q), self.S0.name, "unknown"):
+            if name in state.old:
+                state.old[name].x.array[:] = 0.0
+        self.t = self.t_committed = 0.0
+        self.update(0.0)
 
     def prepare(self, ctx: Context) -> None:
         self.residual_by_hand = False                  # the step energy has the history term: ufl.derivative

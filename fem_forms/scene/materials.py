@@ -148,6 +148,8 @@ def _fiber_rules(s: MaterialSpec, t: Table) -> None:
                          f"{t.key('model')} is {s.model!r} (use model = 'orthotropic' for small-strain anisotropy)")
     if not any(s.fiber_direction):
         raise InputError(f"{key}.direction: must not be the zero vector")
+    if t.has("plasticity"):
+        raise InputError(f"{key}: not with [material.plasticity] (not implemented together)")
     if t.data["fibers"].get("k2") is not None and s.fiber_model != "holzapfel":
         raise InputError(f"{key}.k2: only for model = 'holzapfel'")
 
@@ -185,6 +187,9 @@ def viscoelastic_rules(scene) -> None:
     if scene.discretization.formulation != "displacement":
         raise InputError(f"{key}: the mixed formulation is not implemented with viscoelasticity; use "
                          "formulation = 'displacement'")
+    if scene.solver.control != "load":
+        raise InputError(f"{key}: not with solver.control = {scene.solver.control!r} (its path parameter is no "
+                         "time); use control = 'load'")
     if scene.analysis == "static" and not (any(ld.history for ld in scene.load)
                                            or any(f.history for f in scene.fix)):
         raise InputError(f"{key}: a static scene needs time: give a [[load]] or [[fix]] history ([time, factor] "

@@ -4,6 +4,8 @@
   each one in turn lies along the pull; constants that make the stiffness indefinite are refused;
 - fibre reinforcement: a bar pulled along its fibres is E_m + E_f stiff, across them (fibres shortened:
   no compression stiffness) E_m; fibres on one layer only stiffen that layer (transformed section)."""
+import math
+
 import numpy as np
 import pytest
 
@@ -53,6 +55,44 @@ def test_orthotropic_uniaxial_tension_along_each_axis(axes, order):
     along = order[0]
     expected = [S[along, k] * SIGMA for k in order]             # global x, y, z strains
     assert eps == pytest.approx(expected, rel=1e-9)
+
+
+MINIMAL = [{"where": {"axis": "x", "at": 0.0}, "components": ["x"]},
+           {"where": {"point": [0.0, 0.0, 0.0]}, "components": ["y", "z"]},
+           {"where": {"point": [0.0, 1.0, 0.0]}, "components": ["z"]}]
+
+
+def test_orthotropic_axes_turned_30_degrees_couple_stretch_and_shear():
+    """Uniaxial stress at 30 deg to the fibres (supports that leave the shear free): the stretch is the
+    off-axis compliance 1/E_x = cos^4/E1 + (1/G12 - 2 nu12/E1) sin^2 cos^2 + sin^4/E2 (Jones, Mechanics of
+    Composite Materials, 2nd ed., 1999, eq. 2.98), and the block shears."""
+    c, s_ = math.cos(math.radians(30)), math.sin(math.radians(30))
+    d = pulled_block({"model": "orthotropic", **ORTHO, "axis1": [c, s_, 0.0], "axis2": [-s_, c, 0.0]})
+    d["fix"] = MINIMAL
+    d["output"]["probes"] = {"corner": [2.0, 1.0, 0.5], "edge": [0.0, 1.0, 0.0]}
+    r = ff.solve_static(ff.Scene.from_dict(d)).summary()
+    compliance_x = c**4 / ORTHO["E1"] + (1 / ORTHO["G12"] - 2 * ORTHO["nu12"] / ORTHO["E1"]) * s_**2 * c**2 \
+        + s_**4 / ORTHO["E2"]
+    ux = r["probes"]["corner"]["displacement"][0] - r["probes"]["edge"]["displacement"][0]
+    assert ux / 2.0 == pytest.approx(compliance_x * SIGMA, rel=1e-9)
+    assert abs(r["probes"]["corner"]["displacement"][1]) > 0.1 * abs(ux)          # sheared, not only thinned
+
+
+def test_two_orthotropic_materials_in_series():
+    """A long bar, its halves the same orthotropic material with the fibres along and across the pull: the
+    halves stretch by sigma / E1 and sigma / E2 (their lateral mismatch at the joint is local: 1 %)."""
+    d = pulled_block({}, SIGMA)
+    d["mesh"] = {"size": [2.0, 0.1, 0.1], "cells": [40, 2, 2]}
+    d["load"][0]["where"] = {"axis": "x", "at": 2.0}
+    d["fix"] = [dict(MINIMAL[0]), {"where": {"point": [0.0, 0.0, 0.0]}, "components": ["y", "z"]},
+                {"where": {"point": [0.0, 0.1, 0.0]}, "components": ["z"]}]
+    d["material"] = [{"name": "along", "model": "orthotropic", **ORTHO, "axis1": [1, 0, 0], "axis2": [0, 1, 0]},
+                     {"name": "across", "model": "orthotropic", **ORTHO, "axis1": [0, 1, 0], "axis2": [1, 0, 0],
+                      "where": {"box": [[1.0, 0.0, 0.0], [2.0, 0.1, 0.1]]}}]
+    d["output"]["probes"] = {"corner": [2.0, 0.1, 0.1]}
+    r = ff.solve_static(ff.Scene.from_dict(d)).summary()
+    ux = r["probes"]["corner"]["displacement"][0]
+    assert ux == pytest.approx(SIGMA * (1 / ORTHO["E1"] + 1 / ORTHO["E2"]), rel=0.01)
 
 
 @pytest.mark.parametrize("change, message", [

@@ -79,6 +79,7 @@ def test_the_first_bending_frequency_is_euler_bernoullis_of_the_layered_section(
     assert r.frequencies_hz[0] == pytest.approx(f1, rel=0.01)
 
 
+@pytest.mark.mpi
 def test_two_ranks_give_the_serial_answer(tmp_path):
     d = layered(soft="neo-hookean", stiff="neo-hookean")
     scene = tmp_path / "scene.toml"
@@ -89,6 +90,19 @@ def test_two_ranks_give_the_serial_answer(tmp_path):
     par = json.loads(next((tmp_path / "out").rglob("results.json")).read_text())
     assert np.allclose(par["probes"]["tip"]["displacement"], serial["probes"]["tip"]["displacement"], rtol=1e-8)
     assert [m["mass"] for m in par["materials"]] == pytest.approx([m["mass"] for m in serial["materials"]])
+
+
+def test_the_mixed_formulation_with_two_materials_bends_as_the_transformed_section():
+    """Taylor-Hood P2-P1 (its lambda a DG0 field), nu 0.3, P2 tetrahedra: the transformed section within 1 %
+    (measured +0.26 %; the P2 displacement formulation on these coarse tetrahedra: -1.6 %)."""
+    d = layered("neo-hookean", "neo-hookean", discretization={"degree": 2, "formulation": "mixed"})
+    d["mesh"]["cell"] = "tetrahedron"
+    for m in d["material"]:
+        m["nu"] = 0.3
+    s = ff.solve_static(ff.Scene.from_dict(d)).summary()
+    assert s["converged"]
+    EI, _ = transformed_section()
+    assert -s["probes"]["tip"]["displacement"][2] == pytest.approx(P * L ** 3 / (3 * EI), rel=0.01)
 
 
 # --- a bimetal strip: two layers expanding differently, heated uniformly ---------------------

@@ -129,3 +129,18 @@ def test_bad_viscoelastic_input_is_refused_in_one_line(change, message):
         d["material"]["rho"] = 1000.0
     with pytest.raises(InputError, match=message):
         ff.Scene.from_dict(d)
+
+
+def test_a_model_solved_again_starts_again_from_rest():
+    """Model reuse (set_values, then solve_static(model=...)): the second solve relaxes from t = 0 at rest as
+    the first did (its time and history had stayed at the first run's end: exp(+300) and no convergence)."""
+    from fem_forms.model import build_model
+    scene = ff.Scene.from_dict(bar(fix_history=(1e-4, [[0.0, 0.0], [1e-3, 1.0], [3.0, 1.0]])))
+    model = build_model(scene)
+    first = ff.solve_static(scene, model=model).summary()["reactions"]["pull"][0]
+    model.set_values(scene)
+    again = ff.solve_static(scene, model=model)
+    assert again.report.converged
+    assert again.summary()["reactions"]["pull"][0] == pytest.approx(first, rel=1e-10)
+    with pytest.raises(InputError, match="a new number of Prony terms needs a new model"):
+        model.set_values(ff.Scene.from_dict(bar(prony=PRONY[:1], fix_history=(1e-4, [[0.0, 0.0], [1.0, 1.0]]))))

@@ -67,10 +67,12 @@ def _band(W: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
     return np.vstack([W - tol * m, -W - tol * m]), np.zeros(2 * len(W))
 
 
-def _program(P: Problem, objective_rows: np.ndarray, W: np.ndarray, b: np.ndarray) -> lp.Program:
+def _program(P: Problem, objective_rows: np.ndarray | None, W: np.ndarray, b: np.ndarray,
+             objective: np.ndarray | None = None) -> lp.Program:
+    """min (objective_rows . M(s)) (or objective . s) subject to W . M(s) <= b."""
     t0 = time.perf_counter()
     A, bb = P.constraint(W, b)
-    p = lp.Program(objective_rows @ P.G, A, bb, P.n, groups=P.groups)
+    p = lp.Program(objective_rows @ P.G if objective is None else objective, A, bb, P.n, groups=P.groups)
     P.timing.setup_s += time.perf_counter() - t0
     return p
 
@@ -108,7 +110,8 @@ def stand(P: Problem, normals: np.ndarray, offsets: np.ndarray, frame: tuple, gr
         raise SolveError("balance: no carving makes the part stand with the requested margin (best "
                          f"margin x mass {best} < 0): lower margin_angle or shell, or widen the foot")
     z = v[-1]
-    p2 = _program(P, -rows.mass(), -W, -KEEP_MARGIN * z * np.ones(len(W)))
+    # least mass moved: the carved (hollow or light fill) or ballasted cells' |rho - fill| V, least
+    p2 = _program(P, None, -W, -KEEP_MARGIN * z * np.ones(len(W)), objective=-np.abs(P.G[0]))
     v2 = lp.solve(p2, P.timing)
     return _finish(P, p2, v2, "balance: the least-carved stand design failed")
 
@@ -161,13 +164,15 @@ def spin(P: Problem, axis: np.ndarray, point: np.ndarray, along: bool) -> np.nda
 def swim(P: Problem, frame: tuple, buoyancy: np.ndarray, target_mass: float, max_KG_height: float) -> np.ndarray:
     """Mass = displaced water, CoM on the buoyancy vertical, CoM below the height that gives GM_min."""
     up, e1, e2 = frame
-    lo, hi = P.M0[0], P.M0[0] + P.G[0].sum()
+    # the lightest and heaviest designs (each cell solid or carved: a fill lighter or heavier than the solid)
+    lo = P.M0[0] + np.minimum(P.G[0], 0.0).sum()
+    hi = P.M0[0] + np.maximum(P.G[0], 0.0).sum()
     if target_mass > hi * (1 + MASS_TOLERANCE):
-        raise SolveError(f"balance: too light to float at this waterline even solid (mass {hi:.6g} kg < "
+        raise SolveError(f"balance: too light to float at this waterline (the heaviest design: {hi:.6g} kg < "
                          f"displaced water {target_mass:.6g} kg)")
     if target_mass < lo * (1 - MASS_TOLERANCE):
-        raise SolveError(f"balance: too heavy to float at this waterline even fully carved (mass {lo:.6g} kg "
-                         f"> displaced water {target_mass:.6g} kg): lower shell or raise the waterline")
+        raise SolveError(f"balance: too heavy to float at this waterline (the lightest design: {lo:.6g} kg > "
+                         f"displaced water {target_mass:.6g} kg): lower shell or raise the waterline")
     tol_c = CENTER_TOLERANCE * P.size
     m = rows.mass()
     W = [m, -m]
