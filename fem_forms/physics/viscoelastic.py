@@ -75,6 +75,11 @@ class ViscoelasticSolid(ElasticEnergy):
         self.t = self.t_committed = 0.0
         self.update(0.0)
 
+    def resume(self, t: float) -> None:
+        """Continue from a checkpoint at time t (its Prony stresses and committed S0 restored with the State)."""
+        self.t = self.t_committed = t
+        self.update(t)
+
     def prepare(self, ctx: Context) -> None:
         self.residual_by_hand = False                  # the step energy has the history term: ufl.derivative
 
@@ -95,6 +100,24 @@ class ViscoelasticSolid(ElasticEnergy):
 
     def energy(self, ctx: Context) -> ufl.Form:
         return ctx.volume(self.density(ctx))
+
+    def elastic_law_energy(self, ctx: Context) -> ufl.Form:
+        """int psi dX: the instantaneous elastic law (the stiffness at rest, for Rayleigh damping)."""
+        return ctx.volume(super().density_at(ctx, ctx.F))
+
+    def committed_energy(self, ctx: Context) -> ufl.Form:
+        """int g_inf psi dX: the equilibrium branch's stored energy (the energy account's `elastic`; the Prony
+        branches' share is booked as their work, `viscous_work`)."""
+        return ctx.volume((1 - sum(self.g)) * super().density_at(ctx, ctx.F))
+
+    def viscous_work(self, start: Context, end: Context) -> ufl.Form:
+        """int sum_i (Q_i,n + Q_i,n+1) / 2 : (E_n+1 - E_n) dX: the work of the Prony branches' stresses over a
+        step from start's u to end's (the trapezoidal rule of the energy account), Q_i,n the committed ones;
+        stored in the branches or dissipated."""
+        S0 = self.elastic_stress(end, end.F)
+        dE = self.strain(end.F) - self.strain(start.F)
+        mean = sum(Q + 0.5 * ((a - 1) * Q + b * (S0 - self.S0)) for a, b, Q in zip(self.a, self.b, self.Q))
+        return end.volume(ufl.inner(mean, dE))
 
     def pk1(self, ctx: Context):
         F = ufl.variable(ctx.F)

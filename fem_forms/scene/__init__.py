@@ -111,7 +111,6 @@ def _parse_scene(data: dict, base_dir: Path, source: Path | None) -> Scene:
     prism_rules(sc.mesh, sc.discretization, sc.load, sc.analysis)
     quadrature_rules(sc.mesh, sc.discretization)
     plasticity_rules(sc)
-    viscoelastic_rules(sc)
     if any(ld.type == "gravity" for ld in sc.load) and max(m.rho for m in sc.materials) <= 0:
         raise InputError("material.rho: gravity needs a positive density")
 
@@ -123,6 +122,7 @@ def _parse_scene(data: dict, base_dir: Path, source: Path | None) -> Scene:
         setattr(sc, name, _section(t, mine or first, base_dir))
     if "contact_pressure" in (sc.output.fields or []) and getattr(sc, "contact", None) is None:
         raise InputError("output.fields: 'contact_pressure' needs a [contact] section (nothing touches without)")
+    viscoelastic_rules(sc)                             # after the analysis's own sections: it reads [dynamic]
     if analysis.check is not None:
         analysis.check(sc)
     t.done()

@@ -49,8 +49,8 @@ MATERIAL_KEYS = (
         Key("k2", "number", "holzapfel: exponential stiffening (dimensionless)", default=1.0,
             exclusive_minimum=0, attr="fiber_k2"))),
     Key("viscoelastic", "table", "finite-strain generalized Maxwell (Simo 1987): the stress relaxes from its "
-        "instantaneous value (E) to g_inf = 1 - sum g_i of it; static, with a load or support history (its "
-        "pseudo-time is then time)", keys=(
+        "instantaneous value (E) to g_inf = 1 - sum g_i of it; dynamic (implicit schemes) and static, with a "
+        "load or support history (its pseudo-time is then time)", keys=(
             Key("prony", "points", "[g_i, tau_i] pairs: relative modulus and relaxation time", unit="-, s",
                 length=2, min_items=1, attr="prony", note="must list [g, tau] pairs"),)),
     PLASTICITY,
@@ -179,9 +179,11 @@ def viscoelastic_rules(scene) -> None:
     key = f"{visco.key}.viscoelastic"
     if scene.several_materials:
         raise InputError(f"{key}: for a single [material] table only (not implemented for several materials)")
-    if scene.analysis != "static":
-        raise InputError(f"{key}: for analysis = 'static' only (this scene's is {scene.analysis!r}; dynamics with "
-                         "viscoelasticity is not implemented yet)")
+    if scene.analysis not in ("static", "dynamic"):
+        raise InputError(f"{key}: for analysis = 'static' or 'dynamic' only (this scene's is {scene.analysis!r})")
+    if scene.analysis == "dynamic" and scene.dynamic.scheme == "central-difference":
+        raise InputError(f"{key}: not with the explicit central-difference scheme (its steps solve nothing: no "
+                         "step energy); use newmark or generalized-alpha")
     if visco.plasticity_model is not None:
         raise InputError(f"{key}: not with [material.plasticity] (not implemented together)")
     if scene.discretization.formulation != "displacement":

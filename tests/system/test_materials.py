@@ -210,3 +210,21 @@ def test_bimetal_strip_demo(demo):
     assert [m["mass"] for m in res["materials"]] == pytest.approx(
         [brass["rho"] * L * b * h / 2, steel["rho"] * L * b * h / 2], rel=1e-9)
     assert (out / "deformed.png").stat().st_size > 0
+
+
+def test_heat_flows_through_two_materials_in_series_as_their_resistances_say():
+    """Steady conduction (analysis = "thermal") through a bar whose halves conduct differently (each
+    material's own conductivity, no [thermal] conductivity at all): the joint's temperature divides the drop
+    as the series resistances L/2k do."""
+    from fem_forms.analyses.thermal import solve_thermal
+    k1, k2, T0, T1 = 1.0, 4.0, 100.0, 0.0
+    d = {"analysis": "thermal", "mesh": {"size": [1.0, 0.1, 0.1], "cells": [20, 1, 1]},
+         "material": [{"name": "left", "E": 1e9, "nu": 0.3, "rho": 1000.0, "conductivity": k1},
+                      {"name": "right", "E": 1e9, "nu": 0.3, "rho": 1000.0, "conductivity": k2,
+                       "where": {"box": [[0.5, 0.0, 0.0], [1.0, 0.1, 0.1]]}}],
+         "thermal": {"boundary": [{"where": {"axis": "x", "at": 0.0}, "temperature": T0},
+                                  {"where": {"axis": "x", "at": 1.0}, "temperature": T1}]},
+         "output": {"probes": {"joint": [0.5, 0.05, 0.05]}}}
+    s = solve_thermal(ff.Scene.from_dict(d)).summary()
+    r1, r2 = 0.5 / k1, 0.5 / k2
+    assert s["probes"]["joint"]["temperature"] == pytest.approx(T1 + (T0 - T1) * r2 / (r1 + r2), rel=1e-9)

@@ -7,7 +7,9 @@ ch. 5), a bar in uniaxial stress on rollers, the static analysis's pseudo-time b
 - creep of a standard linear solid (one Prony term) under a load ramped then held: the strain follows the
   creep compliance J(t) = 1/E_inf - (1/E_inf - 1/E) exp(-t/tau_c), tau_c = tau / g_inf, convolved with the ramp;
 - at a finite stretch (neo-Hookean, 50 %) the held force relaxes by the same function of time from the
-  elastic force of that stretch (a run without viscoelasticity)."""
+  elastic force of that stretch (a run without viscoelasticity);
+- in dynamics a suddenly loaded cantilever comes to rest at the deflection of its long-term modulus (beam
+  theory), the energy account (with the work on the Prony branches) constant."""
 import json
 import math
 
@@ -115,7 +117,10 @@ def test_two_ranks_relax_as_one(tmp_path):
     ({"prony": [[1.2, 1.0]]}, r"the relative modulus g must lie in \(0, 1\)"),
     ({"prony": [[0.2, 0.0]]}, "the relaxation time tau must be positive"),
     ({"fix_history": None}, "a static scene needs time"),
-    ({"analysis": "modal"}, "for analysis = 'static' only"),
+    ({"analysis": "modal"}, "for analysis = 'static' or 'dynamic' only"),
+    ({"analysis": "dynamic", "dynamic": {"scheme": "central-difference", "mass": "lumped"}},
+     "not with the explicit central-difference scheme"),
+    ({"solver": {"control": "arc-length"}}, "not with solver.control = 'arc-length'"),
     ({"discretization": {"degree": 2, "formulation": "mixed"}}, "the mixed formulation is not implemented"),
 ])
 def test_bad_viscoelastic_input_is_refused_in_one_line(change, message):
@@ -125,8 +130,9 @@ def test_bad_viscoelastic_input_is_refused_in_one_line(change, message):
     if "fix_history" in over:
         args["fix_history"] = over.pop("fix_history")
     d = bar(model="neo-hookean", **args, **over)
-    if d.get("analysis") == "modal":
+    if d.get("analysis") in ("modal", "dynamic"):
         d["material"]["rho"] = 1000.0
+        d["fix"] = [f for f in d["fix"] if "history" not in f]       # a support history is static's
     with pytest.raises(InputError, match=message):
         ff.Scene.from_dict(d)
 
@@ -144,3 +150,52 @@ def test_a_model_solved_again_starts_again_from_rest():
     assert again.summary()["reactions"]["pull"][0] == pytest.approx(first, rel=1e-10)
     with pytest.raises(InputError, match="a new number of Prony terms needs a new model"):
         model.set_values(ff.Scene.from_dict(bar(prony=PRONY[:1], fix_history=(1e-4, [[0.0, 0.0], [1.0, 1.0]]))))
+
+
+def cantilever(duration=3.0) -> dict:
+    L, B, H, P = CANTILEVER
+    return {"title": "viscoelastic cantilever", "analysis": "dynamic",
+            "mesh": {"size": [L, B, H], "cells": [16, 1, 4], "cell": "hexahedron"},
+            "material": {"model": "linear", "E": E * 10, "nu": 0.0, "rho": 1000.0,
+                         "viscoelastic": {"prony": [[0.5, 0.08]]}},
+            "discretization": {"degree": 2}, "fix": [{"where": {"axis": "x", "at": 0.0}}],
+            "load": [{"type": "traction", "where": {"axis": "x", "at": L}, "value": [0.0, 0.0, -P / (B * H)]}],
+            "dynamic": {"duration": duration, "dt": 0.0125, "checkpoint_every": 20},
+            "output": {"picture": False, "fields": [], "probes": {"tip": [L, B / 2, H / 2]}}}
+
+
+CANTILEVER = (0.4, 0.04, 0.02, 0.02)          # L, B, H (m), tip load P (N)
+
+
+def test_a_viscoelastic_cantilever_swings_to_rest_at_its_relaxed_deflection():
+    """Dynamics: a tip load applied at t = 0 sets a cantilever swinging; its Prony branch (g = 0.5, tau near
+    1 / omega_1) damps the swing, and it comes to rest at the deflection of the long-term modulus g_inf E,
+    P L^3 / (3 g_inf E I) (beam theory; another method than the motion). The energy account (kinetic +
+    g_inf psi - external work + the branches' work) stays constant."""
+    from fem_forms.analyses.dynamic import solve_dynamic
+    L, B, H, P = CANTILEVER
+    r = solve_dynamic(ff.Scene.from_dict(cantilever()))
+    assert r.failure is None
+    rows = np.array(r.probe_rows)
+    relaxed = P * L**3 / (3 * 0.5 * E * 10 * B * H**3 / 12)
+    assert -rows[-1, 3] == pytest.approx(relaxed, rel=0.02)
+    assert np.ptp(rows[rows[:, 0] > 2.5, 3]) < 0.01 * relaxed             # at rest
+    s = r.summary()
+    assert s["energy_final"]["viscous_work"] > 0
+    assert s["energy_balance_error"] < 0.01
+
+
+def test_a_viscoelastic_run_continued_from_its_checkpoint_ends_where_the_whole_run_does(tmp_path):
+    """--restart: the Prony stresses come back with the State and the branches' clock with the checkpoint's
+    time (a clock left at 0 would step them by the whole elapsed time)."""
+    from fem_forms.cli import main
+    for name in ("whole", "half"):
+        (tmp_path / name).mkdir()
+    code, whole, err, _ = run_scene(tmp_path / "whole", cantilever(0.5))
+    assert code == 0, err
+    code, _, err, out = run_scene(tmp_path / "half", cantilever(0.25))
+    assert code == 0, err
+    assert main(["run", str(tmp_path / "whole" / "scene.toml"), "--out", str(out), "--restart", str(out), "-q"]) == 0
+    cont = json.loads((out / "results.json").read_text())
+    assert cont["probes"]["tip"]["displacement"] == pytest.approx(whole["probes"]["tip"]["displacement"],
+                                                                 rel=1e-7, abs=1e-12)

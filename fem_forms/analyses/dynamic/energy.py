@@ -50,22 +50,24 @@ class Energies:
     thermal_work: float = 0.0
     plastic_work: float = 0.0
     contact: float = 0.0              # the contact barrier's stored energy
+    viscous_work: float = 0.0         # the work on a viscoelastic solid's Prony branches (stored there or lost)
 
     def row(self) -> list:
         """The values in the order of COLUMNS."""
         return [self.kinetic, self.elastic, self.external_work, self.dissipated, self.thermal_work,
-                self.plastic_work, self.contact]
+                self.plastic_work, self.contact, self.viscous_work]
 
     def balance(self) -> float:
-        """E_kin + E_el + E_contact - W_ext - W_th + D + W_p (constant in an exact account)."""
+        """E_kin + E_el + E_contact - W_ext - W_th + D + W_p + W_v (constant in an exact account)."""
         return (self.kinetic + self.elastic + self.contact - self.external_work - self.thermal_work
-                + self.dissipated + self.plastic_work)
+                + self.dissipated + self.plastic_work + self.viscous_work)
 
 
 # energies below that of the whole part strained this much are round-off: a balance relative to them would be
 # a ratio of two noises (strains of 1e-8 are sqrt(machine epsilon), far below any motion a run is asked for)
 ENERGY_FLOOR_STRAIN = 1e-8
-COLUMNS = ("kinetic", "elastic", "external_work", "dissipated", "thermal_work", "plastic_work", "contact")
+COLUMNS = ("kinetic", "elastic", "external_work", "dissipated", "thermal_work", "plastic_work", "contact",
+           "viscous_work")
 
 
 def at_temperature(ctx: Context, T: fem.Function, T_then: fem.Function) -> Context:
@@ -117,6 +119,10 @@ class EnergyAccount:
             start = at_temperature(start, m.temperature, s.state.old["temperature"])
         self.plastic = fem.form(term.plastic_dissipation(start, ctx)) if plastic else None
         self.plastic_thermal = fem.form(term.thermal_work(start, ctx)) if plastic and self.thermal else None
+        viscous = hasattr(term, "viscous_work")
+        if viscous and self.u0 is None:
+            self.u0 = fem.Function(V)
+        self.viscous = fem.form(term.viscous_work(replace(m.context, u=self.u0), ctx)) if viscous else None
         if s.lumped is None:
             self.M = fpetsc.assemble_matrix(s.mass)
             self.M.assemble()
@@ -226,9 +232,13 @@ class EnergyAccount:
             plastic = self._scalar(self.plastic)
             if self.plastic_thermal is not None:
                 thermal = self._scalar(self.plastic_thermal)
+        viscous = 0.0
+        if self.viscous is not None:                 # before commit: the Prony stresses are the step's start
+            self._set(self.u0, u0)
+            viscous = self._scalar(self.viscous)
         self.now = Energies(self.kinetic(), self._scalar(self.elastic), prev.external_work + work,
                             prev.dissipated + dis, prev.thermal_work + thermal, prev.plastic_work + plastic,
-                            self._contact())
+                            self._contact(), prev.viscous_work + viscous)
         self.history.append((t_new, self.now))
         return self.now
 
@@ -241,7 +251,8 @@ class EnergyAccount:
         accounted plastic solid, contact with [contact])."""
         return COLUMNS[:4] + (("thermal_work",) if self.thermal else ()) + \
             (("plastic_work",) if self.plastic_accounted else ()) + \
-            (("contact",) if self.system.model.terms.with_role("contact") else ())
+            (("contact",) if self.system.model.terms.with_role("contact") else ()) + \
+            (("viscous_work",) if self.viscous is not None else ())
 
     def imbalance(self) -> float:
         """max over time of |E_kin + E_el - W_ext - W_th + D + W_p - (its start value)| in J."""

@@ -128,6 +128,7 @@ class ImplicitStepper:
         s.set_load_time(t + dt, t, self.released)
         for term in s.model.terms.with_role("contact"):
             term.update(t + dt)                    # obstacles where they are at the step's end
+        s.model.solid.update(t + dt)               # a solid with time (viscoelastic): the step's dt
         rec, why = self._solve(dt)
         if why is not None and self._fall_back(rec):        # CG failed on a fresh hierarchy: MUMPS, same dt
             rec, why = self._again(rec, dt)

@@ -158,6 +158,8 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
         if m.rho <= 0:
             raise InputError(f"{m.key}.rho: dynamic analysis needs a positive density")
     system = build_system(scene)
+    if hasattr(system.model.solid, "restart"):          # a solid with time (viscoelastic) starts at t = 0, at rest
+        system.model.solid.restart(system.state)
     if system.model.temperature is not None:
         system.model.temperature.x.array[:] = scene.thermal.initial_temperature
     released = set(dyn.initial_loads) if dyn.initial == "static" else set()
@@ -182,6 +184,8 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
         t_start, step0, dt = checkpoint.load(restart, result)
         for term in system.model.terms.with_role("contact"):
             term.resume(t_start)                   # the next step starts at the checkpoint's time
+        if hasattr(system.model.solid, "resume"):  # a viscoelastic solid: its history is the checkpoint's
+            system.model.solid.resume(t_start)
     else:
         account.start(0.0)
         result.probe_rows.append(probe_row(points, system, 0.0))
