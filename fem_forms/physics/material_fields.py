@@ -1,6 +1,7 @@
 """Several materials in one energy: the materials of one model share its psi(F) with DG0 parameter fields
-(one form, one kernel: as fast as one material); materials of different models add their psi weighted by DG0
-indicators (each model evaluated everywhere, counted on its own cells)."""
+(one form, one kernel: as fast as one material); materials of different models each integrate their psi over
+their own cells, or (where one expression is needed: stresses, a body load's own cell tags) add their psi
+weighted by DG0 indicators."""
 from __future__ import annotations
 
 import copy

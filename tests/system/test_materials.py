@@ -228,3 +228,20 @@ def test_heat_flows_through_two_materials_in_series_as_their_resistances_say():
     s = solve_thermal(ff.Scene.from_dict(d)).summary()
     r1, r2 = 0.5 / k1, 0.5 / k2
     assert s["probes"]["joint"]["temperature"] == pytest.approx(T1 + (T0 - T1) * r2 / (r1 + r2), rel=1e-9)
+
+
+def test_two_models_with_gravity_on_one_volume_group():
+    """Materials of two kinds (each psi over its own cells) with gravity on one gmsh volume group (cell tags of
+    its own): one form could hold only one of the two cell taggings, and the run stopped; now the clamp
+    carries the group's weight rho g V, V = 100 x 20 x 2 mm (the PneuNet's bottom layer)."""
+    from helpers import ROOT
+    d = {"mesh": {"generator": "file", "file": str(ROOT / "demos" / "scenes" / "pneunet.msh")},
+         "material": [{"name": "silicone", "model": "neo-hookean", "E": 1e5, "nu": 0.45, "rho": 1070.0},
+                      {"name": "layer", "model": "stvk", "E": 1e6, "nu": 0.45, "rho": 1100.0,
+                       "where": {"group": "layer"}}],
+         "discretization": {"degree": 1}, "fix": [{"name": "clamp", "where": {"group": "clamp"}}],
+         "load": [{"type": "gravity", "g": [0.0, 0.0, -9.81], "where": {"group": "layer"}}],
+         "output": {"picture": False, "fields": False}}
+    s = ff.solve_static(ff.Scene.from_dict(d)).summary()
+    assert s["converged"]
+    assert s["reactions"]["clamp"][2] == pytest.approx(1100.0 * 9.81 * 0.1 * 0.02 * 0.002, rel=1e-8)
