@@ -44,6 +44,19 @@ def test_leaning_part_topples_then_stands_with_margin(tmp_path, leaning):
         assert (out / f).stat().st_size > 0
 
 
+def test_a_ballast_makes_the_leaning_part_stand_with_the_least_steel(tmp_path, leaning):
+    """Stand with a steel ballast (fill_density 7800 > rho): it stands with the margin; the second stage moves the
+    least mass, so the steel is a small part of the carvable volume (it filled all it could before: the stage
+    maximised the mass, which for a ballast is the most steel); mass = solid + (7800 - rho) x ballast volume."""
+    mesh = {"generator": "file", "file": str(leaning)}
+    code, check, _, _ = run(tmp_path / "c", scene(mesh, goal="check"))
+    code, d, err, _ = run(tmp_path / "b", scene(mesh, goal="stand", margin_angle=2.0, shell=0.003,
+                                               fill_density=7800.0))
+    assert code == 0 and d["stands"] and d["meets_margin"], err
+    assert 0 < d["carved_fraction"] < 0.25
+    assert d["mass"] - check["mass"] == pytest.approx(check["mass"] * d["carved_fraction"] * 6.8, rel=1e-9)
+
+
 def test_stand_needs_an_area_and_a_reachable_margin(tmp_path, leaning):
     mesh = {"generator": "file", "file": str(leaning)}
     code, d, _, _ = run(tmp_path, scene(mesh, goal="stand", margin_angle=30.0))
@@ -84,6 +97,20 @@ def test_box_floats_upright_at_its_waterline(tmp_path):
     assert code == 3 and d is None                    # too light even solid
     code, d, _, _ = run(tmp_path / "shallow", light(goal="swim", waterline=0.01, shell=0.01))
     assert code == 3 and d is None                    # too heavy even carved
+
+
+def test_a_steel_ballast_sinks_the_box_to_a_waterline_it_cannot_reach_solid(tmp_path):
+    """The box above, asked to float at T = 55 mm (solid it is too light: exit 3 above): ballast (fill_density
+    7800) adds the mass; it floats upright there (Archimedes: mass = rho_w L B T), the CoM on the vertical."""
+    L, B, H, T = 0.2, 0.1, 0.06, 0.055
+    box = {"generator": "box", "size": [L, B, H], "cells": [20, 10, 6]}
+    d = dict(scene(box, goal="swim", waterline=T, shell=0.01, fill_density=7800.0),
+             material={"model": "neo-hookean", "E": 1e6, "nu": 0.3, "rho": 600.0})
+    code, r, err, _ = run(tmp_path, d)
+    assert code == 0, err
+    assert r["mass"] == pytest.approx(1000.0 * L * B * T, rel=1.1e-3)
+    assert np.allclose(r["center_of_mass"][:2], [L / 2, B / 2], atol=3e-4 * 0.25)
+    assert r["metacentric_height"] > 0
 
 
 def test_results_report_the_lp_sifting(tmp_path):
