@@ -130,13 +130,15 @@ class FiberReinforced:
 
     def update(self, specs: list) -> None:
         """New fibre values from the scene's materials (the same families: other fibres need a new model)."""
-        now = [(i, m.fiber_model) for i, m in enumerate(specs) if m.fiber_direction is not None]
+        now = [(i, m.fiber_model) for i, m in enumerate(specs)
+               if m.fiber_direction is not None or m.fiber_field is not None]
         if now != [(f["index"], f["kind"]) for f in self.families]:
             raise InputError("material: fibres added, removed or of another model need a new model (new values "
                              "of direction, E and k2 do not)")
         for f in self.families:
             m = specs[f["index"]]
-            f["direction"].value = unit(m.fiber_direction, m.key)
+            if m.fiber_direction is not None:              # a cell field's directions stay the mesh file's
+                f["direction"].value = unit(m.fiber_direction, m.key)
             f["E"].value, f["k2"].value = m.fiber_E, m.fiber_k2
 
 

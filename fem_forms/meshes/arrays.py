@@ -22,6 +22,7 @@ class MeshArrays:
     curve_groups: dict = field(default_factory=dict)   # curve group name -> (k, 2, 3) edge end points
     point_groups: dict = field(default_factory=dict)   # point group name -> (k, 3) coordinates
     info: dict = field(default_factory=dict)           # what results.json says about the mesh
+    cell_fields: dict = field(default_factory=dict)    # name -> (cells, k) values per cell (a fibre direction)
 
 
 def cell_volumes(points: np.ndarray, cells: np.ndarray, cell_type: str) -> np.ndarray:
@@ -79,4 +80,4 @@ def compact(a: MeshArrays) -> MeshArrays:
     # facets touching unused nodes (degenerate surfaces, e.g. the revolution axis) are dropped
     groups = {n: new[f][np.all(new[f] >= 0, axis=1)] for n, f in a.facet_groups.items()}
     return MeshArrays(a.points[used], new[a.cells], a.cell_type, {n: f for n, f in groups.items() if len(f)},
-                      a.cell_groups, a.curve_groups, a.point_groups, a.info)
+                      a.cell_groups, a.curve_groups, a.point_groups, a.info, a.cell_fields)

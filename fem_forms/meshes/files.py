@@ -81,4 +81,15 @@ def read_mesh_file(path: Path) -> MeshArrays:
     pts = np.asarray(m.points, dtype=np.float64)
     if pts.shape[1] != 3:
         raise InputError(f"mesh.file = {str(path)!r}: points must have 3 coordinates")
-    return compact(MeshArrays(pts, cells, cell_type, {}))
+    return compact(MeshArrays(pts, cells, cell_type, {}, cell_fields=_cell_fields(m, kinds)))
+
+
+def _cell_fields(m, kinds: dict) -> dict:
+    """The numeric cell data of the volume blocks (meshio's cell_data: VTU, XDMF), name -> (cells, k)."""
+    out = {}
+    for name, per_block in m.cell_data.items():
+        values = [np.asarray(v) for b, v in zip(m.cells, per_block) if b.type in kinds]
+        if name.startswith("gmsh:") or not values or not all(np.issubdtype(v.dtype, np.number) for v in values):
+            continue
+        out[name] = np.vstack([v.reshape(len(v), -1) for v in values]).astype(float)
+    return out

@@ -33,6 +33,7 @@ class LoadedMesh:
     curves: dict = field(default_factory=dict)   # curve group name -> (k, 2, 3) edge end points (all ranks)
     points: dict = field(default_factory=dict)   # point group name -> (k, 3) coordinates (all ranks)
     info: dict = field(default_factory=dict)     # cell count, source, quality (results.json "mesh")
+    cell_fields: dict = field(default_factory=dict)   # a mesh file's cell data: name -> (local cells, k)
 
     def group_names(self) -> str:
         """The mesh's named groups by kind, for messages."""
@@ -60,9 +61,9 @@ def _on_root(comm: MPI.Comm, build):
 
 def distribute(comm: MPI.Comm, arrays: MeshArrays | None) -> LoadedMesh:
     """Create a distributed dolfinx mesh (and facet tags of the named groups) from rank-0 arrays."""
-    cell_type, names, volumes, curves, points, info = comm.bcast(
+    cell_type, names, volumes, curves, points, info, fields = comm.bcast(
         (arrays.cell_type, list(arrays.facet_groups), list(arrays.cell_groups), arrays.curve_groups,
-         arrays.point_groups, arrays.info) if comm.rank == 0 else None, root=0)
+         arrays.point_groups, arrays.info, arrays.cell_fields) if comm.rank == 0 else None, root=0)
     nv = 4 if cell_type == "tetrahedron" else 8
     domain = ufl.Mesh(ufl.VectorElement("Lagrange", ufl.Cell(cell_type), 1))
     dtype = dmesh.to_type(cell_type)
@@ -75,7 +76,9 @@ def distribute(comm: MPI.Comm, arrays: MeshArrays | None) -> LoadedMesh:
     cell_sets = distribute_cell_groups(
         mesh, arrays.cells if comm.rank == 0 else None, arrays.cell_groups if comm.rank == 0 else None,
         volumes, cell_type) if volumes else {}
-    extra = dict(cells=cell_sets, curves=curves, points=points, info=info)
+    original = np.asarray(mesh.topology.original_cell_index, dtype=np.int64)      # each local cell's row
+    extra = dict(cells=cell_sets, curves=curves, points=points, info=info,
+                 cell_fields={n: np.asarray(v)[original] for n, v in fields.items()})
     if not names:
         return LoadedMesh(mesh, None, {}, **extra)
     fdim = mesh.topology.dim - 1

@@ -58,7 +58,7 @@ def scene_physics(scene: Scene, loaded: LoadedMesh, u, bc_space: fem.FunctionSpa
     binding = MaterialBinding(scene.materials, regions) if material is None and regions.several else None
     mat = binding.material if binding is not None else bind_constants(build_material(scene, material), mesh)
     if material is None:
-        mat = with_fibers(mat, scene.materials, regions)
+        mat = with_fibers(mat, scene.materials, regions, loaded)
     disc, cell = scene.discretization, mesh.topology.cell_name()
     if why := check_degree(cell, disc.degree, disc.quadrature_degree, disc.formulation):
         raise InputError(why)                          # a mesh file's cell, known only now

@@ -91,18 +91,46 @@ class MaterialBinding:
                 self.regions.fill(f, self._values(built, part.members, name))
 
 
-def with_fibers(material: Material, specs: list, regions: MaterialRegions):
+def with_fibers(material: Material, specs: list, regions: MaterialRegions, loaded=None):
     """The solid's material plus the fibre families of the materials that have [material] fibers (each
     on its own cells when there are several materials), or `material` as it is when none has."""
     families = []
     for i, m in enumerate(specs):
-        if m.fiber_direction is None:
+        if m.fiber_direction is None and m.fiber_field is None:
             continue
         mesh = regions.mesh
+        direction = (fem.Constant(mesh, unit(m.fiber_direction, m.key)) if m.fiber_field is None
+                     else field_directions(loaded, m.fiber_field, regions, i, f"{m.key}.fibers.group_field"))
         families.append({
-            "direction": fem.Constant(mesh, unit(m.fiber_direction, m.key)),
+            "direction": direction,
             "E": fem.Constant(mesh, PETSc.ScalarType(m.fiber_E)),
             "k2": fem.Constant(mesh, PETSc.ScalarType(m.fiber_k2)), "kind": m.fiber_model, "index": i,
             "indicator": regions.field([1.0 if j == i else 0.0 for j in range(len(specs))], "fibers")
             if regions.several else None})
     return FiberReinforced(material, families) if families else material
+
+
+def field_directions(loaded, name: str, regions: MaterialRegions, index: int, key: str) -> fem.Function:
+    """A DG0 vector Function of unit fibre directions from the mesh file's cell field `name` (the cells of
+    material `index`; the others keep a placeholder their indicator zeroes)."""
+    fields = getattr(loaded, "cell_fields", {}) or {}
+    if name not in fields:
+        have = ", ".join(sorted(fields)) or "none (a gmsh .msh or a generated mesh carries no cell data)"
+        raise InputError(f"{key} = {name!r}: the mesh file has no such cell field (its cell fields: {have})")
+    values = np.asarray(fields[name], dtype=float)
+    if values.ndim != 2 or values.shape[1] != 3:
+        raise InputError(f"{key} = {name!r}: must be a vector per cell (3 components), got {values.shape[1:]}")
+    own = regions.n_owned
+    length = np.linalg.norm(values[:own], axis=1)
+    mine = regions.index[:own] == index
+    bad = int(np.count_nonzero(mine & (length == 0)))
+    from mpi4py import MPI
+    if regions.mesh.comm.allreduce(bad, op=MPI.SUM):
+        raise InputError(f"{key} = {name!r}: zero vectors on cells of this material (a fibre needs a direction)")
+    V = fem.VectorFunctionSpace(regions.mesh, ("DG", 0))
+    f = fem.Function(V, name="fiber_direction")
+    units = np.tile([1.0, 0.0, 0.0], (own, 1))
+    units[length > 0] = values[:own][length > 0] / length[length > 0, None]
+    f.x.array[:3 * own] = units.ravel()
+    f.x.scatter_forward()
+    return f

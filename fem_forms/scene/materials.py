@@ -42,6 +42,8 @@ MATERIAL_KEYS = (
         length=3),
     Key("fibers", "table", "fibre reinforcement of a finite-strain model, active in tension only", keys=(
         Key("direction", "vector", "fibre direction in the rest shape", length=3, attr="fiber_direction"),
+        Key("group_field", "string", "instead of direction: the name of a cell field of the mesh file (a vector "
+            "per cell: VTU or XDMF cell data) giving each cell's fibre direction", attr="fiber_field"),
         Key("E", "number", "fibre stiffness: Young's modulus added along the fibres (small strain)",
             unit="Pa", exclusive_minimum=0, attr="fiber_E"),
         Key("model", "string", "holzapfel: k1/(2 k2) (exp(k2 (I4-1)^2) - 1), k1 = E/4; quadratic: E/8 (I4-1)^2",
@@ -86,6 +88,7 @@ class MaterialSpec:
     axis1: list | None = None
     axis2: list | None = None
     fiber_direction: list | None = None
+    fiber_field: str | None = None
     fiber_E: float | None = None
     fiber_model: str = "holzapfel"
     fiber_k2: float = 1.0
@@ -140,13 +143,15 @@ def _fiber_rules(s: MaterialSpec, t: Table) -> None:
     if not t.has("fibers"):
         return
     key = t.key("fibers")
-    for name, value in (("direction", s.fiber_direction), ("E", s.fiber_E)):
-        if value is None:
-            raise InputError(f"{key}.{name}: missing (fibres need a direction and a stiffness E)")
+    if (s.fiber_direction is None) == (s.fiber_field is None):
+        raise InputError(f"{key}: give the fibres' direction = [x, y, z] or group_field = \"name\" (a cell field "
+                         "of the mesh file), one of the two")
+    if s.fiber_E is None:
+        raise InputError(f"{key}.E: missing (fibres need a stiffness E)")
     if s.model in SMALL_STRAIN_MODELS:
         raise InputError(f"{key}: for a finite-strain model (neo-hookean, mooney-rivlin, stvk, corotated); "
                          f"{t.key('model')} is {s.model!r} (use model = 'orthotropic' for small-strain anisotropy)")
-    if not any(s.fiber_direction):
+    if s.fiber_direction is not None and not any(s.fiber_direction):
         raise InputError(f"{key}.direction: must not be the zero vector")
     if t.has("plasticity"):
         raise InputError(f"{key}: not with [material.plasticity] (not implemented together)")

@@ -149,3 +149,64 @@ def test_fibres_stiffen_the_layers_they_reinforce_in_tension_only():
     s = ff.solve_static(ff.Scene.from_dict(d)).summary()
     EI_soft = tm.E_SOFT * tm.B * tm.H ** 3 / 12
     assert -s["probes"]["tip"]["displacement"][2] == pytest.approx(tm.P * tm.L ** 3 / (3 * EI_soft), rel=0.01)
+
+
+def fibre_field_bar(path, direction_of) -> str:
+    """A 2 x 0.1 x 0.1 m bar of tetrahedra as VTU with a cell field "fibers": direction_of(centroid x)."""
+    import meshio
+    from dolfinx import mesh as dmesh
+    from mpi4py import MPI
+    m = dmesh.create_box(MPI.COMM_SELF, [[0.0, 0.0, 0.0], [2.0, 0.1, 0.1]], [40, 2, 2])
+    cells = m.geometry.dofmap.array.reshape(-1, 4)
+    x = m.geometry.x
+    fibers = np.array([direction_of(x[c].mean(axis=0)[0]) for c in cells], dtype=float)
+    meshio.write(str(path), meshio.Mesh(x, [("tetra", cells)], cell_data={"fibers": [fibers]}))
+    return str(path)
+
+
+def test_fibre_directions_read_from_a_cell_field_of_the_mesh_file(tmp_path):
+    """fibers.group_field: each cell's direction from the mesh file (VTU cell data). The bar's left half has
+    its fibres along the pull, its right half across: the halves stretch by sigma / (E_m + E_f) and sigma / E_m
+    (the joint's lateral mismatch is local: 1 %); the field all along x gives the constant direction's answer."""
+    sigma = 50.0
+    def run(direction_of, name):
+        d = pulled_block({"model": "neo-hookean", "E": E_M, "nu": NU_M,
+                          "fibers": {"group_field": "fibers", "E": E_F}}, sigma)
+        d["mesh"] = {"generator": "file", "file": fibre_field_bar(tmp_path / name, direction_of)}
+        d["load"][0]["where"] = {"axis": "x", "at": 2.0}
+        d["fix"] = [dict(MINIMAL[0]), {"where": {"point": [0.0, 0.0, 0.0]}, "components": ["y", "z"]},
+                    {"where": {"point": [0.0, 0.1, 0.0]}, "components": ["z"]}]
+        d["output"]["probes"] = {"corner": [2.0, 0.1, 0.1]}
+        return ff.solve_static(ff.Scene.from_dict(d)).summary()["probes"]["corner"]["displacement"][0]
+    halves = run(lambda x: [1.0, 0.0, 0.0] if x < 1.0 else [0.0, 1.0, 0.0], "halves.vtu")
+    assert halves == pytest.approx(sigma * (1 / (E_M + E_F) + 1 / E_M), rel=0.01)
+    along = run(lambda x: [2.0, 0.0, 0.0], "along.vtu")                    # any length: made a unit vector
+    assert along == pytest.approx(2 * sigma / (E_M + E_F), rel=1e-4)
+
+
+def test_a_missing_cell_field_is_refused_in_one_line():
+    d = pulled_block({"model": "neo-hookean", "E": E_M, "nu": NU_M, "fibers": {"group_field": "fibers", "E": E_F}})
+    with pytest.raises(InputError, match="fibers.group_field = 'fibers': the mesh file has no such cell field"):
+        ff.solve_static(ff.Scene.from_dict(d))
+
+
+@pytest.mark.mpi
+def test_a_fibre_cell_field_gives_the_serial_answer_on_two_ranks(tmp_path):
+    """Each rank's cells take their rows of the file's field (by the cells' original index)."""
+    import json
+    from helpers import mpirun, toml_dumps
+    d = pulled_block({"model": "neo-hookean", "E": E_M, "nu": NU_M, "fibers": {"group_field": "fibers", "E": E_F}},
+                     50.0)
+    d["mesh"] = {"generator": "file", "file": fibre_field_bar(
+        tmp_path / "bar.vtu", lambda x: [1.0, 0.0, 0.0] if x < 1.0 else [0.0, 1.0, 0.0])}
+    d["load"][0]["where"] = {"axis": "x", "at": 2.0}
+    d["fix"] = [dict(MINIMAL[0]), {"where": {"point": [0.0, 0.0, 0.0]}, "components": ["y", "z"]},
+                {"where": {"point": [0.0, 0.1, 0.0]}, "components": ["z"]}]
+    d["output"]["probes"] = {"corner": [2.0, 0.1, 0.1]}
+    serial = ff.solve_static(ff.Scene.from_dict(d)).summary()
+    (tmp_path / "scene.toml").write_text(toml_dumps(d))
+    p = mpirun(["-m", "fem_forms", "run", str(tmp_path / "scene.toml"), "--out", str(tmp_path / "out"), "-q"])
+    assert p.returncode == 0, p.stderr[-2000:]
+    two = json.loads((tmp_path / "out" / "results.json").read_text())
+    assert two["probes"]["corner"]["displacement"] == pytest.approx(serial["probes"]["corner"]["displacement"],
+                                                                    rel=1e-8)
