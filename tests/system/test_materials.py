@@ -70,6 +70,19 @@ def test_the_materials_are_reported_with_their_cells_volumes_and_masses():
         assert got[name]["mass"] == pytest.approx(rho * half, rel=1e-10)
 
 
+def test_the_material_field_marks_each_cell_for_paraview(tmp_path):
+    """output.fields = ["material"]: a cell-centred field in fields.xdmf (the material index of each cell; its
+    values: the regions' DG0 field, checked by the masses above). No reader of the .h5 in the venv: the XDMF's
+    declaration is checked."""
+    import xml.etree.ElementTree as ET
+    d = layered()
+    d["output"]["fields"] = ["displacement", "material"]
+    code, s, err, out = run_scene(tmp_path, d)
+    assert code == 0, err
+    attrs = {a.get("Name"): a.get("Center") for a in ET.parse(out / "fields.xdmf").getroot().iter("Attribute")}
+    assert attrs.get("material") == "Cell" and attrs.get("displacement") == "Node"
+
+
 def test_the_first_bending_frequency_is_euler_bernoullis_of_the_layered_section():
     d = layered(analysis="modal", cells=(24, 2, 4), load=[], modal={"count": 3})
     d["output"]["probes"] = {}
@@ -166,6 +179,7 @@ def test_a_step_load_swings_the_layered_cantilever_at_its_transformed_section_fr
     d["output"]["probes"] = {"tip": [L, B / 2, H / 2]}
     r = solve_dynamic(ff.Scene.from_dict(d))
     assert r.failure is None
+    assert r.system.model.probe_materials() == {"tip": "soft"}           # on the joint: the first listed
     rows = np.array(r.probe_rows)
     t, uz = rows[:, 0], -rows[:, 3]
     back = np.flatnonzero(t > period / 2)[np.argmin(uz[t > period / 2])]

@@ -52,6 +52,8 @@ def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> d
                        lambda: Quantities(model).at_probes(model.probes), {})
     for name, values in stresses.items():
         summary["probes"].setdefault(name, {}).update(values)
+    for name, material in model.probe_materials().items():      # the material each probe lies in
+        summary["probes"].setdefault(name, {})["material"] = material
     T = result.system.model.temperature
     if T is not None:                              # [thermal]: the temperature at the end
         summary["max_temperature"] = max_value(T)
