@@ -137,8 +137,6 @@ def load_path(model: Model) -> tuple:
     step end."""
     timed = [t for t in model.loads if t.history]
     held = [(i, f) for i, f in enumerate(model.scene.fix) if f.history]   # supports following their own history
-    if hasattr(model.solid, "restart"):       # a solid with time (viscoelastic) starts again at t = 0, at rest
-        model.solid.restart(model.state)
     for t in model.loads:                     # every load's own factor at 1, as a new model has it (the rest-
         t.factor.value = 1.0                  # state checks see the full loads): none is left where an earlier
     if not timed and not held:                # run of this model put it; set_load moves them along the histories
@@ -219,6 +217,8 @@ def solve_static(scene: Scene, material=None, model: Model | None = None,
     t0 = time.perf_counter()
     model = model or build_model(scene, material)
     model.probes                                           # located now: a probe outside the mesh is bad input
+    if hasattr(model.solid, "restart"):       # a solid with time (viscoelastic) starts again at t = 0, at rest
+        model.solid.restart(model.state)
     if model.temperature is not None:
         solve_temperature(model)
     set_load, stops = load_path(model)

@@ -199,3 +199,15 @@ def test_a_viscoelastic_run_continued_from_its_checkpoint_ends_where_the_whole_r
     cont = json.loads((out / "results.json").read_text())
     assert cont["probes"]["tip"]["displacement"] == pytest.approx(whole["probes"]["tip"]["displacement"],
                                                                  rel=1e-7, abs=1e-12)
+
+
+def test_the_last_accepted_state_keeps_the_viscoelastic_state():
+    """A run stopped early reports its last accepted state (static.last_accepted_state sets the loads back
+    through the load path): the solid's restart belongs to the start of a solve, not to the load path (there it
+    zeroed the displacement being reported)."""
+    from fem_forms.analyses.static import last_accepted_state
+    r = ff.solve_static(ff.Scene.from_dict(bar(fix_history=(1e-4, [[0.0, 0.0], [1e-3, 1.0], [3.0, 1.0]]))))
+    force, end = r.summary()["reactions"]["pull"][0], list(r.probes["end"])
+    last_accepted_state(r)
+    assert r.probes["end"] == pytest.approx(end, rel=1e-12)
+    assert r.summary()["reactions"]["pull"][0] == pytest.approx(force, rel=1e-10)
