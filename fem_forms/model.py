@@ -10,7 +10,6 @@ import numpy as np
 import ufl
 
 from fem_forms.materials import Material
-from fem_forms.materials.hyperelastic import SMALL_STRAIN_MODELS
 from fem_forms.meshes import LoadedMesh, load_mesh
 from fem_forms.output.probes import ProbeSet
 from fem_forms.physics.admissibility import SmallestValue
@@ -122,7 +121,7 @@ class Model:
         for term in self.terms.with_role("contact"):     # checked apart from the step filter that prevents it
             if why := term.intersection(self.unknown.vector):
                 return why
-        if self.scene.material.model in SMALL_STRAIN_MODELS and self.scene.analysis == "static":
+        if self.scene.small_strain and self.scene.analysis == "static":
             return None                                  # small-strain theory: J has no meaning
         jmin = self.min_jacobian()
         if not jmin > 0:

@@ -83,7 +83,11 @@ class Orthotropic:
     small_strain: ClassVar[bool] = True
 
     def psi(self, F):
-        e = voigt_strain(small_strain(F))
+        return self.strain_energy(small_strain(F))
+
+    def strain_energy(self, eps):
+        """1/2 e . C e of a symmetric strain tensor (the Green strain in a finite-strain part)."""
+        e = voigt_strain(eps)
         C = ufl.as_matrix(np.reshape(self.C, (6, 6)).tolist()) if isinstance(self.C, tuple) else self.C
         return 0.5 * ufl.dot(e, C * e)
 

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-from typing import Callable, ClassVar, Protocol
+from typing import Any, Callable, ClassVar, Protocol
 
 import ufl
 
@@ -27,6 +27,18 @@ SMALL_STRAIN_MODELS = ("linear", "orthotropic")     # psi of the infinitesimal s
 def is_small_strain(material) -> bool:
     """Is psi written in the infinitesimal strain (sigma = P, no meaning for det F)?"""
     return bool(getattr(material, "small_strain", False))
+
+
+@dataclass(frozen=True)
+class GreenStrainForm:
+    """A small-strain law beside finite-strain materials in one part: its energy of the Green strain in place
+    of the infinitesimal one (its St Venant-Kirchhoff form, as FEBio's orthotropic elastic): the same stiffness
+    at small strain, and frame-indifferent under the finite rotations the part undergoes."""
+    law: Any
+    small_strain: ClassVar[bool] = False
+
+    def psi(self, F):
+        return self.law.strain_energy(green_strain(F))
 
 
 def lame_from_young_poisson(E: float, nu: float) -> tuple[float, float]:
@@ -54,7 +66,10 @@ class LinearElastic:
         _check_lame(self.mu, self.lmbda)
 
     def psi(self, F):
-        eps = small_strain(F)
+        return self.strain_energy(small_strain(F))
+
+    def strain_energy(self, eps):
+        """mu eps:eps + lambda/2 (tr eps)^2 of a symmetric strain tensor."""
         return self.mu * ufl.inner(eps, eps) + 0.5 * self.lmbda * ufl.tr(eps) ** 2
 
     def volumetric(self, F):

@@ -73,23 +73,23 @@ def scene_physics(scene: Scene, loaded: LoadedMesh, u, bc_space: fem.FunctionSpa
                                                                    type(material).__name__)
     if binding is not None:
         name = " + ".join(sorted({m.model for m in scene.materials}))
-    terms = declare_terms(scene, mat, mesh, name, binding)
+    terms = declare_terms(scene, mat, mesh, name, binding, regions if material is None else None)
     for t in terms:
         t.prepare(ctx)
     return Physics(ctx, terms, load, bcs, owners)
 
 
 def declare_terms(scene: Scene, material: Material, mesh, model_name: str | None = None,
-                  binding=None) -> TermList:
+                  binding=None, regions=None) -> TermList:
     """The one place a model's terms are declared: the solid (the scene's material, its plastic solid with
     [material.plasticity]), one term per [[load]] in scene order, then those of each registered scene
     section (SCENE_TERMS) the scene asks for."""
     plastic = scene.material.plasticity if model_name in (None, scene.material.model) else None
     if plastic is not None:
         solid = plastic_term(material, plastic, scene.material.model, mesh, scene.discretization.quadrature)
-    elif scene.material.prony is not None and model_name in (None, scene.material.model):
-        solid = ViscoelasticSolid(material, scene.material.model, scene.material.prony, mesh,
-                                  scene.discretization.quadrature)
+    elif any(m.prony is not None for m in scene.materials) and regions is not None:
+        solid = ViscoelasticSolid(material, model_name or scene.material.model, scene.materials, regions,
+                                  scene.discretization.quadrature, binding)
     else:
         solid = ElasticEnergy(material, model_name or scene.material.model, binding)
     terms: list[Term] = [solid]

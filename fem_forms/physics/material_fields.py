@@ -17,6 +17,7 @@ from petsc4py import PETSc
 from fem_forms.errors import InputError
 from fem_forms.materials import Material
 from fem_forms.materials.anisotropic import FiberReinforced, unit
+from fem_forms.materials.hyperelastic import GreenStrainForm, is_small_strain
 from fem_forms.physics.regions import MaterialRegions
 
 
@@ -70,6 +71,10 @@ class MaterialBinding:
                 object.__setattr__(bound, name, fields[name])
             indicator = regions.field([1.0 if i in members else 0.0 for i in range(len(built))], "indicator")
             self.parts.append(MaterialPart(bound, members, fields, indicator))
+        if not all(is_small_strain(p.material) for p in self.parts):        # small-strain laws in a finite part
+            for p in self.parts:
+                if is_small_strain(p.material):
+                    p.material = GreenStrainForm(p.material)
         self.material = self.parts[0].material if len(self.parts) == 1 else MaterialMix(self.parts)
         self.layout = [(s.model, s.where) for s in specs]           # what new values may not change
 

@@ -13,11 +13,8 @@ on quadrature spaces of the dx rule, updated on accepted steps and rolled back o
 steps a = 1, b = g (dt = 0): the energy's stress is then the committed g_inf S0 + sum Q_i (stress output)."""
 from __future__ import annotations
 
-import math
-
 from dolfinx import fem
 import numpy as np
-from petsc4py import PETSc
 import ufl
 
 from fem_forms.errors import InputError
@@ -30,37 +27,47 @@ from fem_forms.state import State
 
 
 class ViscoelasticSolid(ElasticEnergy):
-    """The elastic solid with Prony terms [g_i, tau_i]; every value a fem.Constant."""
+    """The elastic solid with Prony terms [g_i, tau_i], each material its own (DG0 fields of the term's index:
+    a material with fewer terms, or none, has g_i = 0 there); every value changes without compiling."""
 
-    def __init__(self, material, model_name: str, prony: list, mesh, degree: int):
-        super().__init__(material, model_name)
-        self.name = f"viscoelastic ({model_name}, {len(prony)} Prony terms)"
-
-        def const(v: float) -> fem.Constant:
-            return fem.Constant(mesh, PETSc.ScalarType(v))
-        self.g = [const(g) for g, _ in prony]
-        self.tau = [const(tau) for _, tau in prony]
-        self.a = [const(1.0) for _ in prony]
-        self.b = [const(g) for g, _ in prony]
+    def __init__(self, material, model_name: str, specs: list, regions, degree: int, binding=None):
+        super().__init__(material, model_name, binding)
+        self.regions = regions
+        self.layout = [len(m.prony or []) for m in specs]
+        n = max(self.layout)
+        self.name = f"viscoelastic ({model_name}, {n} Prony term{'s' if n > 1 else ''})"
+        self.g = [regions.field(v, f"prony_g_{i}") for i, v in enumerate(self._column(specs, 0, 0.0))]
+        self.tau = [regions.field(v, f"prony_tau_{i}") for i, v in enumerate(self._column(specs, 1, 1.0))]
+        self.a = [regions.field([1.0] * len(specs), f"prony_a_{i}") for i in range(n)]
+        self.b = [regions.field([0.0] * len(specs), f"prony_b_{i}") for i in range(n)]
+        mesh = regions.mesh
         self.points, _ = quadrature_rule(mesh, degree)
         Qt = fem.FunctionSpace(mesh, ufl.TensorElement("Quadrature", mesh.ufl_cell(), degree, shape=(3, 3),
                                                        quad_scheme=quadrature_scheme(mesh, degree)))
-        self.Q = [fem.Function(Qt, name=f"prony_stress_{i}") for i in range(len(prony))]
+        self.Q = [fem.Function(Qt, name=f"prony_stress_{i}") for i in range(n)]
         self.S0 = fem.Function(Qt, name="elastic_stress_committed")
         self.t, self.t_committed = 0.0, 0.0
+
+    @staticmethod
+    def _column(specs: list, k: int, missing: float) -> list[list[float]]:
+        """Per Prony term index, one value per material (g or tau; `missing` where a material has no such term)."""
+        n = max(len(m.prony or []) for m in specs)
+        return [[m.prony[i][k] if m.prony and i < len(m.prony) else missing for m in specs] for i in range(n)]
 
     @property
     def prony_terms(self) -> int:
         return len(self.g)
 
     def set_values(self, scene) -> None:
-        prony = scene.material.prony or []
-        if len(prony) != len(self.g):
-            raise InputError(f"material.viscoelastic.prony: {len(prony)} terms where the model has {len(self.g)} "
-                             "(a new number of Prony terms needs a new model)")
+        layout = [len(m.prony or []) for m in scene.materials]
+        if layout != self.layout:
+            raise InputError(f"material.viscoelastic.prony: {layout} terms per material where the model has "
+                             f"{self.layout} (a new number of Prony terms needs a new model)")
         super().set_values(scene)
-        for (g, tau), cg, ctau in zip(prony, self.g, self.tau):
-            cg.value, ctau.value = g, tau
+        for i, (g, tau) in enumerate(zip(self._column(scene.materials, 0, 0.0),
+                                          self._column(scene.materials, 1, 1.0))):
+            self.regions.fill(self.g[i], g)
+            self.regions.fill(self.tau[i], tau)
         self.update(self.t)
 
     def restart(self, state: State) -> None:
@@ -138,10 +145,11 @@ class ViscoelasticSolid(ElasticEnergy):
         state.add_history(self.S0.name, self.S0, committed)
 
     def update(self, t: float) -> None:
-        """The step's coefficients a_i, b_i for dt = t - the last committed time."""
+        """The step's coefficients a_i = exp(-dt/tau_i), b_i = g_i (1 - a_i) / (dt/tau_i) on every cell, for
+        dt = t - the last committed time (b_i = g_i at dt = 0)."""
         self.t = t
         dt = t - self.t_committed
         for g, tau, a, b in zip(self.g, self.tau, self.a, self.b):
-            x = dt / float(tau.value)
-            a.value = math.exp(-x)
-            b.value = float(g.value) * (-math.expm1(-x) / x if x > 0 else 1.0)
+            x = dt / tau.x.array
+            a.x.array[:] = np.exp(-x)
+            b.x.array[:] = g.x.array * (-np.expm1(-x) / x if dt > 0 else 1.0)

@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from fem_forms.errors import InputError
+from fem_forms.materials.hyperelastic import SMALL_STRAIN_MODELS
 from fem_forms.scene import registry
 from fem_forms.scene.analyses.balance import BalanceSpec
 from fem_forms.scene.analyses.contact_section import ContactSpec
@@ -18,7 +19,7 @@ from fem_forms.scene.analyses.inverse import InverseSpec
 from fem_forms.scene.analyses.modal import ModalSpec, SoundSpec
 from fem_forms.scene.analyses.thermal_section import ThermalSpec
 from fem_forms.scene.cavities import cavity_rules
-from fem_forms.scene.materials import MaterialSpec, viscoelastic_rules
+from fem_forms.scene.materials import MaterialSpec, kinematics_rules, viscoelastic_rules
 from fem_forms.scene.files import parse_assignment, read_toml, set_key
 from fem_forms.scene.reader import AXES, Key, Section, Table, Variants, check_number, check_vector
 from fem_forms.scene.registry import ANALYSIS_KEY
@@ -63,6 +64,12 @@ class Scene:
     @property
     def several_materials(self) -> bool:
         return len(self.materials) > 1
+
+    @property
+    def small_strain(self) -> bool:
+        """Is every material a small-strain law (the part's kinematics then infinitesimal)? With finite-strain
+        materials beside them, the small-strain laws take their Green-strain (St Venant-Kirchhoff) form."""
+        return all(m.model in SMALL_STRAIN_MODELS for m in self.materials)
 
     @classmethod
     def from_file(cls, path: str | Path, overrides: dict | None = None) -> "Scene":
@@ -123,6 +130,7 @@ def _parse_scene(data: dict, base_dir: Path, source: Path | None) -> Scene:
     if "contact_pressure" in (sc.output.fields or []) and getattr(sc, "contact", None) is None:
         raise InputError("output.fields: 'contact_pressure' needs a [contact] section (nothing touches without)")
     viscoelastic_rules(sc)                             # after the analysis's own sections: it reads [dynamic]
+    kinematics_rules(sc)
     if analysis.check is not None:
         analysis.check(sc)
     t.done()

@@ -176,14 +176,21 @@ def _prony_rules(s: MaterialSpec, t: Table) -> None:
                          "below 1 (g_inf = 1 - sum g_i is the long-term modulus, positive)")
 
 
+def kinematics_rules(scene) -> None:
+    """Small-strain laws beside finite-strain materials take their Green-strain form: not in the mixed
+    formulation, whose pressure splits off a volumetric part that form does not have."""
+    small = [m for m in scene.materials if m.model in SMALL_STRAIN_MODELS]
+    if small and not scene.small_strain and scene.discretization.formulation != "displacement":
+        raise InputError(f"{small[0].key}.model = {small[0].model!r}: a small-strain law beside finite-strain "
+                         "materials is not implemented with formulation = 'mixed'; use 'displacement'")
+
+
 def viscoelastic_rules(scene) -> None:
     """What [material.viscoelastic] needs from the rest of the scene, refused when the scene is read."""
     visco = next((m for m in scene.materials if m.prony is not None), None)
     if visco is None:
         return
     key = f"{visco.key}.viscoelastic"
-    if scene.several_materials:
-        raise InputError(f"{key}: for a single [material] table only (not implemented for several materials)")
     if scene.analysis not in ("static", "dynamic"):
         raise InputError(f"{key}: for analysis = 'static' or 'dynamic' only (this scene's is {scene.analysis!r})")
     if scene.analysis == "dynamic" and scene.dynamic.scheme == "central-difference":
@@ -209,11 +216,6 @@ def _materials_rules(materials: list[MaterialSpec]) -> None:
     for i, m in enumerate(materials):
         if m.name in names[:i]:
             raise InputError(f"{m.key}.name = {m.name!r}: another material has this name")
-    small = [m for m in materials if m.model in SMALL_STRAIN_MODELS]
-    if small and len(small) < len(materials):
-        other = next(m for m in materials if m.model not in SMALL_STRAIN_MODELS)
-        raise InputError(f"{other.key}.model = {other.model!r}: small-strain ('linear') and finite-strain models "
-                         f"cannot be mixed in one part ({small[0].key} is 'linear')")
     open_ended = [m for m in materials if m.where is None]
     if len(materials) > 1 and len(open_ended) > 1:
         raise InputError(f"{open_ended[1].key}.where: missing (only one material may leave out `where`: "

@@ -146,7 +146,6 @@ def test_a_heated_bimetal_strip_curls_with_timoshenkos_curvature():
     (("material.1.name", "soft"), "another material has this name"),
     (("material.0.where", {"box": [[0.0, 0.0, 0.0], [L, B, H]]}), "regions must not overlap"),
     (("material.1.where", None), "only one material may leave out `where`"),
-    (("material.0.model", "neo-hookean"), "cannot be mixed"),
     (("material.1.where", {"group": "layer"}), "no such volume group"),
     (("material.0.expansion", 1e-5), "needs a [thermal] section"),
 ])

@@ -12,7 +12,6 @@ import numpy as np
 from petsc4py import PETSc
 import ufl
 
-from fem_forms.materials.hyperelastic import SMALL_STRAIN_MODELS
 from fem_forms.model import Model, build_model
 from fem_forms.physics.assemble import energy_variation, total_energy, virtual_work
 from fem_forms.physics.damping import RayleighDamping, ViscousDamping
@@ -36,7 +35,7 @@ def damping_terms(scene: Scene, model: Model, ctx: Context, velocity, with_mass:
     if d.alpha or d.beta:
         terms.append(RayleighDamping(mesh, d.alpha, d.beta, model.solid, model.V, velocity, with_mass))
     if d.shear or d.bulk:
-        terms.append(ViscousDamping(mesh, d.shear, d.bulk, velocity, scene.material.model in SMALL_STRAIN_MODELS))
+        terms.append(ViscousDamping(mesh, d.shear, d.bulk, velocity, scene.small_strain))
     return terms
 
 

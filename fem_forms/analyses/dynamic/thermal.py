@@ -13,7 +13,6 @@ from dataclasses import replace
 
 from dolfinx import fem
 
-from fem_forms.materials.hyperelastic import SMALL_STRAIN_MODELS
 from fem_forms.physics.damping import ViscousDamping
 from fem_forms.physics.thermal import HeatForms
 from fem_forms.solvers.thermal_step import HeatSolver
@@ -31,7 +30,7 @@ def heat_solver(system, mean_velocity: fem.Function) -> HeatSolver:
     if th.damping_heat:
         d = scene.damping
         viscous = ViscousDamping(model.mesh, d.shear, d.bulk, mean_velocity,
-                                 scene.material.model in SMALL_STRAIN_MODELS)
+                                 scene.small_strain)
         source = viscous.power_density(replace(model.context, u=old["unknown"]))
     forms = HeatForms(th, scene.materials, model.loaded, model.temperature, old["temperature"], True,
                       scene.discretization.quadrature, source, model.context.materials)
