@@ -183,9 +183,9 @@ NEARLY_INCOMPRESSIBLE_NU = 0.49
 
 
 def build_model(scene: Scene, material=None, comm: MPI.Comm = MPI.COMM_WORLD,
-                loaded: LoadedMesh | None = None) -> Model:
+                loaded: LoadedMesh | None = None, extra: dict | None = None) -> Model:
     """Mesh (the scene's, or `loaded`), spaces, supports and the forms of the scene's terms
-    (displacement or mixed u-p)."""
+    (displacement or mixed u-p); `extra` enters the Context (a cellwise `stiffness_factor`, say)."""
     loaded = loaded or load_mesh(scene.mesh, comm, degree=scene.discretization.degree)
     mesh = loaded.mesh
     disc = scene.discretization
@@ -210,7 +210,7 @@ def build_model(scene: Scene, material=None, comm: MPI.Comm = MPI.COMM_WORLD,
         if material is None and nu is not None and nu >= NEARLY_INCOMPRESSIBLE_NU:
             warnings.append(f"{soft.key}.nu = {nu}: nearly incompressible in the displacement formulation "
                             "locks (too stiff); set [discretization] formulation = \"mixed\"")
-    physics = scene_physics(scene, loaded, u_form, bc_space, material, pressure=pressure)
+    physics = scene_physics(scene, loaded, u_form, bc_space, material, pressure=pressure, extra=extra)
     context, terms = physics.context, physics.terms
     fields = {"unknown": unknown}
     if getattr(scene, "thermal", None) is not None:

@@ -48,7 +48,8 @@ class Physics:
 
 
 def scene_physics(scene: Scene, loaded: LoadedMesh, u, bc_space: fem.FunctionSpace, material=None,
-                  rest_map=None, pressure=None, bc_sign: float = 1.0, rest_offset=None) -> Physics:
+                  rest_map=None, pressure=None, bc_sign: float = 1.0, rest_offset=None,
+                  extra: dict | None = None) -> Physics:
     """The one recipe every model follows (forward, on a designed rest shape, inverse): the Context
     (measures, density field, load factor, kinematics of `u` and the rest map G = I + grad `rest_offset`), the
     scene's terms with the material's parameters as Constants, each prepared on the Context, and the supports
@@ -69,6 +70,7 @@ def scene_physics(scene: Scene, loaded: LoadedMesh, u, bc_space: fem.FunctionSpa
     bcs = supports(bc_space, loaded, scene.fix, load, sign=bc_sign, owners=owners)
     ctx = make_context(loaded, scene, u, dx, parameters, load, rest_map, pressure)
     ctx.rest_offset, ctx.materials = rest_offset, regions
+    ctx.extra.update(extra or {})
     name = scene.material.model if material is None else getattr(as_material(material), "name",
                                                                    type(material).__name__)
     if binding is not None:

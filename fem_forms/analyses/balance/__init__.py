@@ -61,7 +61,7 @@ def run(scene: Scene, out, echo: bool = False) -> dict:
     out = Path(out)
     b = scene.balance
     if b.elastic:
-        r = sag_design(scene, _gravity(scene), lambda mesh: setting(scene, mesh))
+        r = sag_design(scene, _gravity(scene), lambda loaded: setting(scene, loaded.mesh, loaded))
         mesh, body, st = r["mesh"], r["rest"], r["setting"]
     else:
         loaded = load_mesh(scene.mesh)

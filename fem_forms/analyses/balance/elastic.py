@@ -1,10 +1,9 @@
 """The sagging part: a static solve under gravity with the current carving, held by the scene's [[fix]].
 
 Carved cells carry the fill density and a stiffness scaled by `fill_stiffness` = E_fill / E (a fill
-material's own; for an empty fill an ersatz 1e-6): the material is wrapped so that its psi(F) is
-multiplied by a DG0 factor field. The
-factor and the density are fem.Functions, so a new carving compiles nothing; no physics module changes,
-and other analyses' forms stay as they are. (Removing carved cells from the mesh instead would build a
+material's own; for an empty fill an ersatz 1e-6): every material's psi(F) is multiplied by a DG0 factor
+field (the Context's `stiffness_factor`). The factor and the density are fem.Functions, so a new carving
+compiles nothing. (Removing carved cells from the mesh instead would build a
 new mesh, spaces and solver per design and lose the cell correspondence the moments need.)
 
 `sag_design` is the loop of `elastic = true`: solve the sag with the current carving, take the moments on
@@ -20,29 +19,19 @@ from typing import Callable
 from dolfinx import fem
 from mpi4py import MPI
 import numpy as np
-from ufl.algorithms import extract_coefficients
 
 from fem_forms.analyses.balance.body import Body
 from fem_forms.analyses.balance.design import Setting, design
 from fem_forms.analyses.balance.evaluate import evaluate, unmet
 from fem_forms.equilibrium import StaticResult, solve_static
 from fem_forms.errors import SolveError
+from fem_forms.meshes import load_mesh
 from fem_forms.model import Model, build_model
 from fem_forms.scene import Load, Scene
 from fem_forms.scene.analyses.balance import fill_stiffness
 
 MAX_STATIC_SOLVES = 4
 FIXED_POINT_CELLS = 0.02        # a redesign changing at most this share of the carvable cells keeps the design
-
-
-class CellwiseStiffness:
-    """A material whose energy density is factor(x) psi(F): factor a DG0 field (1 solid, small carved)."""
-
-    def __init__(self, base, factor: fem.Function, name: str):
-        self.base, self.factor, self.name = base, factor, name
-
-    def psi(self, F):
-        return self.factor * self.base.psi(F)
 
 
 class SagModel:
@@ -52,9 +41,10 @@ class SagModel:
         if not any(ld.type == "gravity" for ld in scene.load):
             scene = dataclasses.replace(scene, load=list(scene.load) + [Load("gravity", g=list(gravity))])
         self.scene = scene
-        self._factor_holder = {}
-        self.model: Model = build_model(scene, material=_Deferred(scene, self._factor_holder))
-        self.factor = self._factor_holder["factor"]
+        loaded = load_mesh(scene.mesh, MPI.COMM_WORLD, degree=scene.discretization.degree)
+        self.factor = fem.Function(fem.FunctionSpace(loaded.mesh, ("DG", 0)), name="stiffness_factor")
+        self.factor.x.array[:] = 1.0
+        self.model: Model = build_model(scene, loaded=loaded, extra={"stiffness_factor": self.factor})
 
     @property
     def mesh(self):
@@ -83,23 +73,6 @@ class SagModel:
         return solve_static(self.scene, model=self.model)
 
 
-class _Deferred:
-    """Builds the wrapped material on first psi(F), when the mesh exists (build_model makes the mesh)."""
-
-    def __init__(self, scene: Scene, holder: dict):
-        self.scene, self.holder = scene, holder
-        self.name = f"{scene.material.model} x cellwise stiffness factor"
-
-    def psi(self, F):
-        if "factor" not in self.holder:
-            # the displacement in F is a dolfinx Function: its space knows the mesh
-            mesh = next(c for c in extract_coefficients(F) if isinstance(c, fem.Function)).function_space.mesh
-            factor = fem.Function(fem.FunctionSpace(mesh, ("DG", 0)), name="stiffness_factor")
-            factor.x.array[:] = 1.0
-            self.holder["factor"] = factor
-        return CellwiseStiffness(self.scene.material.material, self.holder["factor"], self.name).psi(F)
-
-
 def stiffness_factors(body: Body, solid: np.ndarray, fill_stiffness: float) -> np.ndarray:
     """Per owned cell: 1 for solid cells, `fill_stiffness` for carved ones."""
     f = np.ones(len(body.ids))
@@ -111,7 +84,7 @@ def sag_design(scene: Scene, gravity: np.ndarray, setting: Callable[[object], Se
     """The elastic loop: the rigid numbers of the solid part, the design (or, for check, the solid part)
     and its numbers on the rest and on the sagged shape, and one history entry per static solve."""
     sag = SagModel(scene, gravity)
-    st = setting(sag.mesh)
+    st = setting(sag.model.loaded)
     b = st.spec
     rest = Body.rest(sag.mesh, b.shell)
     comm = sag.mesh.comm

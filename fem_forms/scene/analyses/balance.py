@@ -88,9 +88,6 @@ def _rules(s: BalanceSpec, t: Table) -> None:
 
 def _check(scene) -> None:
     b = scene.balance
-    if scene.several_materials and b.elastic:
-        raise InputError("balance.elastic: not with several materials yet (one [material] table; rigid balance "
-                         "design takes several)")
     for m in scene.materials:
         if m.rho <= 0:
             raise InputError(f"{m.key}.rho: balance design needs a positive density")
