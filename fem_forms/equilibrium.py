@@ -41,6 +41,7 @@ class StaticResult:
     quantities: Quantities | None = None                 # recovered stresses and strains
     cavities: dict = field(default_factory=dict)         # name -> pressure, volume, volume_change
     contact: dict = field(default_factory=dict)          # contact, min_distance, intersection_free, ...
+    strength: dict | None = None                         # safety factor against [material.strength]
     wall_time_s: float = 0.0
 
     @property
@@ -84,6 +85,7 @@ class StaticResult:
             **self.reactions,
             **({"cavities": self.cavities} if self.cavities else {}),
             **self.contact,
+            **({"strength": self.strength} if self.strength else {}),
             "message": r.message,
         }
 
@@ -272,6 +274,7 @@ def post_process(result: StaticResult) -> None:
     result.quantities = Quantities(model)
     result.probe_stresses = attempt(model.warnings, "stress recovery at the probes",
                                     lambda: result.quantities.at_probes(model.probes), {})
+    result.strength = attempt(model.warnings, "strength", lambda: result.quantities.strength(), None)
     result.reactions = attempt(model.warnings, "reactions", lambda: reaction_report(model, noise=report.residual_norm), {})
     if model.temperature is not None:
         for name, value in model.probes.evaluate(model.temperature).items():

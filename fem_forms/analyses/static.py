@@ -21,6 +21,7 @@ from fem_forms.output.interrupts import Interrupts
 from fem_forms.output.load_path import LoadPath, field_functions
 from fem_forms.output.plastic import plastic_summary, plastic_term
 from fem_forms.output.stl import write_deformed_surface
+from fem_forms.output.strength import summary_line
 from fem_forms.output import fields
 from fem_forms.scene import Scene
 
@@ -134,6 +135,8 @@ def run(scene: Scene, out, echo: bool = False) -> dict:
               f"{summary['wall_time_s']:.2f} s -> {out}")
         for name, pr in summary["probes"].items():
             print(f"  probe {name} {pr['point']}: u = [{', '.join(f'{v:.6g}' for v in pr['displacement'])}]")
+        if line := summary_line(summary):
+            print(line)
     if "collapse" in summary:
         raise SolveError(f"{scene.title}: plastic collapse: no equilibrium beyond load factor "
                          f"{summary['collapse']['load_factor']:.6g} ({summary['message']})")

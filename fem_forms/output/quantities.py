@@ -20,6 +20,7 @@ from fem_forms.materials.hyperelastic import is_small_strain
 from fem_forms.output import measures, probes
 from fem_forms.output.fields import p1_interpolant
 from fem_forms.output.recovery import Recovery
+from fem_forms.output.strength import StrengthCheck, has_strength
 from fem_forms.scene.spec import FIELD_NAMES
 
 # the fields recovered by L2 projection of a UFL expression (the others derive from them)
@@ -50,6 +51,7 @@ class Quantities:
         self._recovered: dict = {}
         self._p1: dict = {}
         self._fields: dict = {}
+        self._strength = None
 
     def recovered(self, name: str) -> fem.Function:
         """One of PROJECTED as a continuous field on the displacement's Lagrange space."""
@@ -70,6 +72,17 @@ class Quantities:
             out[name] = {"stress": s.tolist(), "von_mises": float(measures.von_mises(s)),
                          "strain": np.reshape(strain[name], (3, 3)).tolist()}
         return out
+
+    def strength(self) -> dict | None:
+        """The safety factor against the materials' strengths (output/strength.py), None without any."""
+        if not has_strength(self.model.scene):
+            return None
+        return self.strength_check().report()
+
+    def strength_check(self) -> StrengthCheck:
+        if self._strength is None:
+            self._strength = StrengthCheck(self.model, self._expressions["cauchy_stress"])
+        return self._strength
 
     def _nodal(self, name: str) -> fem.Function:
         """A recovered tensor at the P1 nodes (the mesh's vertices)."""
@@ -96,6 +109,8 @@ class Quantities:
             return from_nodes(self._nodal("deformation_gradient"), measures.STRAINS_OF_F[name], (3, 3), name)
         if name == "contact_pressure":
             return contact_pressure(self.model)
+        if name == "utilization":
+            return self.strength_check().field()
         if name == "material":
             regions = self.model.context.materials
             return regions.field(list(range(len(regions.materials))), "material")

@@ -129,6 +129,9 @@ def _parse_scene(data: dict, base_dir: Path, source: Path | None) -> Scene:
         setattr(sc, name, _section(t, mine or first, base_dir))
     if "contact_pressure" in (sc.output.fields or []) and getattr(sc, "contact", None) is None:
         raise InputError("output.fields: 'contact_pressure' needs a [contact] section (nothing touches without)")
+    if "utilization" in (sc.output.fields or []) and not any(
+            m.strength_tensile is not None or m.strength_yield is not None for m in sc.materials):
+        raise InputError("output.fields: 'utilization' needs a [material.strength] (stress over strength)")
     viscoelastic_rules(sc)                             # after the analysis's own sections: it reads [dynamic]
     kinematics_rules(sc)
     if analysis.check is not None:

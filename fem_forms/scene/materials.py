@@ -56,6 +56,11 @@ MATERIAL_KEYS = (
             Key("prony", "points", "[g_i, tau_i] pairs: relative modulus and relaxation time", unit="-, s",
                 length=2, min_items=1, attr="prony", note="must list [g, tau] pairs"),)),
     PLASTICITY,
+    Key("strength", "table", "what the material can bear, for the safety factor of every run with stresses", keys=(
+        Key("tensile", "number", "largest principal (Cauchy) stress allowed: brittle failure", unit="Pa",
+            exclusive_minimum=0, attr="strength_tensile"),
+        Key("yield", "number", "von Mises stress allowed: ductile failure (default: plasticity.yield_stress)",
+            unit="Pa", exclusive_minimum=0, attr="strength_yield"))),
 )
 _MAT = {k.name: k for k in MATERIAL_KEYS}
 _PLASTIC = {k.name: k for k in PLASTICITY.keys}
@@ -98,6 +103,8 @@ class MaterialSpec:
     hardening: float = _PLASTIC["hardening"].field()
     elastic_limit: float | None = None
     plastic_limit: float | None = None
+    strength_tensile: float | None = None
+    strength_yield: float | None = None
     key: str = "material"                      # the scene key, for messages: material or material[i]
     _built: tuple | None = field(default=None, repr=False, compare=False)   # (values, Material)
 
@@ -136,6 +143,12 @@ def _material_rules(s: MaterialSpec, t: Table) -> None:
         raise InputError(f"{t.key('plasticity')}: plasticity is for a single [material] table only "
                          "(not implemented for several materials)")
     material_plasticity_rules(s, t.data.get("plasticity"))
+    if t.has("strength"):
+        if s.strength_yield is None and s.yield_stress is not None:
+            s.strength_yield = s.yield_stress              # the plastic yield stress, as the users expect
+        if s.strength_tensile is None and s.strength_yield is None:
+            raise InputError(f"{t.key('strength')}: give tensile (largest principal stress, Pa) and/or yield "
+                             "(von Mises stress, Pa)")
 
 
 def _fiber_rules(s: MaterialSpec, t: Table) -> None:

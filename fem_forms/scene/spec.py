@@ -296,7 +296,7 @@ class SolverSpec:
 # fields [output] fields may name (fem_forms/output/quantities.py computes each)
 FIELD_NAMES = ("displacement", "von_mises", "cauchy_stress", "pk1_stress", "pk2_stress", "principal_stresses",
                "green_strain", "biot_strain", "hencky_strain", "infinitesimal_strain", "deformation_gradient",
-               "contact_pressure", "material")
+               "contact_pressure", "material", "utilization")
 OUTPUT_KEYS = (
     Key("probes", "map", "named points where results are reported", default={},
         item=Key("point", "vector", "[x, y, z]", unit="m", length=3)),

@@ -16,6 +16,7 @@ from fem_forms.output import results
 from fem_forms.output.guard import attempt
 from fem_forms.output.plastic import plastic_summary
 from fem_forms.output.quantities import Quantities
+from fem_forms.output.strength import summary_line
 from fem_forms.scene import Scene
 from fem_forms.solvers.thermal_step import max_value
 
@@ -81,6 +82,9 @@ def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> d
         print(f"{scene.title}: {summary['dofs']} dofs, {scene.dynamic.scheme}, {summary['steps']} steps to "
               f"t = {summary['time_reached']:.6g} s, {summary['newton_iterations']} Newton iterations, "
               f"energy balance {_balance(summary)}, {summary['wall_time_s']:.2f} s -> {out}")
+        if line := summary_line(summary):
+            print(line + (f" at t = {summary['strength']['time']:.6g} s" if summary["strength"].get("time") is
+                          not None else ""))
     if result.failure is not None:
         raise SolveError(f"{scene.title}: {result.failure}")
     return summary

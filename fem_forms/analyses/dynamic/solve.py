@@ -19,6 +19,8 @@ from fem_forms.analyses.dynamic.implicit import ImplicitStepper
 from fem_forms.analyses.dynamic.system import DynamicSystem, build_system
 from fem_forms.errors import InputError, SolveError
 from fem_forms.output import probes
+from fem_forms.output.quantities import tensor_expressions
+from fem_forms.output.strength import StrengthWatch, has_strength
 from fem_forms.scene import Scene
 from fem_forms.solvers import continuation
 from fem_forms.solvers.linear import make_ksp
@@ -35,6 +37,7 @@ class DynamicResult:
     wall_time_s: float = 0.0
     solver: dict = field(default_factory=dict)        # the implicit step's linear solver and its totals
     failure: str | None = None                        # why the march gave up (results.json converged false)
+    strength: dict | None = None                      # the lowest safety factor over the accepted steps
 
     def summary(self) -> dict:
         s, r = self.system, self.report
@@ -57,6 +60,7 @@ class DynamicResult:
             "probes": {n: {"point": s.scene.output.probes[n], "displacement": list(last[1 + 6 * i: 4 + 6 * i]),
                            "velocity": list(last[4 + 6 * i: 7 + 6 * i])} for i, n in enumerate(names)}
             if last else {},
+            **({"strength": self.strength} if self.strength else {}),
         }
 
 
@@ -179,6 +183,8 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
         stepper = StaggeredStepper(system, stepper)
     account = EnergyAccount(system, released)
     result = DynamicResult(system, MarchReport(), account, dt_stable=dt_stable)
+    watch = StrengthWatch(system.model, tensor_expressions(system.model)["cauchy_stress"]) \
+        if has_strength(scene) else None
     t_start, step0, dt = 0.0, 0, dyn.dt
     if restart is not None:
         t_start, step0, dt = checkpoint.load(restart, result)
@@ -189,6 +195,8 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
     else:
         account.start(0.0)
         result.probe_rows.append(probe_row(points, system, 0.0))
+        if watch is not None:
+            watch.step(0.0)
         if on_frame:
             on_frame(system, 0.0, 0)
 
@@ -199,6 +207,8 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
         system.state.commit()
         state["t"] = t
         result.probe_rows.append(probe_row(points, system, t))
+        if watch is not None:
+            watch.step(t)
         if on_frame and step % dyn.output_every == 0:
             on_frame(system, t, step)
         if out is not None and dyn.checkpoint_every and step % dyn.checkpoint_every == 0:
@@ -215,6 +225,7 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
     if isinstance(motion, ImplicitStepper):
         result.solver = motion.summary()
     result.wall_time_s = time.perf_counter() - t0
+    result.strength = watch.lowest if watch is not None else None
     return result
 
 

@@ -16,6 +16,8 @@ from fem_forms.equilibrium import max_norm
 from fem_forms.errors import SolveError
 from fem_forms.meshes import load_mesh
 from fem_forms.output import fields, pictures, probes, results
+from fem_forms.output.quantities import Quantities
+from fem_forms.output.strength import has_strength, summary_line
 from fem_forms.scene import Scene
 
 
@@ -55,6 +57,8 @@ def run(scene: Scene, out: Path, echo: bool = False) -> dict:
         summary["design_gap_max"] = check.design_gap_max
         if check.solve is not None:
             summary["forward_check"] = check.solve.summary()
+            if has_strength(scene) and check.static.report.converged:    # the rest shape under its loads
+                summary["strength"] = Quantities(check.static.model).strength()
         if check.matched_mismatch_max is not None:
             summary["matched_mismatch_max"] = check.matched_mismatch_max
         summary["rest_mesh"] = str((out / "rest_shape.msh"))
@@ -76,6 +80,8 @@ def run(scene: Scene, out: Path, echo: bool = False) -> dict:
               f"({check.solve.kind}, stable) lands within {check.mismatch_max:.3g} m of the target"
               + ("" if check.matched_mismatch_max is None else
                  f" ({check.matched_mismatch_max:.3g} m where matched)") + f" -> {out}")
+        if line := summary_line(summary):
+            print(line + " (the rest shape under its loads)")
     if problems:
         raise SolveError(f"{scene.title}: no usable rest shape: {'; '.join(problems)}")
     return summary
