@@ -17,6 +17,7 @@ from fem_forms.physics.thermal import HeatForms
 from fem_forms.physics.thermoelastic import young_modulus
 from fem_forms.solvers.thermal_step import HeatSolver, max_value, min_value
 from fem_forms.state import State
+from fem_forms.output.fracture import FractureHistory
 from fem_forms.output.quantities import Quantities
 from fem_forms.output.guard import attempt
 from fem_forms.output.reactions import reaction_report
@@ -24,7 +25,7 @@ from fem_forms.physics import rigid_motion
 from fem_forms.physics.histories import piecewise_linear
 from fem_forms.scene import Scene
 from fem_forms.physics.path_constraint import ArcLength
-from fem_forms.solvers import arc_length, continuation, snes
+from fem_forms.solvers import arc_length, continuation, snes, staggered
 from fem_forms.solvers.linear import rigid_body_modes
 
 
@@ -42,6 +43,7 @@ class StaticResult:
     cavities: dict = field(default_factory=dict)         # name -> pressure, volume, volume_change
     contact: dict = field(default_factory=dict)          # contact, min_distance, intersection_free, ...
     strength: dict | None = None                         # safety factor against [material.strength]
+    fracture: FractureHistory | None = None              # [fracture]: forces and crack per accepted step
     wall_time_s: float = 0.0
 
     @property
@@ -86,6 +88,7 @@ class StaticResult:
             **({"cavities": self.cavities} if self.cavities else {}),
             **self.contact,
             **({"strength": self.strength} if self.strength else {}),
+            **(self.fracture.summary() if self.fracture is not None else {}),
             "message": r.message,
         }
 
@@ -202,6 +205,29 @@ def follow_path(model: Model, load_scale: float, linear_kind: str,
                             near_nullspace=lambda: rigid_body_modes(model.V), on_step=on_step)
 
 
+def chain(first: Callable[[float], None], then: Callable[[float], None] | None) -> Callable[[float], None]:
+    """One on_step hook calling `first`, then `then` (if any)."""
+    def both(lam: float) -> None:
+        first(lam)
+        if then is not None:
+            then(lam)
+    return both
+
+
+def fracture_driver(model: Model, problem, linear_kind: str) -> staggered.AlternateMinimization | None:
+    """With [fracture]: the displacement's driver whose steps alternate with the damage's (None without), the
+    damage started again from the scene's notches (a new solve of this model)."""
+    damage = model.damage_problem()
+    if damage is None:
+        return None
+    for term in model.terms.with_role("fracture"):
+        term.restart(model.state)
+    fr = model.scene.fracture
+    return staggered.AlternateMinimization(problem, [damage], fr.tolerance, fr.max_iterations,
+                                           model.scene.solver.petsc, linear_kind=linear_kind,
+                                           near_nullspace=lambda: rigid_body_modes(model.V))
+
+
 def load_span(model: Model) -> float:
     """The pseudo-time at load factor 1: the span of the [[load]] histories (time = lambda x span, as
     `load_path` moves the loads), 1 without any history (time = the load factor)."""
@@ -217,6 +243,7 @@ def solve_static(scene: Scene, material=None, model: Model | None = None,
     writes its load path there. Raises InputError for bad input; a failed solve is returned with
     report.converged False and no answer numbers (see `post_process` for the last accepted state)."""
     t0 = time.perf_counter()
+    fracture = None
     model = model or build_model(scene, material)
     model.probes                                           # located now: a probe outside the mesh is bad input
     if hasattr(model.solid, "restart"):       # a solid with time (viscoelastic) starts again at t = 0, at rest
@@ -236,14 +263,23 @@ def solve_static(scene: Scene, material=None, model: Model | None = None,
         if scene.solver.control == "arc-length":
             report = follow_path(model, r0.norm(), linear_kind, on_step or (lambda lam: None))
         else:
-            report = continuation.solve(problem, scene.solver.petsc, steps=scene.solver.steps,
-                                        max_cutbacks=scene.solver.max_cutbacks, linear_kind=linear_kind,
-                                        near_nullspace=lambda: rigid_body_modes(model.V), stops=stops,
-                                        min_step=min_load_step(model) if model.solid.is_plastic else 0.0,
-                                        limit_step=min_load_step(model), on_step=on_step or (lambda lam: None),
-                                        max_step=scene.solver.max_step)
+            driver = fracture_driver(model, problem, linear_kind)
+            if driver is not None:
+                fracture = FractureHistory(model, load_span(model))
+                on_step = chain(fracture, on_step)
+            try:
+                report = continuation.solve(problem, scene.solver.petsc, steps=scene.solver.steps,
+                                            max_cutbacks=scene.solver.max_cutbacks, linear_kind=linear_kind,
+                                            near_nullspace=lambda: rigid_body_modes(model.V), stops=stops,
+                                            min_step=min_load_step(model) if model.solid.is_plastic else 0.0,
+                                            limit_step=min_load_step(model), on_step=on_step or (lambda lam: None),
+                                            max_step=scene.solver.max_step, driver=driver)
+            finally:
+                if driver is not None:
+                    fracture.sweeps = driver.sweeps
+                    driver.destroy()
     r0.destroy()
-    result = StaticResult(model, report)
+    result = StaticResult(model, report, fracture=fracture)
     if report.converged:
         post_process(result)
     result.wall_time_s = time.perf_counter() - t0

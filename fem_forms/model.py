@@ -14,6 +14,7 @@ from fem_forms.meshes import LoadedMesh, load_mesh
 from fem_forms.output.probes import ProbeSet
 from fem_forms.physics.admissibility import SmallestValue
 from fem_forms.physics.assemble import equilibrium_forms, scene_physics
+from fem_forms.physics.fracture import notch_dofs
 from fem_forms.physics.parameters import Parameters
 from fem_forms.physics.supports import LoadFactor
 from fem_forms.physics.terms import Context, Load, Solid, TermList
@@ -137,6 +138,21 @@ class Model:
                                 inadmissible=self.inadmissible, state=state or self.state,
                                 array_terms=self.terms.arrays, scalars=self.global_scalars())
 
+    def damage_problem(self) -> NonlinearProblem | None:
+        """The phase field's problem with u frozen (None without [fracture]): the energy's derivative in d,
+        bounded by the last accepted damage and 1; built once per model."""
+        term = next(iter(self.terms.with_role("fracture")), None)
+        if term is None:
+            return None
+        if getattr(self, "_damage_problem", None) is None:
+            E = term.damage_energy(self.solid, self.context)
+            V = term.d.function_space
+            R = ufl.derivative(E, term.d, ufl.TestFunction(V))
+            J = ufl.derivative(R, term.d, ufl.TrialFunction(V))
+            self._damage_problem = NonlinearProblem(term.d, fem.form(R), fem.form(J), [], energy=fem.form(E),
+                                                    state=self.state, bounds=(self.state.old["damage"], 1.0))
+        return self._damage_problem
+
     def global_scalars(self) -> list:
         """The scalar unknowns the terms add to the Newton solve (a volume-controlled cavity's pressure), made
         once per model: their forms compile once."""
@@ -215,11 +231,16 @@ def build_model(scene: Scene, material=None, comm: MPI.Comm = MPI.COMM_WORLD,
     fields = {"unknown": unknown}
     if getattr(scene, "thermal", None) is not None:
         fields["temperature"] = couple_temperature(scene, context, terms.solid.material, disc.degree)
+    for term in terms.with_role("fracture"):            # the damage: a second field, committed with u
+        term.notch = notch_dofs(loaded, term.d.function_space, scene.fracture.notch)
+        fields["damage"] = term.d
     forms = equilibrium_forms(terms, context, unknown, v)
     # the mixed energy is a saddle in (u, p): no line-search objective there
     conservative = forms.conservative and disc.formulation != "mixed"
     state = State(fields)
     terms.solid.attach(state, context)               # history variables (plasticity)
+    for term in terms.with_role("fracture"):
+        term.restart(state)                          # the notches' damage, committed
     return Model(scene, loaded, V, u, terms.solid.material, context.dx, physics.load, physics.bcs, forms.energy,
                  forms.residual, forms.jacobian, conservative, unknown, u_form, context, terms,
                  context.parameters, state, warnings, physics.support_owners, fields.get("temperature"))

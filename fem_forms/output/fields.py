@@ -91,8 +91,9 @@ def gather_cell_values(mesh, values: np.ndarray) -> np.ndarray | None:
     return np.concatenate(parts) if mesh.comm.rank == 0 else None
 
 
-def boundary_surface(u: fem.Function):
-    """Rank 0 gets (points, triangles-or-quads, displacement at points) of the mesh's boundary;
+def boundary_surface(u: fem.Function, scalar: fem.Function | None = None):
+    """Rank 0 gets (points, triangles-or-quads, displacement at points) of the mesh's boundary, and a scalar
+    field's values at those points as a fourth entry when `scalar` is given (the damage of a crack picture);
     other ranks get None. Gathering is for the picture only."""
     mesh = u.function_space.mesh
     tdim = mesh.topology.dim
@@ -108,15 +109,18 @@ def boundary_surface(u: fem.Function):
         geom = geom[:, [0, 1, 3, 2]]                 # tensor-product order -> polygon order
     values = node_values(u)
     nodes = np.unique(geom)
-    local = (mesh.geometry.x[nodes], values[nodes], np.searchsorted(nodes, geom))
+    extra = node_values(scalar)[nodes, 0] if scalar is not None else np.zeros(len(nodes))
+    local = (mesh.geometry.x[nodes], values[nodes], np.searchsorted(nodes, geom), extra)
     parts = mesh.comm.gather(local, root=0)
     if mesh.comm.rank != 0:
         return None
-    pts, disp, polys, off = [], [], [], 0
-    for x, d, p in parts:
+    pts, disp, polys, scalars, off = [], [], [], [], 0
+    for x, d, p, e in parts:
         pts.append(x)
         disp.append(d)
         polys.append(p + off)
+        scalars.append(e)
         off += len(x)
-    return np.vstack(pts), np.vstack([p for p in polys if len(p)]), np.vstack(disp)
+    out = np.vstack(pts), np.vstack([p for p in polys if len(p)]), np.vstack(disp)
+    return out if scalar is None else (*out, np.concatenate(scalars))
 

@@ -30,6 +30,7 @@ def field_functions(model, quantities: Quantities, names: list[str]) -> list:
     written = output_fields(quantities, names) + plastic_fields(model)
     if model.temperature is not None:
         written.append(fields.p1_interpolant(model.temperature, "temperature"))
+    written += [t.d for t in model.terms.with_role("fracture")]          # the damage (P1), a time series
     return written
 
 

@@ -45,8 +45,8 @@ class ElasticEnergy(Solid):
     @staticmethod
     def _plain(ctx: Context) -> bool:
         """psi(F) is the material's own: no pressure field, no thermal strain or modulus factor."""
-        return (ctx.pressure is None and ctx.thermal_strain is None and "modulus_factor" not in ctx.extra
-                and "stiffness_factor" not in ctx.extra)
+        return (ctx.pressure is None and ctx.thermal_strain is None
+                and not {"modulus_factor", "stiffness_factor", "damage"} & set(ctx.extra))
 
     def density(self, ctx: Context):
         """psi per rest volume at the context's F (mixed energy with the context's pressure)."""
@@ -72,6 +72,8 @@ class ElasticEnergy(Solid):
                 return value if base is material else value + material.fiber_psi(G)
         else:
             psi = material.psi
+        if "damage" in ctx.extra:                      # phase-field fracture: g(d) psi+ + psi-
+            psi = ctx.extra["damage"].degraded(psi, is_small_strain(material))
         density = thermoelastic_density(psi, F, ctx, is_small_strain(material))
         factor = ctx.extra.get("stiffness_factor")      # a DG0 field scaling psi per cell (a carved fill)
         return density if factor is None else factor * density

@@ -14,6 +14,7 @@ from fem_forms.materials.hyperelastic import SMALL_STRAIN_MODELS
 from fem_forms.scene import registry
 from fem_forms.scene.analyses.balance import BalanceSpec
 from fem_forms.scene.analyses.contact_section import ContactSpec
+from fem_forms.scene.analyses.fracture_section import FractureSpec, fracture_scene_rules
 from fem_forms.scene.analyses.dynamic import DampingSpec, DynamicSpec
 from fem_forms.scene.analyses.inverse import InverseSpec
 from fem_forms.scene.analyses.modal import ModalSpec, SoundSpec
@@ -54,6 +55,7 @@ class Scene:
     damping: DampingSpec = field(default_factory=DampingSpec)
     thermal: ThermalSpec | None = None     # None: no temperature field
     contact: ContactSpec | None = None     # None: no contact
+    fracture: FractureSpec | None = None   # None: no damage field
     source: Path | None = None
 
     @property
@@ -134,6 +136,7 @@ def _parse_scene(data: dict, base_dir: Path, source: Path | None) -> Scene:
         raise InputError("output.fields: 'utilization' needs a [material.strength] (stress over strength)")
     viscoelastic_rules(sc)                             # after the analysis's own sections: it reads [dynamic]
     kinematics_rules(sc)
+    fracture_scene_rules(sc)
     if analysis.check is not None:
         analysis.check(sc)
     t.done()

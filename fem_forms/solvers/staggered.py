@@ -80,3 +80,55 @@ def _relative_change(drv: SNESDriver, before: np.ndarray) -> float:
     diff = drv.comm.allreduce(float(np.abs(now - before[:owned]).max(initial=0.0)), op=MPI.MAX)
     size = drv.comm.allreduce(float(np.abs(now).max(initial=0.0)), op=MPI.MAX)
     return diff / size if size > 0 else diff
+
+
+class AlternateMinimization(SNESDriver):
+    """The driver of a field whose every step is an alternate minimization with other fields (phase-field
+    fracture: the displacement, then sweeps of [damage, displacement] until `solve` above converges): to the
+    continuation it is the displacement's driver (its forms, acceptance and cut-backs), its steps staggered."""
+
+    def __init__(self, problem: NonlinearProblem, others: Sequence[NonlinearProblem], rtol: float,
+                 max_iterations: int, options: dict | None = None, **kwargs):
+        super().__init__(problem, options, **kwargs)
+        self.others = [SNESDriver(p, None, "direct" if _small(p) else "auto", prefix="fem_forms_other_")
+                       for p in others]
+        self.rtol, self.max_iterations = rtol, max_iterations
+        self.sweeps: list[int] = []        # per solved step: the sweeps it took
+        self._inner = False
+
+    def solve_step(self, check_start: bool = True) -> StepRecord:
+        first = super().solve_step(check_start)
+        if self._inner or not first.accepted:
+            return first
+        scale = getattr(self, "_load_scale", None)
+        self._inner = True
+        try:
+            report = solve([*self.others, self], self.rtol, self.max_iterations)
+        finally:
+            self._inner = False
+            self._load_scale = scale               # staggered sub-solves refreshed it at this step's load
+        self.sweeps.append(report.iterations)
+        records = [first] + [r for sweep in report.records for r in sweep]
+        last = report.records[-1][-1] if report.records else first
+        iterations = sum(r.iterations for r in records)
+        if not report.converged:
+            return StepRecord(0.0, iterations, last.residuals, f"STAGGERED ({report.reason})", False)
+        return StepRecord(0.0, iterations, last.residuals, last.reason, True,
+                          krylov_iterations=sum(r.krylov_iterations for r in records))
+
+    def rebuild(self) -> None:
+        super().rebuild()
+        for other in getattr(self, "others", []):
+            other.rebuild()
+
+    def destroy(self) -> None:
+        for other in getattr(self, "others", []):
+            other.destroy()
+        super().destroy()
+
+
+def _small(problem: NonlinearProblem) -> bool:
+    """A field small enough for a direct solve whatever `auto` would choose for it (a scalar P1 field: one
+    third of a P1 displacement's dofs)."""
+    V = problem.u.function_space
+    return V.dofmap.index_map.size_global * V.dofmap.index_map_bs <= 200_000

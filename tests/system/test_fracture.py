@@ -1,0 +1,160 @@
+"""Phase-field fracture ([fracture]) on a bar in uniaxial strain (nu = 0, rollers; E = Gc = 1, l = 0.1), against
+the closed forms of the homogeneous solution (Pham, Amor, Marigo & Maurini 2011; Tanne et al. 2018):
+- AT1: elastic (d = 0 exactly) until sigma_c = sqrt(3 Gc E / (8 l)), then d = 1 - 3 Gc / (8 l E eps^2);
+- AT2: d = E eps^2 / (E eps^2 + Gc / l) from the first load, the peak stress (3/16) sqrt(3 Gc E / l);
+- stress sigma = ((1 - d)^2 + k) E eps at every step; unloading keeps the damage (irreversibility) and
+  follows the damaged secant;
+- around a notch (d = 1 on a plane of nodes) the damage takes the optimal profile (1 - |x| / 2l)^2 (AT1),
+  exp(-|x| / l) (AT2), and a bar cut through has the crack area A (1 + 3 h / (8 l)) (AT1: Bourdin's
+  correction for the mesh size h);
+- the volumetric-deviatoric split leaves a cube under hydrostatic compression intact (split none cracks it);
+- 2 ranks give the serial force-displacement curve; bad input refused in one line."""
+import json
+import math
+
+import numpy as np
+import pytest
+
+import fem_forms as ff
+from fem_forms.errors import InputError
+from helpers import mpirun, run_scene, toml_dumps
+
+E, GC, ELL, K, A = 1.0, 1.0, 0.1, 1.0e-6, 0.01
+SIGMA_AT1 = math.sqrt(3 * GC * E / (8 * ELL))
+SIGMA_AT2 = 3 / 16 * math.sqrt(3 * GC * E / ELL)
+
+
+def bar(model="AT1", u_end=3.0, steps=30, cells=40, notch=False, history=None, **fracture) -> dict:
+    """A 1 x 0.1 x 0.1 bar on rollers at x = 0 (and y = 0, z = 0), pulled at x = 1 by u_end."""
+    pull = {"name": "pull", "where": {"axis": "x", "at": 1.0}, "components": ["x"], "value": [u_end, 0.0, 0.0]}
+    if history is not None:
+        pull["history"] = history
+    d = {"title": "bar", "mesh": {"size": [1.0, 0.1, 0.1], "cells": [cells, 1, 1]},
+         "material": {"model": "linear", "E": E, "nu": 0.0},
+         "discretization": {"degree": 1},
+         "fix": [{"name": "left", "where": {"axis": "x", "at": 0.0}, "components": ["x"]},
+                 {"where": {"axis": "y", "at": 0.0}, "components": ["y"]},
+                 {"where": {"axis": "z", "at": 0.0}, "components": ["z"]}, pull],
+         "fracture": {"toughness": GC, "length": ELL, "model": model, **fracture},
+         "solver": {"steps": steps, "max_step": 1.0 / steps},
+         "output": {"picture": False, "fields": False}}
+    if notch:
+        d["fracture"]["notch"] = [{"where": {"box": [[0.5, 0.0, 0.0], [0.5, 0.1, 0.1]]}}]
+    return d
+
+
+def curve(out) -> np.ndarray:
+    return np.genfromtxt(out / "force_displacement.csv", delimiter=",", names=True)
+
+
+def homogeneous_damage(model: str, eps: np.ndarray) -> np.ndarray:
+    psi2 = E * eps ** 2                                       # 2 psi
+    if model == "AT1":
+        return np.where(psi2 > 3 * GC / (8 * ELL), 1 - 3 * GC / (8 * ELL) / np.maximum(psi2, 1e-300), 0.0)
+    return psi2 / (psi2 + GC / ELL)
+
+
+@pytest.mark.parametrize("model, peak", [("AT1", SIGMA_AT1), ("AT2", SIGMA_AT2)])
+def test_the_homogeneous_bar_follows_the_closed_form_and_peaks_at_the_critical_stress(tmp_path, model, peak):
+    code, s, err, out = run_scene(tmp_path, bar(model, steps=60))
+    assert code == 0, err
+    rows = curve(out)
+    eps = rows["pull_ux"]
+    d = homogeneous_damage(model, eps)
+    assert rows["damage_max"] == pytest.approx(d, abs=1e-6)
+    assert rows["pull_Fx"] / A == pytest.approx(((1 - d) ** 2 + K) * E * eps, rel=1e-5, abs=1e-9)
+    k = int(np.argmax(rows["pull_Fx"]))
+    assert s["peak_load_factor"] == pytest.approx(rows["load_factor"][k])
+    assert s["peak_force"]["pull"] / A == pytest.approx(peak, rel=0.01 if model == "AT2" else 0.03)
+    if model == "AT1":                                        # no damage at all below the elastic limit
+        below = E * eps < SIGMA_AT1 * (1 - 1e-6)
+        assert below.sum() >= 30 and np.all(rows["damage_max"][below] == 0.0)
+        assert rows["pull_Fx"][k] / A <= SIGMA_AT1 <= E * eps[k + 1]
+
+
+def test_unloading_keeps_the_damage_and_follows_the_damaged_secant(tmp_path):
+    """AT2, pulled to eps 1.5, back to 0.5, then to 2: the damage of the first peak stays while unloading and
+    reloading below it (the force on the secant E (1 - d1)^2), then grows again."""
+    history = [[0.0, 0.0], [1.0, 0.75], [2.0, 0.25], [3.0, 1.0]]
+    code, s, err, out = run_scene(tmp_path, bar("AT2", u_end=2.0, steps=60, history=history))
+    assert code == 0, err
+    rows = curve(out)
+    t, eps = rows["time"], rows["pull_ux"]
+    assert np.all(np.diff(rows["damage_max"]) >= 0.0)        # irreversible
+    d1 = homogeneous_damage("AT2", np.array([1.5]))[0]
+    back = (t > 1.0) & (t < 2.6)                              # unloading and reloading below eps 1.5
+    assert back.sum() >= 10
+    assert rows["damage_max"][back] == pytest.approx(d1, abs=1e-6)
+    assert rows["pull_Fx"][back] / A == pytest.approx(((1 - d1) ** 2 + K) * E * eps[back], rel=1e-5)
+    assert rows["damage_max"][-1] == pytest.approx(homogeneous_damage("AT2", np.array([2.0]))[0], abs=1e-6)
+
+
+@pytest.mark.parametrize("model, profile", [("AT1", lambda r: np.clip(1 - r / (2 * ELL), 0, None) ** 2),
+                                            ("AT2", lambda r: np.exp(-r / ELL))])
+def test_a_notch_takes_the_optimal_damage_profile(model, profile):
+    """At a small load the damage around a notch is the 1D optimal profile (h = l/10: within 0.03)."""
+    scene = ff.Scene.from_dict(bar(model, u_end=1e-3, steps=1, cells=200, notch=True))
+    result = ff.solve_static(scene)
+    assert result.report.converged
+    d = result.fracture.term.d
+    x = d.function_space.tabulate_dof_coordinates()[:, 0]
+    r = np.abs(x - 0.5)
+    assert np.abs(d.x.array - profile(r)).max() < 0.03
+    assert d.x.array[r < 1e-9] == pytest.approx(1.0)
+
+
+def test_a_bar_cut_through_has_the_crack_area_of_its_section(tmp_path):
+    code, s, err, out = run_scene(tmp_path, bar("AT1", notch=True))
+    assert code == 0, err
+    h = 1.0 / 40
+    assert s["damage_max"] == pytest.approx(1.0)
+    assert s["crack_area"] == pytest.approx(A * (1 + 3 * h / (8 * ELL)), rel=0.01)
+    rows = curve(out)
+    assert rows["pull_Fx"][-1] < 0.1 * rows["pull_Fx"].max()        # cut: the force has fallen
+    assert s["files"]["force_displacement"] == "force_displacement.csv"
+
+
+@pytest.mark.parametrize("split, cracks", [("volumetric-deviatoric", False), ("none", True)])
+def test_hydrostatic_compression_cracks_nothing_with_the_volumetric_split(split, cracks):
+    fix = [{"where": {"axis": a, "at": 0.0}, "components": [a]} for a in "xyz"]
+    fix += [{"where": {"axis": a, "at": 1.0}, "components": [a], "value": [-0.3 if b == a else 0.0 for b in "xyz"]}
+            for a in "xyz"]
+    d = {"mesh": {"size": [1.0, 1.0, 1.0], "cells": [2, 2, 2]}, "material": {"model": "linear", "E": E, "nu": 0.2},
+         "discretization": {"degree": 1}, "fix": fix, "solver": {"steps": 3},
+         "fracture": {"toughness": 0.1 * GC, "length": ELL, "model": "AT2", "split": split},
+         "output": {"picture": False, "fields": False}}
+    s = ff.solve_static(ff.Scene.from_dict(d)).summary()
+    assert s["converged"]
+    assert (s["damage_max"] > 0.1) == cracks
+    if not cracks:
+        assert s["damage_max"] < 1e-12
+
+
+def test_two_ranks_give_the_serial_curve(tmp_path):
+    (tmp_path / "s.toml").write_text(toml_dumps(bar("AT1", notch=True, steps=10)))
+    curves = []
+    for n in (1, 2):
+        r = mpirun(["-m", "fem_forms", "run", str(tmp_path / "s.toml"), "--out", str(tmp_path / f"o{n}")], n=n)
+        assert r.returncode == 0, r.stderr[-2000:]
+        curves.append(curve(tmp_path / f"o{n}"))
+        assert json.loads((tmp_path / f"o{n}" / "results.json").read_text())["mpi_ranks"] == n
+    assert curves[1]["pull_Fx"] == pytest.approx(curves[0]["pull_Fx"], rel=1e-6)
+    assert curves[1]["crack_area"] == pytest.approx(curves[0]["crack_area"], rel=1e-6)
+
+
+@pytest.mark.parametrize("change, message", [
+    (("fracture", "split", "spectral"), "'spectral': not implemented yet"),
+    (("fracture", "toughness", -1.0), "fracture.toughness"),
+    (("fracture", "notch", [{"where": {"box": [[0.51, 0.0, 0.0], [0.52, 0.1, 0.1]]}}]), "holds no mesh node"),
+    (("solver", "control", "arc-length"), "not with solver.control = 'arc-length'"),
+    (("analysis", None, "modal"), "fracture: only for analysis = 'static'"),
+])
+def test_bad_fracture_input_is_refused_in_one_line(change, message):
+    d = bar()
+    section, key, value = change
+    if key is None:
+        d[section] = value
+    else:
+        d[section][key] = value
+    with pytest.raises(InputError, match=message.replace("(", r"\(").replace(")", r"\)")):
+        ff.solve_static(ff.Scene.from_dict(d))
