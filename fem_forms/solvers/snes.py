@@ -349,6 +349,8 @@ class SNESDriver:
         reduced the residual; with `polish_stuck` (staggered sub-solves) or a step-capping array term also after a
         line search failed below 1e-6 of the load scale (measured: 1e-9 from a sub-solve's answer; contact 2e-9).
         Returns (reason, Newton iterations, Krylov iterations) added."""
+        if self.bounds is not None:       # a VI solve: setFromOptions resets its reduced KSP (PETSc error 60, the
+            return reason, 0, 0           # inactive set's size against the full one, seen on a damage solve)
         last = self._history[-1] if self._history else math.inf
         near = (self.polish_stuck or self.arrays.caps) and last < 1e-6 * (getattr(self, "_load_scale", None) or 0.0)
         stuck = near and reason == PETSc.SNES.ConvergedReason.DIVERGED_LINE_SEARCH

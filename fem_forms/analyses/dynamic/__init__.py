@@ -61,6 +61,8 @@ def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> d
         for name, value in result.system.model.probes.evaluate(T).items():
             summary["probes"][name]["temperature"] = value[0]
     summary.update(plastic_summary(result.system.model))
+    for term in model.terms.with_role("fracture"):              # the crack at the end
+        summary.update(term.record())
     for term in model.terms.with_role("contact"):
         summary.update(term.report(model.u.vector))
     if "max_plastic_strain" in summary and not result.energy.plastic_accounted:

@@ -51,23 +51,24 @@ class Energies:
     plastic_work: float = 0.0
     contact: float = 0.0              # the contact barrier's stored energy
     viscous_work: float = 0.0         # the work on a viscoelastic solid's Prony branches (stored there or lost)
+    fracture: float = 0.0             # the crack's surface energy (phase field: what cracking dissipated)
 
     def row(self) -> list:
         """The values in the order of COLUMNS."""
         return [self.kinetic, self.elastic, self.external_work, self.dissipated, self.thermal_work,
-                self.plastic_work, self.contact, self.viscous_work]
+                self.plastic_work, self.contact, self.viscous_work, self.fracture]
 
     def balance(self) -> float:
-        """E_kin + E_el + E_contact - W_ext - W_th + D + W_p + W_v (constant in an exact account)."""
+        """E_kin + E_el + E_contact - W_ext - W_th + D + W_p + W_v + E_crack (constant in an exact account)."""
         return (self.kinetic + self.elastic + self.contact - self.external_work - self.thermal_work
-                + self.dissipated + self.plastic_work + self.viscous_work)
+                + self.dissipated + self.plastic_work + self.viscous_work + self.fracture)
 
 
 # energies below that of the whole part strained this much are round-off: a balance relative to them would be
 # a ratio of two noises (strains of 1e-8 are sqrt(machine epsilon), far below any motion a run is asked for)
 ENERGY_FLOOR_STRAIN = 1e-8
 COLUMNS = ("kinetic", "elastic", "external_work", "dissipated", "thermal_work", "plastic_work", "contact",
-           "viscous_work")
+           "viscous_work", "fracture")
 
 
 def at_temperature(ctx: Context, T: fem.Function, T_then: fem.Function) -> Context:
@@ -123,6 +124,8 @@ class EnergyAccount:
         if viscous and self.u0 is None:
             self.u0 = fem.Function(V)
         self.viscous = fem.form(term.viscous_work(replace(m.context, u=self.u0), ctx)) if viscous else None
+        crack = next(iter(m.terms.with_role("fracture")), None)
+        self.crack = fem.form(ctx.volume(crack.crack_density())) if crack is not None else None
         if s.lumped is None:
             self.M = fpetsc.assemble_matrix(s.mass)
             self.M.assemble()
@@ -197,7 +200,8 @@ class EnergyAccount:
 
     def start(self, t: float) -> Energies:
         self._set(self.ue, self.system.u.x.array)
-        self.now = Energies(self.kinetic(), self._scalar(self.elastic), contact=self._contact())
+        self.now = Energies(self.kinetic(), self._scalar(self.elastic), contact=self._contact(),
+                            fracture=self._crack())
         self.history.append((t, self.now))
         return self.now
 
@@ -238,7 +242,7 @@ class EnergyAccount:
             viscous = self._scalar(self.viscous)
         self.now = Energies(self.kinetic(), self._scalar(self.elastic), prev.external_work + work,
                             prev.dissipated + dis, prev.thermal_work + thermal, prev.plastic_work + plastic,
-                            self._contact(), prev.viscous_work + viscous)
+                            self._contact(), prev.viscous_work + viscous, self._crack())
         self.history.append((t_new, self.now))
         return self.now
 
@@ -246,13 +250,18 @@ class EnergyAccount:
         """The contact barrier's energy at the current state (0 without [contact])."""
         return sum(t.barrier_energy(self.system.u.vector) for t in self.system.model.terms.with_role("contact"))
 
+    def _crack(self) -> float:
+        """The crack's surface energy at the current damage (0 without [fracture])."""
+        return self._scalar(self.crack) if self.crack is not None else 0.0
+
     def columns(self) -> tuple:
         """The energies this run records (thermal_work with a temperature field, plastic_work with an
         accounted plastic solid, contact with [contact])."""
         return COLUMNS[:4] + (("thermal_work",) if self.thermal else ()) + \
             (("plastic_work",) if self.plastic_accounted else ()) + \
             (("contact",) if self.system.model.terms.with_role("contact") else ()) + \
-            (("viscous_work",) if self.viscous is not None else ())
+            (("viscous_work",) if self.viscous is not None else ()) + \
+            (("fracture",) if self.crack is not None else ())
 
     def imbalance(self) -> float:
         """max over time of |E_kin + E_el - W_ext - W_th + D + W_p - (its start value)| in J."""

@@ -11,7 +11,7 @@ from petsc4py import PETSc
 
 from fem_forms.analyses.dynamic.system import DynamicSystem
 from fem_forms.physics.terms import ArrayTerm
-from fem_forms.solvers import acceptance, linear, snes
+from fem_forms.solvers import acceptance, linear, snes, staggered
 from fem_forms.solvers.time_stepping import StepOutcome
 
 
@@ -87,10 +87,18 @@ class ImplicitStepper:
         # slip (a block sticking on a slope: 49 iterations a step, most in failed 50-iteration attempts; 11
         # with the energy line search first, full Newton as the retry where round-off stalls the line search)
         self.contact = bool(m.terms.with_role("contact"))
+        self.fracture = bool(m.terms.with_role("fracture"))
         self.searches = ("bt", "basic") if self.contact and system.energy is not None else ("basic", "bt")
-        self.driver = snes.SNESDriver(self.problem, self._options(), linear_kind,
-                                      near_nullspace=lambda: linear.rigid_body_modes(m.V),
-                                      reuse_factor=not self.iterative, keep_preconditioner=True)
+        damage = m.damage_problem()                # [fracture]: each step an alternate minimization with d
+        self.fracture = damage is not None
+        kwargs = dict(near_nullspace=lambda: linear.rigid_body_modes(m.V), reuse_factor=not self.iterative,
+                      keep_preconditioner=True)
+        if damage is None:
+            self.driver = snes.SNESDriver(self.problem, self._options(), linear_kind, **kwargs)
+        else:
+            fr = system.scene.fracture
+            self.driver = staggered.AlternateMinimization(self.problem, [damage], fr.tolerance, fr.max_iterations,
+                                                          self._options(), linear_kind=linear_kind, **kwargs)
         self.line_search_retry = self.driver.E is not None and "snes_linesearch_type" not in self.user_options
         self.may_unlag = "snes_lag_jacobian" not in self.user_options
         self.fresh = True                          # the next step starts from a freshly built tangent
@@ -105,7 +113,7 @@ class ImplicitStepper:
         Iterative (CG + GAMG; GMRES where damping leaves no energy): a fresh tangent at every Newton
         iteration, the multigrid hierarchy kept across iterations and steps by the driver's cost rule."""
         opts = {"snes_linesearch_type": self.searches[0]}
-        if not self.iterative and not self.contact:
+        if not self.iterative and not self.contact and not self.fracture:   # damage changes the tangent
             opts.update({"snes_lag_preconditioner": 100, "snes_lag_preconditioner_persists": True,
                          "snes_lag_jacobian": 100, "snes_lag_jacobian_persists": True})
         opts.update(self.user_options)

@@ -52,6 +52,8 @@ class MotionWriter:
                 self.xdmf.write_function(g, t)
             for g in plastic_fields(system.model):       # committed plastic strain (cell averages), if plastic
                 self.xdmf.write_function(g, t)
+            for term in system.model.terms.with_role("fracture"):      # the damage (P1), if [fracture]
+                self.xdmf.write_function(term.d, t)
         if self.with_picture:
             surf = fields.boundary_surface(system.u)
             if surf is not None:

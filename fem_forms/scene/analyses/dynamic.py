@@ -6,6 +6,7 @@ from dataclasses import dataclass
 from fem_forms.errors import InputError
 from fem_forms.scene.analyses import Analysis
 from fem_forms.scene.analyses.contact_section import CONTACT
+from fem_forms.scene.analyses.fracture_section import FRACTURE
 from fem_forms.scene.analyses.thermal_section import THERMAL, check_coupled
 from fem_forms.scene.reader import Key, Section, Table
 
@@ -111,6 +112,7 @@ ANALYSIS = Analysis(
         Section("damping", "Rayleigh and viscous (Kelvin-Voigt) damping", DampingSpec, keys=DAMPING_KEYS),
         THERMAL,                         # [thermal]: transient heat, staggered with the motion step by step
         CONTACT,                         # [contact]: obstacles and self-contact in the implicit step
+        FRACTURE,                        # [fracture]: the damage minimized with the motion in each implicit step
     ),
     outputs=("results.json", "probes.csv", "energy.csv", "motion.xdmf", "motion.gif", "history.png",
              "checkpoint/"),

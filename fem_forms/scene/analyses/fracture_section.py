@@ -1,4 +1,4 @@
-"""The [fracture] section: damage as a second field of a static analysis, by the variational phase field
+"""The [fracture] section: damage as a second field of a static or dynamic analysis, by the variational phase field
 (Francfort-Marigo, Bourdin): toughness Gc, regularization length l, the AT1 or AT2 crack density, which part of
 the energy damage degrades (the split), and initial cracks ([[fracture.notch]])."""
 from __future__ import annotations
@@ -60,6 +60,9 @@ def fracture_scene_rules(scene) -> None:
     fr = getattr(scene, "fracture", None)
     if fr is None:
         return
+    if scene.analysis == "dynamic" and scene.dynamic.scheme == "central-difference":
+        raise InputError("fracture: not with the explicit central-difference scheme (its steps solve nothing: no "
+                         "step for the damage to minimize with); use newmark or generalized-alpha")
     if scene.solver.control != "load":
         raise InputError("fracture: not with solver.control = 'arc-length' (the staggered damage solve steps the "
                          "load factor); use control = 'load' with a prescribed displacement")
