@@ -263,6 +263,34 @@ CASES = [
               lambda r, ref: -probe("tip", "displacement", 2)(r, ref), 0.01, "m")],
          notes="[[material]] steel below (box), brass above (the rest); linear, nu = 0; Q2 hexahedra 25x1x4, one "
                "layer of cells per 0.5 mm; the temperature is the steady solution with one end held at 100 K."),
+    Case("phase_field_bar_at1", "AT1 phase-field bar in tension: elastic until the critical stress",
+         "E. Tanne, T. Li, B. Bourdin, J.-J. Marigo, C. Maurini, Crack nucleation in variational phase-field "
+         "models of brittle fracture, J. Mech. Phys. Solids 110 (2018) 80-99: sigma_c = sqrt(3 Gc E / (8 l))",
+         "phase_field_bar_at1.toml",
+         [Row("peak stress F / A", math.sqrt(3 * 1.0 * 1.0 / (8 * 0.1)),
+              lambda r, ref: float(r["peak_force"]["pull"]) / 0.01, 0.01)],
+         notes="E = Gc = 1, l = 0.1, P1 tetrahedra 40x1x1 (h = l/4), 100 displacement steps of 0.02: the peak is "
+               "the last undamaged step's stress, within one step (1 %) below sigma_c; the whole curve against "
+               "the homogeneous closed form is tests/system/test_fracture.py's."),
+    Case("phase_field_bar_at2", "AT2 phase-field bar in tension: the peak of the homogeneous solution",
+         "K. Pham, H. Amor, J.-J. Marigo, C. Maurini, Gradient damage models and their use to approximate brittle "
+         "fracture, Int. J. Damage Mech. 20 (2011) 618-652: sigma_max = (3/16) sqrt(3 Gc E / l) at d = 1/4",
+         "phase_field_bar_at2.toml",
+         [Row("peak stress F / A", 3 / 16 * math.sqrt(3 * 1.0 * 1.0 / 0.1),
+              lambda r, ref: float(r["peak_force"]["pull"]) / 0.01, 0.005)],
+         notes="E = Gc = 1, l = 0.1, 60 displacement steps of 0.05 across the smooth maximum."),
+    Case("centre_crack", "Centre-cracked plate (2a / W = 0.2) pulled until its crack runs (AT1 phase field)",
+         "LEFM: K = sigma sqrt(pi a sec(pi a / W)) (Feddersen; Tada, Paris & Irwin, The Stress Analysis of Cracks "
+         "Handbook, 3rd ed., 2000, p. 5.2) reaching sqrt(E Gc_eff), Gc_eff = Gc (1 + 3 h / (8 l)) (B. Bourdin, "
+         "G. Francfort, J.-J. Marigo, The variational approach to fracture, J. Elasticity 91 (2008) 5-148)",
+         "centre_crack.toml",
+         [Row("peak stress F / (W/2 t)", targets.centre_crack_stress(0.1, 1.0, 1.0, 1e-3, 0.0033, 0.01),
+              lambda r, ref: float(r["peak_force"]["pull"]) / (0.5 * 0.01), 0.06)],
+         fast=False, mesh=("centre_crack", {"ell": 0.01, "h_fine": 0.0033}),
+         notes="A quarter plate (symmetry on x = 0 and on the crack's plane y = 0), one layer of P1 tetrahedra, "
+               "h = l/3 along the crack's path; 40 displacement steps of 2.9 % of the critical one: the peak is "
+               "the last step before the crack runs across (within one step below the true one) and a/l = 10 "
+               "leaves the phase field a few percent from LEFM (Tanne et al. 2018)."),
     Case("prony_relaxation", "Stress relaxation of a two-term Prony bar held at constant stretch for 3 s",
          "linear viscoelasticity, the Prony series of the relaxation modulus (W. N. Findley, J. S. Lai, K. Onaran, "
          "Creep and Relaxation of Nonlinear Viscoelastic Materials, North-Holland, 1976, ch. 5)",

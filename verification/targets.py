@@ -125,3 +125,10 @@ def ogden_sphere_maximum(mu: float, ratio: float = 2.0) -> float:
     """The largest pressure the sphere carries (0.8164 mu for ratio 2)."""
     from scipy.optimize import minimize_scalar
     return float(-minimize_scalar(lambda s: -ogden_sphere_pressure(s, mu, ratio), bounds=(1, 5), method="bounded").fun)
+
+
+def centre_crack_stress(a: float, W: float, E: float, Gc: float, h: float, ell: float) -> float:
+    """The remote stress at which a centre crack of half-length a in a plate of width W runs (LEFM, plane
+    stress with nu = 0): sigma sqrt(pi a sec(pi a / W)) = sqrt(E Gc_eff), Gc_eff = Gc (1 + 3 h / (8 ell)) the
+    AT1 phase field's toughness on a mesh of size h (Bourdin, Francfort & Marigo 2008)."""
+    return math.sqrt(E * Gc * (1 + 3 * h / (8 * ell)) / (math.pi * a / math.cos(math.pi * a / W)))

@@ -178,11 +178,24 @@ class SNESDriver:
         with b.localForm() as bl:
             bl.set(0.0)
         fpetsc.assemble_vector(b, self.L)
-        fpetsc.apply_lifting(b, [self.a], bcs=[self.p.bcs], x0=[x], scale=-1.0)
+        if self.p.bcs and not self._on_supports(x):      # on them the lifting adds exactly zero
+            fpetsc.apply_lifting(b, [self.a], bcs=[self.p.bcs], x0=[x], scale=-1.0)
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         self.arrays.add_gradient(x, b, lifting=snes is None)   # SNES's own iterates sit on the Dirichlet values
         fpetsc.set_bc(b, self.p.bcs, x, -1.0)
         self.assembly_time += time.perf_counter() - t
+
+    def _on_supports(self, x: PETSc.Vec) -> bool:
+        """Whether x holds every Dirichlet value exactly (then the lifting A (g - x) is zero: SNES's iterates
+        after the first, whose Newton steps vanish on the supports). The lifting assembles the tangent's element
+        matrices of every cell touching a support, as costly as the tangent where supports touch most cells
+        (measured on a one-layer slab held on z = 0: 80 % of a staggered fracture run's residual time)."""
+        y = x.copy()
+        fpetsc.set_bc(y, self.p.bcs)
+        y.axpy(-1.0, x)
+        same = y.norm(PETSc.NormType.INFINITY) == 0.0
+        y.destroy()
+        return same
 
     def _jacobian(self, snes, x, A, P) -> None:
         t = time.perf_counter()
