@@ -14,7 +14,7 @@ from fem_forms.meshes import LoadedMesh, load_mesh
 from fem_forms.output.probes import ProbeSet
 from fem_forms.physics.admissibility import SmallestValue
 from fem_forms.physics.assemble import equilibrium_forms, scene_physics
-from fem_forms.physics.fracture import notch_dofs
+from fem_forms.physics.fracture import notch_dofs, resolution_warning
 from fem_forms.physics.parameters import Parameters
 from fem_forms.physics.supports import LoadFactor
 from fem_forms.physics.terms import Context, Load, Solid, TermList
@@ -234,6 +234,8 @@ def build_model(scene: Scene, material=None, comm: MPI.Comm = MPI.COMM_WORLD,
     for term in terms.with_role("fracture"):            # the damage: a second field, committed with u
         term.notch = notch_dofs(loaded, term.d.function_space, scene.fracture.notch)
         fields["damage"] = term.d
+        if why := resolution_warning(mesh, scene.fracture.length):
+            warnings.append(why)
     forms = equilibrium_forms(terms, context, unknown, v)
     # the mixed energy is a saddle in (u, p): no line-search objective there
     conservative = forms.conservative and disc.formulation != "mixed"

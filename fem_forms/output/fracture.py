@@ -60,6 +60,7 @@ class FractureHistory:
         if not self.rows:
             return {}
         out = {k: self.records[-1][k] for k in ("damage_max", "cracked_volume", "crack_area", "surface_energy")}
+        out["crack_center"] = self.term.crack_center()
         lams = np.asarray(self.rows)[:, 0]
         carried = self.along()
         moving = [i for i, f in enumerate(self.model.scene.fix) if any(f.value or [])]

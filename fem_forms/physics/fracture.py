@@ -103,6 +103,18 @@ class PhaseField(Term):
                 "crack_area": surface / float(self.Gc.value), "surface_energy": surface,
                 "cracked_volume": self._scalar("cracked", ufl.conditional(ufl.ge(self.d, CRACKED), 1.0, 0.0))}
 
+    def crack_center(self) -> list | None:
+        """The mean rest position of the nodes cracked through (d >= CRACKED), notches included; None where
+        none is (the same on every rank)."""
+        V = self.d.function_space
+        n = V.dofmap.index_map.size_local
+        cracked = self.d.x.array[:n] >= CRACKED
+        x = V.tabulate_dof_coordinates()[:n][cracked]
+        comm = V.mesh.comm
+        count = comm.allreduce(int(cracked.sum()), op=MPI.SUM)
+        total = comm.allreduce(x.sum(axis=0) if len(x) else np.zeros(3), op=MPI.SUM)
+        return (total / count).tolist() if count else None
+
     def restart(self, state) -> None:
         """Intact but for the notches (d = 1 there), committed: a new solve starts from the scene's cracks."""
         for f in (self.d, state.old["damage"]):
@@ -135,6 +147,23 @@ def notch_dofs(loaded, V: fem.FunctionSpace, selectors: list) -> np.ndarray:
                              "or widen the box)")
         found.append(np.asarray(dofs, dtype=np.int32))
     return np.unique(np.concatenate(found)) if found else np.zeros(0, dtype=np.int32)
+
+
+def resolution_warning(mesh, ell: float) -> str | None:
+    """A warning when even the finest cells are too coarse for the regularization length (their shortest edge
+    above l: the crack's profile, about 4 l wide, spans fewer than four of them), else None."""
+    x = mesh.geometry.x
+    n = mesh.topology.index_map(mesh.topology.dim).size_local
+    corners = {"tetrahedron": 4, "hexahedron": 8, "prism": 6}.get(mesh.topology.cell_name(), 4)
+    nodes = mesh.geometry.dofmap.array.reshape(-1, len(mesh.geometry.dofmap.links(0)))[:n, :corners]
+    p = x[nodes]
+    edges = np.linalg.norm(p[:, :, None, :] - p[:, None, :, :], axis=-1)
+    edges[:, np.arange(corners), np.arange(corners)] = np.inf
+    shortest = mesh.comm.allreduce(float(edges.min(initial=np.inf)), op=MPI.MIN)
+    if shortest > ell:
+        return (f"fracture.length = {ell:g}: the finest cells' shortest edge is {shortest:.3g}, longer than l: the "
+                "crack's profile is not resolved (mesh about l/3 or finer along the crack's path)")
+    return None
 
 
 @register_terms("fracture")

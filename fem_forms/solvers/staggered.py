@@ -90,8 +90,11 @@ class AlternateMinimization(SNESDriver):
     def __init__(self, problem: NonlinearProblem, others: Sequence[NonlinearProblem], rtol: float,
                  max_iterations: int, options: dict | None = None, **kwargs):
         super().__init__(problem, options, **kwargs)
-        self.others = [SNESDriver(p, None, "direct" if _small(p) else "auto", prefix="fem_forms_other_")
-                       for p in others]
+        # the other fields' energies are quadratic in their own field with this one frozen (the phase field's
+        # for a frozen u): full Newton steps are exact, and an energy line search only met round-off near the
+        # answer (DIVERGED_LINE_SEARCH on a tearing silicone strip's damage, every few steps)
+        self.others = [SNESDriver(p, {"snes_linesearch_type": "basic"}, "direct" if _small(p) else "auto",
+                                  prefix="fem_forms_other_") for p in others]
         self.rtol, self.max_iterations = rtol, max_iterations
         self.sweeps: list[int] = []        # per solved step: the sweeps it took
         self._inner = False

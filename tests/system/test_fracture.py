@@ -18,6 +18,7 @@ import pytest
 import fem_forms as ff
 from fem_forms.errors import InputError
 from helpers import mpirun, run_scene, toml_dumps
+from system.demo_runs import DEMOS, demo  # noqa: F401,F811 (demo: fixture)
 
 E, GC, ELL, K, A = 1.0, 1.0, 0.1, 1.0e-6, 0.01
 SIGMA_AT1 = math.sqrt(3 * GC * E / (8 * ELL))
@@ -180,3 +181,40 @@ def test_a_struck_bar_damages_with_the_energy_account_closed_by_the_crack(tmp_pa
     assert s["energy_balance_error"] < 2e-3
     crack = [e.fracture for _, e in result.energy.history]
     assert np.all(np.diff(crack) >= -1e-12 * max(crack))            # the crack never heals
+
+
+def test_a_mesh_too_coarse_for_the_length_is_warned_about():
+    d = bar(cells=4, steps=1, u_end=0.1, length=0.05)          # shortest edges 0.1 > l = 0.05
+    s = ff.solve_static(ff.Scene.from_dict(d)).summary()
+    assert any("not resolved" in w for w in s["warnings"])
+    s = ff.solve_static(ff.Scene.from_dict(bar(steps=1, u_end=0.1))).summary()     # h = 0.025
+    assert not any("not resolved" in w for w in s["warnings"])
+
+
+def test_printed_hook_demo(demo):
+    """The PLA hook pulled until it cracks (demos/printed_hook.py), against an elastic solve of its mesh (the same
+    scene without [fracture]): AT1 leaves the first step purely elastic (the same force); the crack starts where
+    the elastic stress is largest (the inner side where shank and bend meet: within 4 mm), not before that
+    stress reaches the strength sqrt(3 Gc E / (8 l)) (the stress gradient over l delays it: at most 2x); it cuts
+    through the shank (its area at least the section) and the force falls to nothing."""
+    import tomllib
+    text, out = demo("printed_hook")
+    res = json.loads((out / "results.json").read_text())
+    rows = curve(out)
+    d = tomllib.loads((DEMOS / "scenes" / "printed_hook.toml").read_text())
+    fr, mat = d["fracture"], d["material"]
+    del d["fracture"]
+    d["mesh"]["file"] = str(out / "printed_hook.msh")
+    d["solver"] = {"steps": 1}
+    d["fix"][1]["value"] = [0.0, float(rows["load_uy"][0]), 0.0]
+    d["output"] = {"fields": False, "picture": False}
+    elastic = ff.solve_static(ff.Scene.from_dict(d)).summary()
+    force = -rows["load_Fy"]
+    assert force[0] == pytest.approx(-elastic["reactions"]["load"][1], rel=1e-5)
+    stress_per_newton = mat["strength"]["tensile"] / elastic["strength"]["safety_factor"] / force[0]
+    sigma_c = math.sqrt(3 * fr["toughness"] * mat["E"] / (8 * fr["length"]))
+    assert 1.0 <= stress_per_newton * force.max() / sigma_c <= 2.0
+    assert np.linalg.norm(np.subtract(res["crack_center"], elastic["strength"]["where"])[:2]) < 4e-3
+    assert res["crack_area"] >= 6e-3 * 5e-3 and force[-1] < 0.01 * force.max()
+    assert res["peak_force"]["load"] == pytest.approx(force.max()) and (out / "crack.png").stat().st_size > 0
+    assert "peak force" in text

@@ -60,7 +60,7 @@ def attributes(path):
 
 
 def test_fields_on_request(tmp_path):
-    names = [n for n in FIELD_NAMES if n != "contact_pressure"]        # that one needs [contact]
+    names = [n for n in FIELD_NAMES if n not in ("contact_pressure", "utilization")]   # [contact], a strength
     d = beam_scene(output={"fields": names, "picture": False})
     code, data, _, out = run_in(tmp_path / "all", d)
     assert code == 0 and attributes(out / "fields.xdmf") == names
