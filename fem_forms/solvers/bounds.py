@@ -73,6 +73,19 @@ class Bounds:
         ra[at_upper] = np.maximum(ra[at_upper], 0.0)
 
 
+def on_supports(x: PETSc.Vec, bcs: list) -> bool:
+    """Whether x holds every Dirichlet value exactly (then a residual's lifting A (g - x) is zero: SNES's iterates
+    after the first, whose Newton steps vanish on the supports). dolfinx's lifting assembles the tangent's element
+    matrices of every cell touching a support, as costly as the tangent where supports touch most cells
+    (measured on a one-layer slab held on z = 0: 80 % of a staggered fracture run's residual time)."""
+    y = x.copy()
+    fpetsc.set_bc(y, bcs)
+    y.axpy(-1.0, x)
+    same = y.norm(PETSc.NormType.INFINITY) == 0.0
+    y.destroy()
+    return same
+
+
 def options(merged: dict, user_options: dict, bounds: Bounds | None) -> None:
     """A bounded problem's SNES options, in place: a VI type unless the user chose one (a user's non-VI type
     is replaced: bounds it would ignore are no option), and its line search (nothing without `bounds`)."""

@@ -173,3 +173,10 @@ def _from_options(obj, prefix: str, defaults: dict) -> None:
     for k in written:
         if not k.startswith(_READ_LATER):
             db.delValue(prefix + k)
+
+
+def roundoff_floor(tangent_norm: float, x: PETSc.Vec, safety: float = 1.0) -> float:
+    """The residual norm round-off allows at state x for a tangent of infinity norm `tangent_norm`:
+    safety x machine epsilon x |K|_inf x |x|_inf x sqrt(n)."""
+    return safety * np.finfo(float).eps * tangent_norm * max(x.norm(PETSc.NormType.INFINITY), 1e-300) \
+        * np.sqrt(x.getSize())

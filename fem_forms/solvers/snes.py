@@ -19,6 +19,7 @@ import ufl
 
 from fem_forms import progress
 from fem_forms.solvers import bounds as vi, linear, pmultigrid
+from fem_forms.solvers.linear import roundoff_floor  # noqa: F401 (snes.roundoff_floor, used by the inverse check)
 from fem_forms.solvers.array_terms import ArrayTerms
 from fem_forms.solvers.bordered import Bordered
 from fem_forms.solvers.preconditioner_reuse import PreconditionerReuse
@@ -49,13 +50,6 @@ class NonlinearProblem:
 def as_compiled(form) -> fem.Form:
     """A UFL form compiled, or a form compiled already (a Model's, shared with its checks) as it is."""
     return form if isinstance(form, FormMetaClass) else fem.form(form)
-
-
-def roundoff_floor(tangent_norm: float, x: PETSc.Vec, safety: float = 1.0) -> float:
-    """The residual norm round-off allows at state x for a tangent of infinity norm `tangent_norm`:
-    safety x machine epsilon x |K|_inf x |x|_inf x sqrt(n)."""
-    return safety * np.finfo(float).eps * tangent_norm * max(x.norm(PETSc.NormType.INFINITY), 1e-300) \
-        * np.sqrt(x.getSize())
 
 
 _DRIVER_IDS = itertools.count()
@@ -178,24 +172,12 @@ class SNESDriver:
         with b.localForm() as bl:
             bl.set(0.0)
         fpetsc.assemble_vector(b, self.L)
-        if self.p.bcs and not self._on_supports(x):      # on them the lifting adds exactly zero
+        if self.p.bcs and not vi.on_supports(x, self.p.bcs):      # on them the lifting adds exactly zero
             fpetsc.apply_lifting(b, [self.a], bcs=[self.p.bcs], x0=[x], scale=-1.0)
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         self.arrays.add_gradient(x, b, lifting=snes is None)   # SNES's own iterates sit on the Dirichlet values
         fpetsc.set_bc(b, self.p.bcs, x, -1.0)
         self.assembly_time += time.perf_counter() - t
-
-    def _on_supports(self, x: PETSc.Vec) -> bool:
-        """Whether x holds every Dirichlet value exactly (then the lifting A (g - x) is zero: SNES's iterates
-        after the first, whose Newton steps vanish on the supports). The lifting assembles the tangent's element
-        matrices of every cell touching a support, as costly as the tangent where supports touch most cells
-        (measured on a one-layer slab held on z = 0: 80 % of a staggered fracture run's residual time)."""
-        y = x.copy()
-        fpetsc.set_bc(y, self.p.bcs)
-        y.axpy(-1.0, x)
-        same = y.norm(PETSc.NormType.INFINITY) == 0.0
-        y.destroy()
-        return same
 
     def _jacobian(self, snes, x, A, P) -> None:
         t = time.perf_counter()
@@ -362,8 +344,8 @@ class SNESDriver:
         reduced the residual; with `polish_stuck` (staggered sub-solves) or a step-capping array term also after a
         line search failed below 1e-6 of the load scale (measured: 1e-9 from a sub-solve's answer; contact 2e-9).
         Returns (reason, Newton iterations, Krylov iterations) added."""
-        if self.bounds is not None:       # a VI solve: setFromOptions resets its reduced KSP (PETSc error 60, the
-            return reason, 0, 0           # inactive set's size against the full one, seen on a damage solve)
+        if self.bounds is not None:       # a VI solve: setFromOptions resets its reduced KSP (PETSc error 60)
+            return reason, 0, 0
         last = self._history[-1] if self._history else math.inf
         near = (self.polish_stuck or self.arrays.caps) and last < 1e-6 * (getattr(self, "_load_scale", None) or 0.0)
         stuck = near and reason == PETSc.SNES.ConvergedReason.DIVERGED_LINE_SEARCH
