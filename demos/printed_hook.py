@@ -33,7 +33,8 @@ if comm.rank == 0:
     out.mkdir(parents=True, exist_ok=True)
     hook.build(out / "printed_hook.msh", h_fine=0.5e-3)
 comm.barrier()
-scene = ff.Scene.from_file(here / "scenes" / "printed_hook.toml", overrides={"mesh.file": str(out / "printed_hook.msh")})
+scene = ff.Scene.from_file(here / "scenes" / "printed_hook.toml",
+                           overrides={"mesh.file": str(out / "printed_hook.msh")})
 s = solve_and_write(scene, out)
 
 rows = np.genfromtxt(out / "force_displacement.csv", delimiter=",", names=True)

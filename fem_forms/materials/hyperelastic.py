@@ -40,6 +40,12 @@ class GreenStrainForm:
     def psi(self, F):
         return self.law.strain_energy(green_strain(F))
 
+    def __getattr__(self, name: str):
+        """The law's constants (mu, lmbda, C: a modulus for barrier and round-off scales) read through."""
+        if name not in ("mu", "lmbda", "C"):     # not pk1 (the law's is of the small strain), nor law itself
+            raise AttributeError(name)           # (not set yet while copied: no recursion)
+        return getattr(self.law, name)
+
 
 def lame_from_young_poisson(E: float, nu: float) -> tuple[float, float]:
     """(mu, lambda) from Young's modulus E and Poisson's ratio nu."""

@@ -4,7 +4,8 @@ over the largest principal Cauchy stress (brittle), `yield` over the von Mises s
 Stresses are each element's own, straight from the finite element solution, at the quadrature points of the
 dx rule and at the element's corners (where surface peaks are: the corner values are what FEBio and CalculiX
 extrapolate integration points to): not smoothed across the interfaces of materials of different strength,
-each point judged by its own cell's material. The safety factor is the smallest strength / stress over the part (1 / the largest utilization),
+each point judged by its own cell's material (with plastic or Prony history, which lives on the dx rule's points,
+at those only). The safety factor is the smallest strength / stress over the part (1 / the largest utilization),
 with the point (rest and deformed position), material and criterion where it is reached; the `utilization`
 field is each cell's largest stress / strength (DG0, for ParaView). Same answer on any number of ranks."""
 from __future__ import annotations
@@ -34,7 +35,10 @@ class StrengthCheck:
         self.mesh, self.regions = mesh, model.context.materials
         gauss, _ = quadrature_rule(mesh, model.scene.discretization.quadrature)
         corners = basix.geometry(basix.cell.string_to_type(mesh.topology.cell_name()))
-        points = np.vstack([gauss, corners])
+        # a stress with quadrature-space history (plastic strain, Prony stresses) exists at the dx rule's points
+        # only (FFCx refuses other points for it): there the corners are left out
+        history = getattr(model.solid, "is_plastic", False) or getattr(model.solid, "prony_terms", 0)
+        points = gauss if history else np.vstack([gauss, corners])
         self.sigma = fem.Expression(sigma, points)
         X = ufl.SpatialCoordinate(mesh)
         self.rest = fem.Expression(X, points)

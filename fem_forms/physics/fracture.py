@@ -1,7 +1,7 @@
 """Phase-field fracture ([fracture]): damage d in [0, 1], a P1 field beside the displacement, and the energy
     E(u, d) = int g(d) psi+(F) + psi-(F) dX + Gc / c_w int (w(d) / l + l |grad d|^2) dX
-(Bourdin, Francfort & Marigo 2000), g(d) = (1 - d)^2 + k, AT1: w = d, c_w = 8/3 (an elastic phase until the
-stress reaches sqrt(3 Gc E / (8 l))); AT2: w = d^2, c_w = 2. The split of psi into what damage degrades (psi+)
+(Bourdin, Francfort & Marigo 2000), g(d) = (1 - k)(1 - d)^2 + k, AT1: w = d, c_w = 8/3 (an elastic phase until
+the stress reaches sqrt(3 Gc E / (8 l))); AT2: w = d^2, c_w = 2. The split of psi into what damage degrades (psi+)
 and what it does not (psi-, compression) is written on psi(F) itself, for any isotropic model:
 volumetric-deviatoric (Amor, Marigo & Maurini 2009) takes the volumetric part as psi of the purely volumetric
 deformation, psi(J^(1/3) I) (small strain: psi(I + tr(eps)/3 I)), undegraded in compression (J < 1).
@@ -56,7 +56,8 @@ class PhaseField(Term):
 
     # -- the energy ---------------------------------------------------------------------------------
     def degradation(self):
-        return (1 - self.d) ** 2 + self.k
+        """g(d) = (1 - k)(1 - d)^2 + k: 1 intact (the material's own stiffness), k cracked through."""
+        return (1 - self.k) * (1 - self.d) ** 2 + self.k
 
     def degraded(self, psi, small_strain: bool):
         """psi(F) -> g(d) psi+(F) + psi-(F) by the scene's split."""
@@ -136,8 +137,9 @@ def notch_dofs(loaded, V: fem.FunctionSpace, selectors: list) -> np.ndarray:
             dofs = np.flatnonzero(np.all((x >= lo - tol) & (x <= hi + tol), axis=1)).astype(np.int32)
         elif sel.group in loaded.cells:
             dofs = fem.locate_dofs_topological(V, mesh.topology.dim, loaded.cells[sel.group])
-        elif sel.group in loaded.groups:
-            dofs = fem.locate_dofs_topological(V, mesh.topology.dim - 1, loaded.groups[sel.group])
+        elif sel.group in loaded.groups:                  # a surface group: its tag value names its facets
+            facets = loaded.facet_tags.indices[loaded.facet_tags.values == loaded.groups[sel.group]]
+            dofs = fem.locate_dofs_topological(V, mesh.topology.dim - 1, facets)
         else:
             raise InputError(f"{sel.key}.group = {sel.group!r}: no such volume or surface group (the mesh has: "
                              f"{loaded.group_names()})")

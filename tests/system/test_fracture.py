@@ -2,7 +2,7 @@
 the closed forms of the homogeneous solution (Pham, Amor, Marigo & Maurini 2011; Tanne et al. 2018):
 - AT1: elastic (d = 0 exactly) until sigma_c = sqrt(3 Gc E / (8 l)), then d = 1 - 3 Gc / (8 l E eps^2);
 - AT2: d = E eps^2 / (E eps^2 + Gc / l) from the first load, the peak stress (3/16) sqrt(3 Gc E / l);
-- stress sigma = ((1 - d)^2 + k) E eps at every step; unloading keeps the damage (irreversibility) and
+- stress sigma = ((1 - k)(1 - d)^2 + k) E eps at every step; unloading keeps the damage (irreversibility) and
   follows the damaged secant;
 - around a notch (d = 1 on a plane of nodes) the damage takes the optimal profile (1 - |x| / 2l)^2 (AT1),
   exp(-|x| / l) (AT2), and a bar cut through has the crack area A (1 + 3 h / (8 l)) (AT1: Bourdin's
@@ -49,10 +49,15 @@ def curve(out) -> np.ndarray:
 
 
 def homogeneous_damage(model: str, eps: np.ndarray) -> np.ndarray:
-    psi2 = E * eps ** 2                                       # 2 psi
+    """d minimizing (g(d) E eps^2 / 2 + Gc / c_w w(d) / l) with g(d) = (1 - K)(1 - d)^2 + K."""
+    psi2 = (1 - K) * E * eps ** 2                             # 2 psi, of the degradable part
     if model == "AT1":
         return np.where(psi2 > 3 * GC / (8 * ELL), 1 - 3 * GC / (8 * ELL) / np.maximum(psi2, 1e-300), 0.0)
     return psi2 / (psi2 + GC / ELL)
+
+
+def degraded(d):
+    return (1 - K) * (1 - d) ** 2 + K
 
 
 @pytest.mark.parametrize("model, peak", [("AT1", SIGMA_AT1), ("AT2", SIGMA_AT2)])
@@ -63,7 +68,7 @@ def test_the_homogeneous_bar_follows_the_closed_form_and_peaks_at_the_critical_s
     eps = rows["pull_ux"]
     d = homogeneous_damage(model, eps)
     assert rows["damage_max"] == pytest.approx(d, abs=1e-6)
-    assert rows["pull_Fx"] / A == pytest.approx(((1 - d) ** 2 + K) * E * eps, rel=1e-5, abs=1e-9)
+    assert rows["pull_Fx"] / A == pytest.approx(degraded(d) * E * eps, rel=1e-5, abs=1e-9)
     k = int(np.argmax(rows["pull_Fx"]))
     assert s["peak_load_factor"] == pytest.approx(rows["load_factor"][k])
     assert s["peak_force"]["pull"] / A == pytest.approx(peak, rel=0.01 if model == "AT2" else 0.03)
@@ -86,7 +91,7 @@ def test_unloading_keeps_the_damage_and_follows_the_damaged_secant(tmp_path):
     back = (t > 1.0) & (t < 2.6)                              # unloading and reloading below eps 1.5
     assert back.sum() >= 10
     assert rows["damage_max"][back] == pytest.approx(d1, abs=1e-6)
-    assert rows["pull_Fx"][back] / A == pytest.approx(((1 - d1) ** 2 + K) * E * eps[back], rel=1e-5)
+    assert rows["pull_Fx"][back] / A == pytest.approx(degraded(d1) * E * eps[back], rel=1e-5)
     assert rows["damage_max"][-1] == pytest.approx(homogeneous_damage("AT2", np.array([2.0]))[0], abs=1e-6)
 
 
@@ -218,3 +223,32 @@ def test_printed_hook_demo(demo):
     assert res["crack_area"] >= 6e-3 * 5e-3 and force[-1] < 0.01 * force.max()
     assert res["peak_force"]["load"] == pytest.approx(force.max()) and (out / "crack.png").stat().st_size > 0
     assert "peak force" in text
+
+
+def test_a_notch_on_a_surface_group_damages_that_surface(tmp_path):
+    """A notch given as a gmsh surface group puts d = 1 on exactly that surface's nodes (the end face x = 1)."""
+    import gmsh
+    path = tmp_path / "bar.msh"
+    gmsh.initialize()
+    gmsh.option.setNumber("General.Terminal", 0)
+    gmsh.model.occ.addBox(0, 0, 0, 1.0, 0.1, 0.1)
+    gmsh.model.occ.synchronize()
+    e = 1e-6
+    end = [t for _, t in gmsh.model.getEntitiesInBoundingBox(1 - e, -e, -e, 1 + e, 0.1 + e, 0.1 + e, 2)]
+    gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, end), "end")
+    gmsh.model.addPhysicalGroup(3, [1], 1)
+    gmsh.option.setNumber("Mesh.CharacteristicLengthMax", 0.05)
+    gmsh.model.mesh.generate(3)
+    gmsh.write(str(path))
+    gmsh.finalize()
+    d = bar(steps=1, u_end=1e-3)
+    d["mesh"] = {"generator": "file", "file": str(path)}
+    d["fix"][3]["where"] = {"axis": "x", "at": 0.5}
+    d["fix"] = d["fix"][:3]
+    d["fracture"]["notch"] = [{"where": {"group": "end"}}]
+    from fem_forms.model import build_model
+    model = build_model(ff.Scene.from_dict(d))
+    term = next(iter(model.terms.with_role("fracture")))
+    x = term.d.function_space.tabulate_dof_coordinates()[:, 0]
+    assert np.all(term.d.x.array[np.isclose(x, 1.0)] == 1.0)
+    assert np.all(term.d.x.array[~np.isclose(x, 1.0)] == 0.0) and np.isclose(x, 1.0).any()

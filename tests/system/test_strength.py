@@ -149,3 +149,13 @@ def test_the_utilization_field_needs_a_strength():
     del d["material"]["strength"]
     with pytest.raises(InputError, match="'utilization' needs a \\[material.strength\\]"):
         ff.Scene.from_dict(d)
+
+
+def test_a_plastic_bar_reports_its_yield_safety_factor():
+    """With [material.plasticity] the yield strength defaults to its yield stress; the stress there lives on the
+    quadrature points only (the strength check reads no corner values then)."""
+    d = bar(strength={"tensile": 4e5})
+    d["material"]["plasticity"] = {"model": "von-mises", "yield_stress": YIELD}
+    s = ff.solve_static(ff.Scene.from_dict(d)).summary()
+    assert s["strength"]["safety_factor"] == pytest.approx(YIELD / TRACTION, rel=1e-6)
+    assert s["strength"]["criterion"] == "von Mises"

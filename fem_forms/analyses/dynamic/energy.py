@@ -51,7 +51,7 @@ class Energies:
     plastic_work: float = 0.0
     contact: float = 0.0              # the contact barrier's stored energy
     viscous_work: float = 0.0         # the work on a viscoelastic solid's Prony branches (stored there or lost)
-    fracture: float = 0.0             # the crack's surface energy (phase field: what cracking dissipated)
+    fracture: float = 0.0             # the crack's surface energy beyond the notches' (what cracking dissipated)
 
     def row(self) -> list:
         """The values in the order of COLUMNS."""
@@ -126,6 +126,8 @@ class EnergyAccount:
         self.viscous = fem.form(term.viscous_work(replace(m.context, u=self.u0), ctx)) if viscous else None
         crack = next(iter(m.terms.with_role("fracture")), None)
         self.crack = fem.form(ctx.volume(crack.crack_density())) if crack is not None else None
+        self.crack0 = 0.0
+        self.crack0 = self._crack()               # the notches' own: the column is what cracking added since
         if s.lumped is None:
             self.M = fpetsc.assemble_matrix(s.mass)
             self.M.assemble()
@@ -251,8 +253,8 @@ class EnergyAccount:
         return sum(t.barrier_energy(self.system.u.vector) for t in self.system.model.terms.with_role("contact"))
 
     def _crack(self) -> float:
-        """The crack's surface energy at the current damage (0 without [fracture])."""
-        return self._scalar(self.crack) if self.crack is not None else 0.0
+        """The crack's surface energy at the current damage beyond the notches' (0 without [fracture])."""
+        return self._scalar(self.crack) - self.crack0 if self.crack is not None else 0.0
 
     def columns(self) -> tuple:
         """The energies this run records (thermal_work with a temperature field, plastic_work with an

@@ -27,7 +27,8 @@ FRACTURE_KEYS = (
     Key("split", "string", "what damage degrades: volumetric-deviatoric (Amor et al. 2009: compression does not "
         "crack), none (all of psi), spectral (Miehe et al. 2010: tensile principal strains; linear model only)",
         default="volumetric-deviatoric", choices=SPLITS),
-    Key("residual_stiffness", "number", "what a fully damaged point keeps of its stiffness (k in (1 - d)^2 + k)",
+    Key("residual_stiffness", "number", "what a fully damaged point keeps of its stiffness (k in g(d) = "
+        "(1 - k)(1 - d)^2 + k)",
         default=1.0e-6, minimum=0, exclusive_maximum=1),
     Key("tolerance", "number", "the alternate minimization stops when a sweep changes the damage (and the "
         "displacement, relative to its largest value) by less than this", default=1.0e-4, exclusive_minimum=0,
