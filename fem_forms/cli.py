@@ -25,6 +25,7 @@ from fem_forms.output.interrupts import Terminated
 from fem_forms.output.progress_line import show_progress
 from fem_forms.output.results import forget_results
 from fem_forms.scene import Scene, parse_assignment
+from fem_forms.scene.manual import built, manual_page
 from fem_forms.scene.petsc_options import check_options
 from fem_forms.scene.schema import schema_json
 from fem_forms.study import run_study, solve_to_tolerance
@@ -50,8 +51,12 @@ def _petsc_options(extra: list[str]) -> dict:
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="fem-forms", description="Hyperelastic solids from scene files.")
     sub = p.add_subparsers(dest="command", required=True)
+    manual = built("index.html")
     run = sub.add_parser("run", help="solve a scene file and write results to --out (default out/<scene stem>/)",
-                         epilog="Trailing -key value pairs are passed to PETSc (e.g. -snes_monitor).")
+                         epilog="Trailing -key value pairs are passed to PETSc (e.g. -snes_monitor). Every scene "
+                                f"key (type, default, range, unit, meaning) is in the manual's scene reference, "
+                                f"{built('reference/index.html')}; the manual: {manual} (build it with "
+                                "`.venv/bin/python -m sphinx -W -b html docs docs/_build/html`).")
     run.add_argument("scene", help="scene file (TOML)")
     run.add_argument("--out", help="output folder (created; default out/<scene file stem>/ in the current folder)")
     run.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
@@ -73,7 +78,8 @@ def _parser() -> argparse.ArgumentParser:
     study.add_argument("-v", "--verbose", action="store_true", help="show FFCx/UFL compilation logs")
     study.add_argument("-q", "--quiet", action="store_true", help="show no progress (the per-run lines)")
     schema = sub.add_parser("schema", help="print the JSON Schema of scene files (for editors: Taplo, "
-                            "Even Better TOML)")
+                            "Even Better TOML); the same keys, explained: the manual's scene reference",
+                            epilog=f"The manual's scene reference explains every key: {built('reference/index.html')}")
     schema.add_argument("--out", help="write it to this file instead")
     schema.set_defaults(verbose=False, quiet=True)
     return p
@@ -136,7 +142,8 @@ def main(argv: list[str] | None = None) -> int:
         if reporter:
             reporter.close()
         if rank == 0:
-            print(f"fem-forms: error: {e}", file=sys.stderr)
+            page = manual_page(str(e)) if isinstance(e, InputError) else None
+            print(f"fem-forms: error: {e}" + (f" (manual: {built(page)})" if page else ""), file=sys.stderr)
         return e.exit_status
     except KeyboardInterrupt as e:
         if reporter:

@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 
 from fem_forms.scene import registry
+from fem_forms.scene.manual import BUILT
 from fem_forms.scene.reader import Key, Section, Variants
 from fem_forms.scene.selectors import SELECTOR_KEYS
 from fem_forms.scene.spec import CORE_SECTIONS, TITLE
@@ -124,13 +125,19 @@ def _object(keys, variants: Variants | None = None, doc: str = "") -> dict:
     return s
 
 
+def manual(name: str) -> str:
+    """Where the manual explains a table's keys (fem_forms.scene.manual names the same pages)."""
+    return f"manual: {BUILT.as_posix()}/reference/{name}.html"
+
+
 def section_schema(section: Section) -> dict:
     """A section's table (or array of tables) as JSON Schema."""
-    table = _object(section.keys, section.variants, section.doc)
+    doc = f"{section.doc} ({manual(section.name)})"
+    table = _object(section.keys, section.variants, doc)
     if section.array:
-        return {"type": "array", "description": section.doc, "items": table}
+        return {"type": "array", "description": doc, "items": table}
     if section.either:
-        return {"description": section.doc, "oneOf": [table, {"type": "array", "items": table, "minItems": 1}]}
+        return {"description": doc, "oneOf": [table, {"type": "array", "items": table, "minItems": 1}]}
     return table
 
 
@@ -145,11 +152,11 @@ def scene_schema() -> dict:
         for s in analysis.sections:
             if s is not owned[s.name][1]:     # this analysis reads a table another declares more widely
                 narrowed[s.name] = section_schema(s)
-                narrowed[s.name]["description"] = f"{s.doc} (analysis = {analysis.name!r})"
+                narrowed[s.name]["description"] = f"{s.doc} (analysis = {analysis.name!r}; {manual(s.name)})"
                 continue
             props[s.name] = section_schema(s)
             names = " or ".join(repr(a.name) for a in owned[s.name][0])
-            props[s.name]["description"] = f"{s.doc} (analysis = {names} only)"
+            props[s.name]["description"] = f"{s.doc} (analysis = {names} only; {manual(s.name)})"
         others = [name for name, (owners, _) in owned.items() if analysis not in owners]
         if others or narrowed:
             cond = {"properties": {"analysis": {"const": analysis.name}}}
@@ -163,7 +170,8 @@ def scene_schema() -> dict:
     return {
         "$schema": DRAFT,
         "title": "fem_forms scene",
-        "description": f"A scene for `fem-forms run` (TOML). Outputs: {analyses}.",
+        "description": f"A scene for `fem-forms run` (TOML). Outputs: {analyses}. Every key explained: "
+                       f"the manual's scene reference, {BUILT.as_posix()}/reference/index.html.",
         "type": "object",
         "properties": props,
         "required": [s.name for s in CORE_SECTIONS if s.required],

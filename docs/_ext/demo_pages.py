@@ -1,0 +1,88 @@
+"""The tutorials (docs/tutorials/<demo>.md): one page per demos/*.py, written at every build from the demo's
+docstring (Markdown), its scene files and source (included, so never copied), what it printed
+(docs/demos/<demo>.txt) and the pictures it drew (docs/demos/<demo>/).
+
+The printed output and pictures come from `python docs/refresh_demos.py`; the test suite compares every demo's
+output with its transcript (docs/demo_transcripts.py), so a page cannot show numbers the code no longer gives.
+A demo without a transcript or a picture, or a transcript without a demo, is a build warning (an error under -W).
+"""
+from __future__ import annotations
+
+import ast
+import re
+from pathlib import Path
+
+from sphinx.application import Sphinx
+from sphinx.util import logging
+
+DOCS = Path(__file__).resolve().parents[1]
+ROOT = DOCS.parent
+DEMOS = ROOT / "demos"
+STORED = DOCS / "demos"
+OUT = DOCS / "tutorials"
+logger = logging.getLogger(__name__)
+
+
+def split_docstring(source: str, name: str) -> tuple[str, str]:
+    """(title, body) of a demo's docstring: a leading "# Title" line, else its first paragraph."""
+    doc = (ast.get_docstring(ast.parse(source)) or name).strip()
+    first, _, rest = doc.partition("\n\n")
+    if first.startswith("# ") and "\n" not in first:
+        return first[2:].strip(), rest.strip()
+    return " ".join(first.split()), rest.strip()
+
+
+def scenes_of(source: str, name: str) -> list[Path]:
+    """The scene files of demos/scenes/ a demo reads (named in its source)."""
+    names = dict.fromkeys(re.findall(r"([A-Za-z0-9_]+)\.toml", source))
+    if (DEMOS / "scenes" / f"{name}.toml").is_file():
+        names = {name: None, **names}
+    return [DEMOS / "scenes" / f"{n}.toml" for n in names if (DEMOS / "scenes" / f"{n}.toml").is_file()]
+
+
+def page_text(name: str) -> str:
+    source = (DEMOS / f"{name}.py").read_text()
+    title, body = split_docstring(source, name)
+    lines = [f"(tutorial-{name})=", f"# {title}", "", body, "", "## Run it", "", "```sh",
+             f".venv/bin/python demos/{name}.py            # writes out/{name}/", "```", ""]
+    transcript = STORED / f"{name}.txt"
+    if transcript.is_file():
+        lines += ["## What it prints", "", f"```{{literalinclude}} ../demos/{name}.txt", ":language: text", "```", ""]
+    else:
+        logger.warning(f"demos/{name}.py has no transcript docs/demos/{name}.txt: "
+                       f"run `python docs/refresh_demos.py {name}`")
+    pictures = sorted((STORED / name).glob("*.png")) + sorted((STORED / name).glob("*.gif"))
+    if pictures:
+        lines += ["## Pictures", ""]
+        for p in pictures:
+            lines += [f"```{{figure}} ../demos/{name}/{p.name}", f":alt: {p.stem}", "", f"`{p.name}`", "```", ""]
+    else:
+        logger.warning(f"demos/{name}.py has no pictures in docs/demos/{name}/: "
+                       f"run `python docs/refresh_demos.py {name}`")
+    for scene in scenes_of(source, name):
+        lines += [f"## The scene: `demos/scenes/{scene.name}`", "",
+                  f"```{{literalinclude}} ../../demos/scenes/{scene.name}", ":language: toml", "```", ""]
+    lines += [f"## The script: `demos/{name}.py`", "",
+              f"```{{literalinclude}} ../../demos/{name}.py", ":language: python", "```", ""]
+    return "\n".join(lines)
+
+
+def generate(app: Sphinx) -> None:
+    OUT.mkdir(exist_ok=True)
+    names = sorted(p.stem for p in DEMOS.glob("*.py"))
+    for stale in sorted(set(p.stem for p in STORED.glob("*.txt")) - set(names)):
+        logger.warning(f"docs/demos/{stale}.txt belongs to no demo: remove it")
+    wanted = {f"{n}.md" for n in names} | {"index.md"}           # index.md: the hand-written overview
+    for old in OUT.glob("*.md"):
+        if old.name not in wanted:
+            old.unlink()
+    for name in names:
+        text = page_text(name)
+        path = OUT / f"{name}.md"
+        if not path.is_file() or path.read_text() != text:
+            path.write_text(text)
+
+
+def setup(app: Sphinx) -> dict:
+    app.connect("builder-inited", generate)
+    return {"parallel_read_safe": True, "version": "1"}

@@ -1,0 +1,164 @@
+"""The scene reference (docs/reference/): one page per scene table, written at every build from the key
+declarations (fem_forms.scene.manual walks them, the CLI's error pointers walk the same), so a key the code
+declares is always documented and a key it no longer declares is gone.
+
+Each key is a `key` object (`{key}`material.E`` links to it from any page; under -W a link to a key that does
+not exist fails the build), with its type, default, range, unit and meaning.
+"""
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+from sphinx.application import Sphinx
+
+from fem_forms.keys import Key
+from fem_forms.scene.manual import Page, pages
+from fem_forms.scene.selectors import SELECTOR_KEYS
+
+OUT = Path(__file__).resolve().parents[1] / "reference"
+_SPECIAL = re.compile(r"([\\`*_\[\]<>|{}$])")
+
+
+def esc(text: str) -> str:
+    """Text with Markdown's special characters escaped (docs say x * y, [[x0, y0, z0], ...], a_i)."""
+    return _SPECIAL.sub(r"\\\1", text)
+
+
+def toml(v) -> str:
+    """A value as a scene file writes it."""
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, dict):
+        return "{ " + ", ".join(f"{k} = {toml(x)}" for k, x in v.items()) + " }" if v else "{}"
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(toml(x) for x in v) + "]"
+    return json.dumps(v)
+
+
+def kind_text(k: Key) -> str:
+    number = "whole number" if k.kind == "integer" or k.integer else "number"
+    n = f"{k.length} " if k.length else ""
+    return {
+        "number": "number", "integer": "whole number", "string": "string", "boolean": "true or false",
+        "vector": f"list of {n}{number}s", "points": f"list of points (each {n}{number}s)",
+        "axes": "list of distinct axis names from \"x\", \"y\", \"z\"", "file": "file path (relative to the scene file)",
+        "table": "table", "tables": "array of tables", "map": "table of name = value",
+        "options": "table of PETSc options (name = value)", "selector": "selector (a table, see below)",
+        "selection": "true (the default list), false (none) or a list of names", "either": "one of the forms below",
+    }[k.kind]
+
+
+def range_text(k: Key) -> str:
+    if k.note:
+        return k.note
+    lo = f">= {k.minimum:g}" if k.minimum is not None else f"> {k.exclusive_minimum:g}" \
+        if k.exclusive_minimum is not None else ""
+    hi = f"<= {k.maximum:g}" if k.maximum is not None else f"< {k.exclusive_maximum:g}" \
+        if k.exclusive_maximum is not None else ""
+    return " and ".join(x for x in (lo, hi) if x)
+
+
+def facts(k: Key, when: list) -> list[str]:
+    """The bullet lines of one declaration."""
+    out = [f"- type: {esc(kind_text(k))}"]
+    if k.required:
+        out.append("- required" + (f" (for {esc(', '.join(when))})" if when else ""))
+    if k.default is not None and k.default != [] or k.default_note:
+        default = f"`{toml(k.default)}`" if k.default is not None else ""
+        note = esc(k.default_note) if k.default_note else ""
+        out.append(f"- default: {default}{' ' if default and note else ''}{note}")
+    if k.choices is not None and k.kind not in ("selector",):
+        out.append("- one of: " + ", ".join(f"`{toml(c)}`" for c in k.choices))
+    rng = range_text(k)
+    if rng and k.kind in ("number", "integer", "vector", "points"):
+        out.append(f"- range: {esc(rng)}" + (" (each number)" if k.kind in ("vector", "points") else "")
+                   + (" (checked by the material model)" if k.checked_by else ""))
+    if k.unit:
+        out.append(f"- unit: {esc(k.unit)}")
+    if when:
+        out.append("- only for: " + ", ".join(f"`{w}`" for w in when))
+    if k.kind == "selector":
+        kinds = [kd for kd in SELECTOR_KEYS if k.choices is None or kd in k.choices]
+        for kd in kinds:
+            keys = SELECTOR_KEYS[kd]
+            out.append(f"- {kd}: `{{ {', '.join(f'{s.name} = ...' for s in keys)} }}`: "
+                       + "; ".join(esc(s.doc) for s in keys))
+    if k.kind == "map" and k.item is not None:
+        out.append(f"- each value: {esc(kind_text(k.item))}, {esc(k.item.doc)}"
+                   + (f" [{esc(k.item.unit)}]" if k.item.unit else ""))
+    if k.kind == "either":
+        for alt in k.keys:
+            out.append(f"- or {esc(kind_text(alt))}: {esc(alt.doc)}")
+    return out
+
+
+def page_text(page: Page) -> str:
+    if page.name == "scene":
+        title, intro = "Top-level keys", ["The keys outside any table, at the top of a scene file."]
+    else:
+        s0 = page.sections[0][0]
+        brackets = f"[[{page.name}]]" if s0.array else f"[{page.name}]"
+        title = f"`{brackets}`"
+        intro = [esc(page.doc[0].upper() + page.doc[1:]) + "."]
+        if s0.array:
+            intro.append(f"An array of tables: write `{brackets}` once per item, any number of them.")
+        if s0.either:
+            intro.append(f"One table `[{page.name}]`, or several `[[{page.name}]]`.")
+        owners = [a for _, analyses in page.sections for a in analyses]
+        intro.append("Read by " + (", ".join(f"`analysis = \"{a}\"`" for a in owners) if owners
+                                   else "every analysis") + ("; required." if s0.required else "."))
+    lines = [f"(reference-{page.name})=", f"# {title}", "", *intro, "",
+             "Written from the key declarations in `fem_forms/` when the manual is built "
+             "(`fem-forms schema` prints the same declarations as JSON Schema).", ""]
+    for entry in page.entries.values():
+        lines += ["```{key} " + entry.path]
+        for i, (k, when) in enumerate(entry.cases):
+            if len(entry.cases) > 1:
+                lines += [f"**{' or '.join(when) if when else 'otherwise'}:** {esc(k.doc)}", ""]
+            else:
+                lines += [esc(k.doc), ""]
+            lines += facts(k, [] if len(entry.cases) > 1 else when) + [""]
+        lines += ["```", ""]
+    return "\n".join(lines)
+
+
+def index_text(all_pages: list[Page]) -> str:
+    rows = ["| table | what it holds | keys |", "|---|---|---|"]
+    for p in all_pages:
+        label = "top level" if p.name == "scene" else f"`[{p.name}]`"
+        rows.append(f"| [{label}]({p.name}.md) | {esc(p.doc)} | {len(p.entries)} |")
+    return "\n".join([
+        "# Scene reference", "",
+        "Every key a scene file may hold, one page per table: its type, default, range, unit and meaning. These",
+        "pages are written from the same declarations the scene reader checks a scene against, at every build",
+        "of this manual, so they cannot drift from the code. The guides explain what the keys do together;",
+        "`fem-forms schema` prints the same declarations as a JSON Schema for editors.", "",
+        "An error message about a key ends with the page and anchor of that key, e.g.",
+        "`(manual: docs/_build/html/reference/material.html#key-material.E)`.", "",
+        *rows, "",
+        "```{toctree}", ":hidden:", "", *[p.name for p in all_pages], "```", ""])
+
+
+def write_if_changed(path: Path, text: str) -> None:
+    if not path.is_file() or path.read_text() != text:
+        path.write_text(text)
+
+
+def generate(app: Sphinx) -> None:
+    OUT.mkdir(exist_ok=True)
+    all_pages = pages()
+    wanted = {f"{p.name}.md" for p in all_pages} | {"index.md"}
+    for old in OUT.glob("*.md"):
+        if old.name not in wanted:
+            old.unlink()
+    for p in all_pages:
+        write_if_changed(OUT / f"{p.name}.md", page_text(p))
+    write_if_changed(OUT / "index.md", index_text(all_pages))
+
+
+def setup(app: Sphinx) -> dict:
+    app.add_object_type("key", "key", objname="scene key", indextemplate="pair: %s; scene key")
+    app.connect("builder-inited", generate)
+    return {"parallel_read_safe": True, "version": "1"}

@@ -1,0 +1,88 @@
+"""Run demos and store what the manual's tutorial pages show: the printed output (docs/demos/<name>.txt) and
+the pictures (docs/demos/<name>/*.png, *.gif, scaled down to at most 900 px wide).
+
+    .venv/bin/python docs/refresh_demos.py            # every demo (about 10 minutes on 2 cores)
+    .venv/bin/python docs/refresh_demos.py bent_spoon struck_bar
+
+The test suite checks that the committed transcripts are current (docs/demo_transcripts.py); run this after
+changing what a demo prints, and commit docs/demos/.
+"""
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from PIL import Image
+
+DOCS = Path(__file__).resolve().parent
+ROOT = DOCS.parent
+sys.path.insert(0, str(DOCS))
+from demo_transcripts import TRANSCRIPTS, normalise, transcript_path  # noqa: E402
+
+WIDTH = 900                    # px: pictures wider than this are scaled down
+MAX_GIF = 2_500_000            # bytes: larger animations are scaled down by a further factor of 2
+
+
+def pictures(out: Path) -> list[Path]:
+    """The pictures a demo wrote, anywhere under its output folder."""
+    return sorted(p for p in out.rglob("*") if p.suffix in (".png", ".gif"))
+
+
+def store_picture(src: Path, dest: Path) -> None:
+    """A copy of src at most WIDTH px wide (animated GIFs keep their frames)."""
+    im = Image.open(src)
+    if src.suffix == ".png":
+        if im.width > WIDTH:
+            im = im.resize((WIDTH, round(im.height * WIDTH / im.width)), Image.LANCZOS)
+        im.save(dest, optimize=True)
+        return
+    scale = min(1.0, WIDTH / im.width)
+    if src.stat().st_size * scale * scale > MAX_GIF:
+        scale /= 2
+    if scale == 1.0:
+        shutil.copyfile(src, dest)
+        return
+    size = (round(im.width * scale), round(im.height * scale))
+    frames, durations = [], []
+    for i in range(getattr(im, "n_frames", 1)):
+        im.seek(i)
+        frames.append(im.convert("RGB").resize(size, Image.LANCZOS).convert("P", palette=Image.ADAPTIVE))
+        durations.append(im.info.get("duration", 100))
+    frames[0].save(dest, save_all=True, append_images=frames[1:], duration=durations, loop=0, optimize=True)
+
+
+def refresh(name: str) -> float:
+    """Run demos/<name>.py, store its transcript and pictures; returns its wall time."""
+    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+               OPENBLAS_NUM_THREADS="1", PYTHONPATH=str(ROOT))
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / name
+        t0 = time.perf_counter()
+        p = subprocess.run([sys.executable, str(ROOT / "demos" / f"{name}.py"), str(out)], cwd=tmp, env=env,
+                           capture_output=True, text=True)
+        wall = time.perf_counter() - t0
+        if p.returncode != 0:
+            raise SystemExit(f"demos/{name}.py exited {p.returncode}:\n{p.stdout}\n{p.stderr}")
+        transcript_path(name).write_text(normalise(p.stdout, out, name))
+        folder = TRANSCRIPTS / name
+        shutil.rmtree(folder, ignore_errors=True)
+        folder.mkdir(parents=True)
+        for src in pictures(out):
+            store_picture(src, folder / "_".join(src.relative_to(out).parts))
+    return wall
+
+
+def main(names: list[str]) -> None:
+    TRANSCRIPTS.mkdir(exist_ok=True)
+    names = names or sorted(p.stem for p in (ROOT / "demos").glob("*.py"))
+    for name in names:
+        print(f"{name}: {refresh(name):.0f} s", flush=True)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
