@@ -1,11 +1,13 @@
 #!/usr/bin/env bash
-# Install what fem_forms needs on Debian 12 and make a venv (.venv) that sees Debian's FEniCSx stack.
+# Install what fem_forms needs on Debian 12 and make a venv (.venv) that sees Debian's FEniCSx stack
+# (and Sphinx, MyST and the furo theme for the manual in docs/).
 # Idempotent: a second run installs nothing and takes a second.
 set -euo pipefail
 cd "$(dirname "$0")"
 pkgs="python3-dolfinx python3-dolfinx-real python3-ufl python3-petsc4py python3-slepc4py python3-gmsh
 python3-meshio python3-pytest python3-mpi4py openmpi-bin libopenblas0-pthread python3-matplotlib
-python3-scipy python3-pil python3-jsonschema python3-venv python3-setuptools python3-pip python3-pytest-xdist"
+python3-scipy python3-pil python3-jsonschema python3-venv python3-setuptools python3-pip python3-pytest-xdist
+python3-sphinx python3-myst-parser furo"
 missing=""
 for p in $pkgs; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing="$missing $p"

@@ -21,3 +21,12 @@ html_theme = "furo"
 html_title = "fem_forms manual"
 autodoc_typehints = "description"
 autodoc_member_order = "bysource"
+
+
+def _plain_bars(app, what, name, obj, options, lines):
+    """Docstrings are plain text: |F - R| is a norm, not an RST substitution."""
+    lines[:] = [line.replace("|", r"\|") for line in lines]
+
+
+def setup(app):
+    app.connect("autodoc-process-docstring", _plain_bars)

@@ -7,9 +7,10 @@ it printed with the committed transcript through `differences` below: a changed 
 so a page cannot silently show numbers the code no longer gives.
 
 A transcript is the demo's stdout with its output folder written as out/<name> (what a user running
-`python demos/<name>.py` sees). Numbers are compared to one unit of their last printed digit (or 1e-4
-relative, whichever is larger; two numbers below 1e-8 in size are both round-off and equal); timings (a number of seconds printed with at most one decimal and followed
-by " s", e.g. "36.2 s", or "in 4 s"), which vary from run to run, are not compared.
+`python demos/<name>.py` sees). Whole numbers must be equal, decimal ones equal to one unit of their last
+printed digit (a rounding flip); two numbers below 1e-8 in size are both round-off (a residual force, a
+round-trip mismatch) and equal. Timings (seconds printed with at most two decimals and followed by " s":
+"36.2 s", "2.72 s"), which vary from run to run, are not compared; "0.866 s" (a period) is.
 """
 from __future__ import annotations
 
@@ -47,15 +48,17 @@ def _tokens(text: str) -> tuple[list[str], list[tuple[str, bool]]]:
 
 
 def _close(a: str, b: str) -> bool:
-    """b equals a to one unit of a's last printed digit, or to 1e-4 relative."""
+    """b is a: a whole number exactly, a decimal one to one unit of a's last printed digit (a rounding flip);
+    two numbers below ROUNDOFF are both round-off and equal."""
     x, y = float(a), float(b)
     if abs(x) < ROUNDOFF and abs(y) < ROUNDOFF:
         return True
-    mantissa = re.split(r"[eE]", a)[0]
-    exponent = int(re.split(r"[eE]", a)[1]) if re.search(r"[eE]", a) else 0
+    mantissa, _, exponent = a.lower().partition("e")
+    if "." not in mantissa and not exponent:
+        return a.lstrip("+") == b.lstrip("+")
     decimals = len(mantissa.split(".")[1]) if "." in mantissa else 0
-    unit = 10.0 ** (exponent - decimals)
-    return abs(x - y) <= max(1.0001 * unit, 1e-4 * abs(x))
+    unit = 10.0 ** (int(exponent or 0) - decimals)
+    return abs(x - y) <= 1.0001 * unit
 
 
 def differences(committed: str, fresh: str) -> list[str]:

@@ -12,12 +12,14 @@ import re
 from pathlib import Path
 
 from sphinx.application import Sphinx
+from sphinx.util import logging
 
 from fem_forms.keys import Key
 from fem_forms.scene.manual import Page, pages
 from fem_forms.scene.selectors import SELECTOR_KEYS
 
 OUT = Path(__file__).resolve().parents[1] / "reference"
+logger = logging.getLogger(__name__)
 _SPECIAL = re.compile(r"([\\`*_\[\]<>|{}$])")
 
 
@@ -158,7 +160,15 @@ def generate(app: Sphinx) -> None:
     write_if_changed(OUT / "index.md", index_text(all_pages))
 
 
+def unknown_key(app: Sphinx, env, node, contnode) -> None:
+    """A `{key}` link to a key the scene no longer declares: a warning (an error under -W)."""
+    if node.get("refdomain") == "std" and node.get("reftype") == "key":
+        logger.warning(f"no scene key {node['reftarget']!r} (the reference documents every declared key)",
+                       location=node)
+
+
 def setup(app: Sphinx) -> dict:
     app.add_object_type("key", "key", objname="scene key", indextemplate="pair: %s; scene key")
     app.connect("builder-inited", generate)
+    app.connect("missing-reference", unknown_key)
     return {"parallel_read_safe": True, "version": "1"}

@@ -1,6 +1,9 @@
 """What the demo tests share: which test checks each demo, running the demos as a user runs them (two at a
 time in worker threads, the machines have 2 cores) and reading the numbers they print. A test module that
-imports `demo` gets the demos its own selected tests check, started when the module's first test asks."""
+imports `demo` gets the demos its own selected tests check, started when the module's first test asks.
+Every run is also compared with the output its tutorial page in the manual shows (docs/demo_transcripts.py):
+a demo whose printed numbers changed fails until `python docs/refresh_demos.py NAME` refreshes the page."""
+import importlib.util
 import os
 import re
 import subprocess
@@ -12,6 +15,9 @@ import pytest
 from helpers import ROOT
 
 DEMOS = ROOT / "demos"
+_spec = importlib.util.spec_from_file_location("demo_transcripts", ROOT / "docs" / "demo_transcripts.py")
+transcripts = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(transcripts)
 # the test that checks each demo (a new demo without a check fails test_every_demo_is_checked)
 CHECKS = {"loaded_vs_unloaded_modes": "test_loaded_vs_unloaded_modes_demo",    # longest first
           "sagging_beam": "test_demo_scene_solves_and_writes_outputs",
@@ -52,6 +58,7 @@ class DemoRuns:
         p = self._runs[name].result()
         assert p.returncode == 0, f"{name}.py exited {p.returncode}:\n{p.stdout}\n{p.stderr}"
         assert "Traceback" not in p.stderr, p.stderr
+        transcripts.check(name, p.stdout, self.out[name])           # the manual's page shows these numbers
         return p.stdout, self.out[name]
 
     def close(self):

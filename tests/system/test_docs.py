@@ -1,0 +1,129 @@
+"""The manual (docs/): it builds with warnings as errors (a broken link, a link to a scene key that no longer
+exists, a demo without its transcript fail), documents every key the scene schema knows at the anchor the
+CLI's error messages point to, and the first scene that the README and Getting started show still prints
+what they show."""
+import importlib.util
+import json
+import os
+import re
+import subprocess
+import sys
+import time
+
+import pytest
+
+from fem_forms.cli import main
+from fem_forms.scene.manual import anchor, key_paths, manual_page, pages
+from fem_forms.scene.schema import scene_schema
+from helpers import ROOT
+
+DOCS = ROOT / "docs"
+_spec = importlib.util.spec_from_file_location("demo_transcripts", DOCS / "demo_transcripts.py")
+transcripts = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(transcripts)
+ENV = dict(os.environ, PYTHONPATH=str(ROOT), OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+           OPENBLAS_NUM_THREADS="1")
+
+
+@pytest.fixture(scope="module")
+def html(tmp_path_factory):
+    """The manual built as the README says (sphinx-build -W), into a temporary folder."""
+    out = tmp_path_factory.mktemp("html")
+    t0 = time.perf_counter()
+    p = subprocess.run([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q", "-b", "html",
+                        "-d", str(out / ".doctrees"), str(DOCS), str(out)],
+                       cwd=ROOT, env=ENV, capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0 and not p.stderr.strip(), f"the manual does not build:\n{p.stdout}\n{p.stderr}"
+    assert time.perf_counter() - t0 < 60, "building the manual took over a minute"
+    return out
+
+
+def test_manual_builds_and_opens_offline(html):
+    index = (html / "index.html").read_text()
+    assert "Getting started" in index and (html / "searchindex.js").is_file()
+    for page in html.rglob("*.html"):
+        text = page.read_text()
+        remote = re.findall(r'<(?:script|link|img)[^>]+(?:src|href)="(https?://[^"]+)"', text)
+        assert not remote, f"{page.relative_to(html)} loads {remote[0]}: the manual must open offline"
+    for name in sorted(p.stem for p in (ROOT / "demos").glob("*.py")):
+        page = (html / "tutorials" / f"{name}.html").read_text()
+        assert f"demos/{name}.py" in page and "What it prints" in page and "<img" in page, name
+
+
+def test_every_scene_key_is_in_the_reference_at_its_anchor(html):
+    """Walked from the JSON Schema (another walk of the declarations than the one the pages are written
+    from): every key has its page and anchor; a selector's shapes are listed under their `where` key."""
+    documented = key_paths()
+    kinds = {e.path: e.cases[0][0].kind for p in pages() for e in p.entries.values()}
+    found = set()
+
+    def walk(s, path):
+        if not isinstance(s, dict):
+            return
+        for name, sub in s.get("properties", {}).items():
+            found.add(f"{path}.{name}" if path else name)
+            walk(sub, f"{path}.{name}" if path else name)
+        for k in ("oneOf", "anyOf", "allOf"):
+            for sub in s.get(k, []):
+                walk(sub, path)
+        for k in ("items", "then"):
+            walk(s.get(k), path)
+
+    walk(scene_schema(), "")
+    tables = {p.name for p in pages()}
+    for path in sorted(found):
+        if path in tables:
+            continue
+        parent = path.rsplit(".", 1)[0]
+        if path not in documented:
+            assert kinds.get(parent) == "selector", f"scene key {path} is not in the manual's reference"
+            continue
+        page = html / "reference" / f"{documented[path]}.html"
+        assert f'id="{anchor(path)}"' in page.read_text(), f"{path}: no anchor in {page.name}"
+    assert len(documented) > 150
+
+
+def test_a_bad_key_points_to_its_page(html, capsys, monkeypatch, tmp_path):
+    monkeypatch.chdir(ROOT)
+    scene = tmp_path / "bad.toml"
+    scene.write_text('analysis = "modal"\n[mesh]\n[material]\nE = 1.0e6\nnu = 0.3\n[modal]\ncount = 0\n')
+    assert main(["run", str(scene), "-q", "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    m = re.search(r"\(manual: docs/_build/html/(reference/(\w+)\.html)#(\S+)\)$", err.strip())
+    assert m and err.count("\n") == 1, err
+    assert f'id="{m.group(3)}"' in (html / m.group(1)).read_text()
+    assert manual_page("material[1].where.box: lower corner [1, 0, 0] exceeds upper corner") == \
+        "reference/material.html#key-material.where"
+    assert manual_page("mesh.cellz: unknown key") == "reference/mesh.html"
+    assert manual_page("command line: 'x' is not an option") is None
+
+
+def test_help_and_schema_name_the_manual(capsys, monkeypatch):
+    monkeypatch.chdir(ROOT)
+    with pytest.raises(SystemExit):
+        main(["run", "--help"])
+    assert "docs/_build/html/reference/index.html" in " ".join(capsys.readouterr().out.split())
+    assert main(["schema"]) == 0
+    schema = json.loads(capsys.readouterr().out)
+    assert "docs/_build/html/reference/index.html" in schema["description"]
+    assert "reference/sound.html" in schema["properties"]["sound"]["description"]
+
+
+def test_the_first_scene_prints_what_the_readme_shows(tmp_path):
+    scene = (DOCS / "examples" / "first_scene.toml").read_text()
+    readme = (ROOT / "README.md").read_text()
+    assert scene.strip() in readme, "the README's first scene is not docs/examples/first_scene.toml"
+    p = subprocess.run([sys.executable, "-m", "fem_forms", "run", str(DOCS / "examples" / "first_scene.toml"), "-q"],
+                       cwd=tmp_path, env=ENV, capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    fresh = transcripts.normalise(p.stdout, tmp_path / "out" / "first_scene", "first_scene")
+    stored = (DOCS / "examples" / "first_scene.txt").read_text()
+    assert transcripts.differences(stored, fresh) == [], (stored, fresh)
+    title = re.search(r'title = "([^"]+)"', scene).group(1)
+    shown = readme[readme.index(title + ":"):].split("```")[0]
+    assert transcripts.differences(shown, fresh) == [], "the README's output of the first scene is stale"
+
+
+def test_the_readme_quotes_the_verification_manual():
+    verified = re.search(r"(\d+) of (\d+) rows pass", (ROOT / "verification" / "README.md").read_text())
+    assert verified and f"{verified.group(1)} of {verified.group(2)} rows" in (ROOT / "README.md").read_text()
