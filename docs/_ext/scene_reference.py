@@ -20,7 +20,7 @@ from fem_forms.scene.selectors import SELECTOR_KEYS
 
 OUT = Path(__file__).resolve().parents[1] / "reference"
 logger = logging.getLogger(__name__)
-_SPECIAL = re.compile(r"([\\`*_\[\]<>|{}$])")
+_SPECIAL = re.compile(r"([\\*_\[\]<>|{}$])")         # backticks stay: docs quote `keys` as code
 
 
 def esc(text: str) -> str:
@@ -47,7 +47,7 @@ def kind_text(k: Key) -> str:
         "vector": f"list of {n}{number}s", "points": f"list of points (each {n}{number}s)",
         "axes": "list of distinct axis names from \"x\", \"y\", \"z\"", "file": "file path (relative to the scene file)",
         "table": "table", "tables": "array of tables", "map": "table of name = value",
-        "options": "table of PETSc options (name = value)", "selector": "selector (a table, see below)",
+        "options": "table of PETSc options (name = value)", "selector": "a table saying where, one of the shapes below",
         "selection": "true (the default list), false (none) or a list of names", "either": "one of the forms below",
     }[k.kind]
 

@@ -36,7 +36,7 @@ class Page:
 
     def add(self, path: str, k: Key, when: str = "") -> None:
         e = self.entries.setdefault(path, Entry(path))
-        for i, (other, conds) in enumerate(e.cases):
+        for other, conds in e.cases:
             if other is k:
                 if when and when not in conds:
                     conds.append(when)
