@@ -18,6 +18,7 @@ exclude_patterns = ["_build"]
 myst_heading_anchors = 3
 myst_enable_extensions = ["colon_fence"]
 html_theme = "furo"
+smartquotes = False                     # keep TOML's straight quotes copyable: type = "gravity"
 html_title = "fem_forms manual"
 autodoc_typehints = "description"
 autodoc_member_order = "bysource"

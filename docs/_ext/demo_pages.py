@@ -27,9 +27,10 @@ def split_docstring(source: str, name: str) -> tuple[str, str]:
     """(title, body) of a demo's docstring: a leading "# Title" line, else its first paragraph."""
     doc = (ast.get_docstring(ast.parse(source)) or name).strip()
     first, _, rest = doc.partition("\n\n")
+    rest = rest.strip("\n")                      # keep an indented first line: a code block
     if first.startswith("# ") and "\n" not in first:
-        return first[2:].strip(), rest.strip()
-    return " ".join(first.split()), rest.strip()
+        return first[2:].strip(), rest
+    return " ".join(first.split()).rstrip("."), rest
 
 
 def scenes_of(source: str, name: str) -> list[Path]:

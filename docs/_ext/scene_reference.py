@@ -75,7 +75,7 @@ def facts(k: Key, when: list) -> list[str]:
         out.append("- one of: " + ", ".join(f"`{toml(c)}`" for c in k.choices))
     rng = range_text(k)
     if rng and k.kind in ("number", "integer", "vector", "points"):
-        out.append(f"- range: {esc(rng)}" + (" (each number)" if k.kind in ("vector", "points") else "")
+        out.append(f"- range: {esc(rng)}" + (" (each number)" if k.kind in ("vector", "points") and not k.note else "")
                    + (" (checked by the material model)" if k.checked_by else ""))
     if k.unit:
         out.append(f"- unit: {esc(k.unit)}")

@@ -101,8 +101,8 @@ def manual_page(message: str) -> str | None:
     with a scene key, e.g. "material[1].E = -1: ..." -> "reference/material.html#key-material.E"; None when
     the message names no scene key."""
     m = _PATH.match(message)
-    if not m:
-        return None
+    if not m or re.match(r" [A-Za-z]", message[m.end():]) or "(manual: " in message:
+        return None                                 # "scene file 'x': ...", or a message already pointing
     path = re.sub(r"\[\d+\]", "", m.group())
     known = key_paths()
     parts = path.split(".")

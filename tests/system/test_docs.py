@@ -102,6 +102,7 @@ def test_a_bad_key_points_to_its_page(html, capsys, monkeypatch, tmp_path):
         "reference/material.html#key-material.where"
     assert manual_page("mesh.cellz: unknown key") == "reference/mesh.html"
     assert manual_page("command line: 'x' is not an option") is None
+    assert manual_page("scene file 'a.toml': not found") is None
 
 
 def test_help_and_schema_name_the_manual(capsys, monkeypatch):
