@@ -9,7 +9,7 @@ time spent in the contact term (energy, gradient, Hessian, step filter; measured
 the cost of one Newton iteration against the clamped slab's. Medians of 2 runs after one that compiled the
 forms; one core. (The STL table with friction 0.5 did not converge at this size: the triangle pairs' Hessian,
 projected per pair with the table's nodes and then restricted to the slab's, is not the exact one, and
-Newton crept linearly then stalled; see the README.)
+Newton crept linearly then stalled; see the manual, docs/analyses/contact.md.)
 
 Run: `.venv/bin/python benchmarks/contact_cost.py` (about 6 minutes). Writes benchmarks/contact_cost.md.
 """

@@ -1,5 +1,6 @@
 """Speed against accuracy for three scenes: `fem-forms study` on each (degrees 1 and 2, three mesh
-levels), collected into one markdown file for the README's "choosing speed or accuracy" section.
+levels), collected into one markdown file for the manual's "choosing speed or accuracy" page
+(docs/speed-accuracy.md includes it).
 
 Run: `.venv/bin/python benchmarks/speed_accuracy.py` (a few minutes). Writes benchmarks/speed_accuracy.md
 and the study folders under out/speed_accuracy/.

@@ -73,7 +73,7 @@ def test_adjoint_matches_direct_and_fixed_point_agrees(tmp_path):
     assert ref > 0.05
     assert np.abs(adjoint.v.x.array - direct.v.x.array).max() <= 1e-4 * ref
     assert np.abs(fixed.v.x.array - direct.v.x.array).max() <= 1e-6 * ref
-    # TAO's L-BFGS makes progress but stalls in its line search on this bending problem (see README)
+    # TAO's L-BFGS makes progress but stalls in its line search on this bending problem (see docs/analyses/inverse.md)
     assert lbfgs.history[-1]["J"] < 0.1 * lbfgs.history[0]["J"]
 
 
