@@ -145,3 +145,31 @@ def test_a_changed_demo_number_makes_its_page_stale():
     for changed in (page.replace("18 Newton", "19 Newton"), page.replace("-0.0586", "-0.0588"),
                     page.replace("0.866 s", "0.868 s"), page.replace("tip u", "tip v")):
         assert transcripts.differences(page, changed), changed
+
+
+def _without_required(s, in_if=False):
+    """The schema with no key required (a guide shows a fragment of a scene), except in the conditions that
+    tell variants apart (generator = "box" or "file", load type)."""
+    if isinstance(s, dict):
+        return {k: _without_required(v, in_if or k == "if") for k, v in s.items() if k != "required" or in_if}
+    if isinstance(s, list):
+        return [_without_required(v, in_if) for v in s]
+    return s
+
+
+def test_every_toml_example_in_the_manual_uses_declared_keys():
+    """A key renamed or removed in the code fails here if a guide or the README still shows it."""
+    import jsonschema
+    import tomllib
+    schema = scene_schema()
+    schema.pop("allOf")                                   # fragments need not name their analysis
+    validator = jsonschema.Draft7Validator(_without_required(schema))
+    pages = [p for p in DOCS.rglob("*.md") if not {"reference", "_build"} & set(p.relative_to(DOCS).parts)
+             and not (p.parent.name == "tutorials" and p.name != "index.md")] + [ROOT / "README.md"]
+    blocks = 0
+    for page in pages:
+        for m in re.finditer(r"```toml\n(.*?)```", page.read_text(), re.S):
+            blocks += 1
+            errors = [f"{list(e.absolute_path)}: {e.message[:120]}" for e in validator.iter_errors(tomllib.loads(m.group(1)))]
+            assert not errors, f"{page.relative_to(ROOT)}: {errors[0]}"
+    assert blocks >= 12
