@@ -20,6 +20,11 @@ from fem_forms.scene.selectors import SELECTOR_KEYS
 
 OUT = Path(__file__).resolve().parents[1] / "reference"
 logger = logging.getLogger(__name__)
+GUIDES = {"scene": "scenes", "mesh": "scenes", "material": "analyses/materials", "discretization": "analyses/elements",
+          "fix": "scenes", "load": "analyses/static", "solver": "analyses/static", "output": "analyses/stresses",
+          "thermal": "analyses/thermal", "contact": "analyses/contact", "fracture": "analyses/fracture",
+          "modal": "analyses/modal", "sound": "analyses/modal", "inverse": "analyses/inverse",
+          "balance": "analyses/balance", "dynamic": "analyses/dynamic", "damping": "analyses/dynamic"}
 _SPECIAL = re.compile(r"([\\*_\[\]<>|{}$])")         # backticks stay: docs quote `keys` as code
 
 
@@ -111,6 +116,8 @@ def page_text(page: Page) -> str:
         owners = [a for _, analyses in page.sections for a in analyses]
         intro.append("Read by " + (", ".join(f"`analysis = \"{a}\"`" for a in owners) if owners
                                    else "every analysis") + ("; required." if s0.required else "."))
+    if page.name in GUIDES:
+        intro.append(f"What these keys do together: [the guide](../{GUIDES[page.name]}.md).")
     lines = [f"(reference-{page.name})=", f"# {title}", "", *intro, "",
              "Written from the key declarations in `fem_forms/` when the manual is built "
              "(`fem-forms schema` prints the same declarations as JSON Schema).", ""]
