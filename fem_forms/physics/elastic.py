@@ -73,7 +73,7 @@ class ElasticEnergy(Solid):
         else:
             psi = material.psi
         if "damage" in ctx.extra:                      # phase-field fracture: g(d) psi+ + psi-
-            psi = ctx.extra["damage"].degraded(psi, is_small_strain(material))
+            psi = ctx.extra["damage"].degraded(psi, is_small_strain(material), material)
         density = thermoelastic_density(psi, F, ctx, is_small_strain(material))
         factor = ctx.extra.get("stiffness_factor")      # a DG0 field scaling psi per cell (a carved fill)
         return density if factor is None else factor * density

@@ -4,7 +4,9 @@
 the stress reaches sqrt(3 Gc E / (8 l))); AT2: w = d^2, c_w = 2. The split of psi into what damage degrades (psi+)
 and what it does not (psi-, compression) is written on psi(F) itself, for any isotropic model:
 volumetric-deviatoric (Amor, Marigo & Maurini 2009) takes the volumetric part as psi of the purely volumetric
-deformation, psi(J^(1/3) I) (small strain: psi(I + tr(eps)/3 I)), undegraded in compression (J < 1).
+deformation, psi(J^(1/3) I) (small strain: psi(I + tr(eps)/3 I)), undegraded in compression (J < 1); spectral
+(Miehe, Welschinger & Hofacker 2010; isotropic linear materials) degrades the energy of the tensile principal
+strains, lambda/2 <tr eps>+^2 + mu sum <eps_i>+^2 (physics/principal.py).
 
 The solid's energy reads the damage through the Context (ctx.extra["damage"]), so the displacement problem is
 the model's own forms with d a coefficient; the damage problem is this energy's derivative in d, solved with
@@ -18,6 +20,7 @@ from petsc4py import PETSc
 import ufl
 
 from fem_forms.errors import InputError
+from fem_forms.physics.principal import tensile_energy
 from fem_forms.physics.terms import Context, Term, register_terms
 
 C_W = {"AT1": 8.0 / 3.0, "AT2": 2.0}
@@ -59,11 +62,17 @@ class PhaseField(Term):
         """g(d) = (1 - k)(1 - d)^2 + k: 1 intact (the material's own stiffness), k cracked through."""
         return (1 - self.k) * (1 - self.d) ** 2 + self.k
 
-    def degraded(self, psi, small_strain: bool):
-        """psi(F) -> g(d) psi+(F) + psi-(F) by the scene's split."""
+    def degraded(self, psi, small_strain: bool, material=None):
+        """psi(F) -> g(d) psi+(F) + psi-(F) by the scene's split (spectral: of the isotropic linear `material`,
+        psi- = psi - psi+, so an intact part stores psi exactly)."""
         g = self.degradation()
         if self.split == "none":
             return lambda G: g * psi(G)
+        if self.split == "spectral":
+            def spectral(G):
+                plus = tensile_energy(ufl.sym(G) - ufl.Identity(3), material.mu, material.lmbda)
+                return psi(G) - (1 - g) * plus
+            return spectral
 
         def split(G):
             I = ufl.Identity(3)
@@ -174,7 +183,4 @@ def fracture_terms(scene, mesh) -> list[Term]:
     fr = getattr(scene, "fracture", None)
     if fr is None:
         return []
-    if fr.split == "spectral":
-        raise InputError("fracture.split = 'spectral': not implemented yet (its principal strains have no "
-                         "derivative where two are equal: the unloaded state); use 'volumetric-deviatoric'")
     return [PhaseField(fr, mesh)]

@@ -7,7 +7,8 @@ the closed forms of the homogeneous solution (Pham, Amor, Marigo & Maurini 2011;
 - around a notch (d = 1 on a plane of nodes) the damage takes the optimal profile (1 - |x| / 2l)^2 (AT1),
   exp(-|x| / l) (AT2), and a bar cut through has the crack area A (1 + 3 h / (8 l)) (AT1: Bourdin's
   correction for the mesh size h);
-- the volumetric-deviatoric split leaves a cube under hydrostatic compression intact (split none cracks it);
+- the volumetric-deviatoric split leaves a cube under hydrostatic compression intact (split none cracks it); the
+  spectral split cracks a bar at the energy of its tensile principal strains (tension and compression);
 - 2 ranks give the serial force-displacement curve; bad input refused in one line."""
 import json
 import math
@@ -136,6 +137,29 @@ def test_hydrostatic_compression_cracks_nothing_with_the_volumetric_split(split,
         assert s["damage_max"] < 1e-12
 
 
+@pytest.mark.parametrize("pull", [2.5, -6.0])
+def test_the_spectral_split_damages_at_the_tensile_principal_strains_energy(tmp_path, pull):
+    """A bar in uniaxial stress (nu = 0.3, sides free), AT1 with the spectral split: intact and linear
+    (F/A = E eps) until 2 psi+ = 3 Gc / (8 l) with psi+ = lambda/2 <tr eps>+^2 + mu sum <eps_i>+^2 of the
+    strains (eps, -nu eps, -nu eps): in tension (lambda (1 - 2 nu)^2 + 2 mu) eps^2 (the volumetric-deviatoric
+    split would crack at E eps^2: earlier); in compression only the lateral extension's 4 mu nu^2 eps^2."""
+    nu = 0.3
+    lmbda, mu = E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu))
+    d = bar("AT1", u_end=pull, steps=50, split="spectral")
+    d["material"]["nu"] = nu
+    code, s, err, out = run_scene(tmp_path, d)
+    assert code == 0, err
+    rows = curve(out)
+    eps = rows["pull_ux"]
+    stiffness = lmbda * (1 - 2 * nu) ** 2 + 2 * mu if pull > 0 else 4 * mu * nu ** 2
+    eps_c = math.sqrt(3 * GC / (8 * ELL) / ((1 - K) * stiffness))
+    below, above = np.abs(eps) < eps_c * (1 - 1e-6), np.abs(eps) > eps_c * 1.03
+    assert below.sum() >= 30 and above.sum() >= 2
+    assert np.all(rows["damage_max"][below] == 0.0)
+    assert rows["pull_Fx"][below] / A == pytest.approx(E * eps[below], rel=1e-6)
+    assert np.all(rows["damage_max"][above] > 1e-3)
+
+
 def test_two_ranks_give_the_serial_curve(tmp_path):
     (tmp_path / "s.toml").write_text(toml_dumps(bar("AT1", notch=True, steps=10)))
     curves = []
@@ -149,7 +173,7 @@ def test_two_ranks_give_the_serial_curve(tmp_path):
 
 
 @pytest.mark.parametrize("change, message", [
-    (("fracture", "split", "spectral"), "'spectral': not implemented yet"),
+    (("material", "model", "neo-hookean"), None),
     (("fracture", "toughness", -1.0), "fracture.toughness"),
     (("fracture", "notch", [{"where": {"box": [[0.51, 0.0, 0.0], [0.52, 0.1, 0.1]]}}]), "holds no mesh node"),
     (("solver", "control", "arc-length"), "not with solver.control = 'arc-length'"),
@@ -157,6 +181,8 @@ def test_two_ranks_give_the_serial_curve(tmp_path):
 ])
 def test_bad_fracture_input_is_refused_in_one_line(change, message):
     d = bar()
+    if message is None:                           # the spectral split is isotropic linear elasticity's
+        d["fracture"]["split"], message = "spectral", "'spectral': for model = 'linear' only"
     section, key, value = change
     if key is None:
         d[section] = value
