@@ -10,7 +10,11 @@ A transcript is the demo's stdout with its output folder written as out/<name> (
 `python demos/<name>.py` sees). Whole numbers must be equal, decimal ones equal to one unit of their last
 printed digit (a rounding flip); two numbers below 1e-8 in size are both round-off (a residual force, a
 round-trip mismatch) and equal. Timings (seconds printed with at most two decimals and followed by " s":
-"36.2 s", "2.72 s"), which vary from run to run, are not compared; "0.866 s" (a period) is.
+"36.2 s", "2.72 s"), which vary from run to run, are not compared; "0.866 s" (a period) is. Solver effort
+("18 Newton iterations", "191 staggered sweeps", "22 load steps") may differ by a quarter (and 2): the Newton
+path depends on wall-clock timings (the preconditioner-reuse rule weighs measured setup against iteration
+costs), so a cold form cache or a loaded machine takes 18 iterations where a warm one takes 17 for the same
+answer.
 """
 from __future__ import annotations
 
@@ -22,6 +26,8 @@ TRANSCRIPTS = DOCS / "demos"
 NUMBER = re.compile(r"[-+]?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?")
 ROUNDOFF = 1e-8                                     # a residual force, a round-trip mismatch: noise
 TIMING = re.compile(r"^\d+(?:\.\d\d?)? s\b")      # a wall time: "36.2 s", "2.72 s" (not "0.866 s", a period)
+EFFORT = re.compile(r"^[\d,]+ (?:Newton |staggered |load |time |Krylov |linear )?(?:iterations|sweeps|steps|cut-?backs)\b")
+TIME, COUNT, VALUE = "timing", "effort", "value"
 
 
 def normalise(stdout: str, out: Path | str, name: str) -> str:
@@ -34,14 +40,15 @@ def transcript_path(name: str) -> Path:
     return TRANSCRIPTS / f"{name}.txt"
 
 
-def _tokens(text: str) -> tuple[list[str], list[tuple[str, bool]]]:
-    """The text between numbers, and each number with whether it is a timing."""
+def _tokens(text: str) -> tuple[list[str], list[tuple[str, str]]]:
+    """The text between numbers, and each number with its kind: a timing, a solver effort or a value."""
     words, numbers, last = [], [], 0
     for m in NUMBER.finditer(text):
         if m.start() > 0 and (text[m.start() - 1].isalpha() or text[m.start() - 1] == "_"):
             continue                                   # part of a name (fields.xdmf, P2, mesh1)
         words.append(text[last:m.start()])
-        numbers.append((m.group(), bool(TIMING.match(text[m.start():]))))
+        rest = text[m.start():]
+        numbers.append((m.group(), TIME if TIMING.match(rest) else COUNT if EFFORT.match(rest) else VALUE))
         last = m.end()
     words.append(text[last:])
     return words, numbers
@@ -69,8 +76,12 @@ def differences(committed: str, fresh: str) -> list[str]:
         old = [line for line in committed.splitlines() if line not in fresh.splitlines()]
         return [f"the text changed: {old[:3]}"]
     out = []
-    for (a, timing), (b, _) in zip(cn, fn):
-        if not timing and not _close(a, b):
+    for (a, kind), (b, _) in zip(cn, fn):
+        if kind == COUNT:
+            x, y = float(a.replace(",", "")), float(b.replace(",", ""))
+            if abs(x - y) > 2 + 0.25 * x:
+                out.append(f"{a} is now {b} (a solver effort, beyond a quarter)")
+        elif kind == VALUE and not _close(a, b):
             out.append(f"{a} is now {b}")
     return out
 

@@ -37,7 +37,8 @@ CHECKS = {"loaded_vs_unloaded_modes": "test_loaded_vs_unloaded_modes_demo",    #
           "finger_on_ball": "test_finger_on_ball_demo",
           "figure_on_table": "test_figure_on_table_demo",
           "bimetal_strip": "test_bimetal_strip_demo",
-          "printed_hook": "test_printed_hook_demo"}
+          "printed_hook": "test_printed_hook_demo",
+          "torn_silicone_strip": "test_torn_silicone_strip_demo"}
 NUMBER = r"[-+]?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?"
 
 

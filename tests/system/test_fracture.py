@@ -251,6 +251,38 @@ def test_printed_hook_demo(demo):
     assert "peak force" in text
 
 
+def test_torn_silicone_strip_demo(demo):
+    """The notched neo-Hookean strip of demos/torn_silicone_strip.py against Rivlin & Thomas's pure-shear tear
+    criterion W(lambda) h0 = Gc (1 + 3 h / (8 l)), W the plane-stress pure-shear energy of the compressible
+    neo-Hookean computed here: the crack runs between the step before it and the one after (2 % slack); it runs
+    along the notch's line through the whole strip (its area the strip's section with the mesh correction,
+    within 3 %) and the force falls to nothing."""
+    from scipy.optimize import brentq, minimize_scalar
+    import tomllib
+    text, out = demo("torn_silicone_strip")
+    res = json.loads((out / "results.json").read_text())
+    d = tomllib.loads((DEMOS / "scenes" / "torn_silicone_strip.toml").read_text())
+    m, fr = d["material"], d["fracture"]
+    width, h0, thick = d["mesh"]["size"]
+    h = width / d["mesh"]["cells"][0]
+    mu, lmbda = m["E"] / (2 * (1 + m["nu"])), m["E"] * m["nu"] / ((1 + m["nu"]) * (1 - 2 * m["nu"]))
+
+    def pure_shear(lam):
+        f = lambda t: (mu / 2 * (lam**2 + t**2 - 2) - mu * math.log(lam * t)       # noqa: E731
+                       + lmbda / 2 * math.log(lam * t) ** 2)
+        return minimize_scalar(f, bounds=(0.2, 1.5), method="bounded").fun
+    gc = fr["toughness"] * (1 + 3 * h / (8 * fr["length"]))
+    critical = brentq(lambda lam: pure_shear(lam) * h0 - gc, 1.0 + 1e-9, 3.0)
+    rows = curve(out)
+    force, stretch = rows["top_Fy"], 1 + rows["top_uy"] / h0
+    k = int(np.argmax(force))
+    assert stretch[k] <= critical * 1.02 and stretch[k + 1] >= critical * 0.98
+    assert force[-1] < 0.01 * force[k] and res["damage_max"] == pytest.approx(1.0)
+    assert res["crack_area"] == pytest.approx(width * thick * (1 + 3 * h / (8 * fr["length"])), rel=0.03)
+    assert abs(res["crack_center"][1] - h0 / 2) <= h
+    assert "Rivlin-Thomas" in text and (out / "crack.png").stat().st_size > 0
+
+
 def test_a_notch_on_a_surface_group_damages_that_surface(tmp_path):
     """A notch given as a gmsh surface group puts d = 1 on exactly that surface's nodes (the end face x = 1)."""
     import gmsh
