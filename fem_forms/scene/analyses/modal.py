@@ -11,6 +11,8 @@ from fem_forms.scene.reader import Key, Section, Table
 MODAL_KEYS = (
     Key("count", "integer", "number of elastic modes", default=6, minimum=1, maximum=500,
         note="must be a whole number of modes in 1..500"),
+    Key("up_to", "number", "every elastic mode below this frequency, however many (instead of count)",
+        unit="Hz", exclusive_minimum=0),
     Key("prestress", "boolean", "modes about the static equilibrium under the scene's loads", default=False),
     Key("mass", "string", "mass matrix", default="consistent", choices=("consistent", "lumped")),
 )
@@ -21,8 +23,14 @@ _MODAL = {k.name: k for k in MODAL_KEYS}
 class ModalSpec:
     """[modal]: how many elastic modes, about which state, with which mass matrix."""
     count: int = _MODAL["count"].field()
+    up_to: float | None = _MODAL["up_to"].field()   # Hz: all modes below it (count then unused)
     prestress: bool = _MODAL["prestress"].field()   # True: tangent at the static equilibrium under the loads
     mass: str = _MODAL["mass"].field()              # "consistent" | "lumped"
+
+
+def _modal_rules(s: ModalSpec, t: Table) -> None:
+    if s.up_to is not None and t.has("count"):
+        raise InputError(f"{t.key('up_to')}: give either count or up_to, not both")
 
 
 MAX_SAMPLES = 2**26
@@ -73,7 +81,7 @@ ANALYSIS = Analysis(
     runner="fem_forms.analyses.modal:run",
     sections=(
         Section("modal", "how many elastic modes, about which state, with which mass matrix", ModalSpec,
-                keys=MODAL_KEYS),
+                keys=MODAL_KEYS, rules=_modal_rules),
         Section("sound", "a modal impulse response at a struck point, written as a WAV", SoundSpec,
                 keys=SOUND_KEYS, rules=_sound_rules, absent=lambda: None),
     ),
