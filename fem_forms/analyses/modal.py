@@ -184,12 +184,20 @@ def assemble_operators(model: Model, kind: str = "direct", lumped: bool = False,
 
 
 def _strike_point_check(model: Model, scene: Scene) -> None:
+    """The strike point must lie in the part, the listener (if any) in the air."""
     if scene.sound is None:
         return
     try:
         probes.evaluate(model.u, {"strike": scene.sound.point})
     except InputError:
         raise InputError(f"sound.strike.point = {scene.sound.point}: point lies outside the mesh") from None
+    if scene.sound.listener is None:
+        return
+    try:
+        probes.evaluate(model.u, {"listener": scene.sound.listener})
+    except InputError:
+        return
+    raise InputError(f"sound.listener = {scene.sound.listener}: lies in or on the part; it must be in the air")
 
 
 def _sign_reference(V: fem.FunctionSpace) -> fem.Function:

@@ -71,8 +71,11 @@ def test_up_to_on_a_cantilever_gives_the_euler_bernoulli_list():
     assert res.frequencies_hz == pytest.approx(np.repeat(eb, 2), rel=0.015)
 
 
-def test_two_ranks_find_the_same_band(tmp_path):
-    d = bar(40_000.0, output={"picture": False, "fields": False})
+def test_two_ranks_find_the_same_band_and_hear_the_same_sound(tmp_path):
+    d = bar(40_000.0, output={"picture": False, "fields": False},
+            sound={"strike": {"point": [0.01, 0.01, 0.008], "direction": [0.0, 0.3, -1.0]}, "duration": 0.2,
+                   "sample_rate": 96000, "listener": [0.03, 0.006, 0.3],
+                   "modal_damping": [[5000.0, 0.002], [50000.0, 0.004]]})
     (tmp_path / "scene.toml").write_text(to_toml(d))
     runs = {}
     for n in (1, 2):
@@ -85,6 +88,10 @@ def test_two_ranks_find_the_same_band(tmp_path):
     assert runs[2]["modes_below_limit"] == runs[1]["modes_below_limit"] >= 4
     assert runs[2]["band"]["eigenvalues_below_limit"] == runs[1]["band"]["eigenvalues_below_limit"]
     assert runs[2]["frequencies_hz"] == pytest.approx(runs[1]["frequencies_hz"], rel=1e-8)
+    heard = [r["sound"] for r in (runs[1], runs[2])]
+    assert heard[0]["heard"] == "pressure at the listener [Pa]" and max(heard[0]["modal_amplitudes"]) > 0
+    assert heard[1]["modal_amplitudes"] == pytest.approx(heard[0]["modal_amplitudes"], rel=1e-6, abs=1e-9)
+    assert heard[1]["peaks_hz"] == pytest.approx(heard[0]["peaks_hz"], rel=1e-6)
 
 
 REFUSED = [

@@ -44,6 +44,14 @@ SOUND_KEYS = (
     Key("damping", "table", "Rayleigh damping zeta = alpha / (2 omega) + beta omega / 2", keys=(
         Key("alpha", "number", "mass-proportional damping", default=1.0, unit="1/s", minimum=0),
         Key("beta", "number", "stiffness-proportional damping", default=1e-7, unit="s", minimum=0))),
+    Key("modal_damping", "points", "[f, zeta] pairs: each mode's damping ratio interpolated linearly in f, "
+        "constant beyond the ends (instead of damping)", unit="Hz, 1", length=2, min_items=1,
+        note="must list at least one [f, zeta] pair"),
+    Key("listener", "vector", "hear the radiated sound pressure at this point in the air instead of the "
+        "motion of the struck point", unit="m", length=3),
+    Key("air_density", "number", "density of the air the part radiates into", default=1.2, unit="kg/m^3",
+        exclusive_minimum=0),
+    Key("speed_of_sound", "number", "speed of sound in that air", default=343.0, unit="m/s", exclusive_minimum=0),
 )
 _SOUND = {k.name: k for k in SOUND_KEYS}
 _DAMPING = {k.name: k for k in _SOUND["damping"].keys}
@@ -58,9 +66,27 @@ class SoundSpec:
     alpha: float = _DAMPING["alpha"].field()      # Rayleigh damping zeta = alpha / (2 omega) + beta omega / 2
     beta: float = _DAMPING["beta"].field()
     sample_rate: int = _SOUND["sample_rate"].field()
+    modal_damping: list | None = _SOUND["modal_damping"].field()   # [[f, zeta], ...]: replaces alpha, beta
+    listener: list | None = _SOUND["listener"].field()             # None: the struck point's motion
+    air_density: float = _SOUND["air_density"].field()
+    speed_of_sound: float = _SOUND["speed_of_sound"].field()
+
+
+def _damping_table_rules(pairs: list, key: str) -> None:
+    for i, (f, zeta) in enumerate(pairs):
+        if f <= 0:
+            raise InputError(f"{key}[{i}] = {[f, zeta]}: the frequency must be positive")
+        if i and f <= pairs[i - 1][0]:
+            raise InputError(f"{key}[{i}] = {[f, zeta]}: frequencies must increase")
+        if not 0 <= zeta < 1:
+            raise InputError(f"{key}[{i}] = {[f, zeta]}: zeta must lie in [0, 1)")
 
 
 def _sound_rules(s: SoundSpec, t: Table) -> None:
+    if s.modal_damping is not None:
+        if t.has("damping"):
+            raise InputError(f"{t.key('modal_damping')}: give either damping (Rayleigh) or modal_damping, not both")
+        _damping_table_rules(s.modal_damping, t.key("modal_damping"))
     norm = math.sqrt(sum(c * c for c in s.direction))
     if norm == 0:
         raise InputError(f"sound.strike.direction = {s.direction}: must not be the zero vector")
