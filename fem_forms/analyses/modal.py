@@ -5,7 +5,8 @@ K is the tangent of the scene's energy (model.jacobian, i.e. ufl.derivative twic
 equilibrium under the scene's loads, found by the static analysis. M is the consistent mass
 rho u.v, or its diagonal (HRZ) lumping. Supported dofs map to infinite eigenvalues (K diagonal 1,
 M diagonal 0). Parts without supports are solved about a small negative shift; their rigid-body
-modes (omega^2 ~ 0) are counted and left out of the reported modes.
+modes (omega^2 ~ 0) are counted and left out of the reported modes. `up_to` asks for every mode
+below a frequency instead of a count (modal_band.py: counted by inertia, then found).
 """
 from __future__ import annotations
 
@@ -261,9 +262,7 @@ def solve_modal(scene: Scene, material=None, model: Model | None = None) -> Moda
     kind = "direct" if spec.up_to is not None else scene.solver.linear   # up_to counts with a factorisation
     if kind == "auto":
         kind = "direct" if model.dofs <= DIRECT_UP_TO_DOFS else "iterative"
-    # up_to: AIJ, since MUMPS computes inertia from a Cholesky of AIJ (or SBAIJ), not BAIJ
-    ops = assemble_operators(model, kind, lumped=spec.mass == "lumped",
-                             mat_type="aij" if spec.up_to is not None else None)
+    ops = assemble_operators(model, kind, lumped=spec.mass == "lumped")
     nns = linear.rigid_body_modes(model.V) if kind == "iterative" else None
 
     free_target = -SHIFT_FRACTION * ops.omega2_scale

@@ -47,7 +47,7 @@ class Band:
 def solve_band(K: PETSc.Mat, M: PETSc.Mat, up_to: float, lower: float,
                options: dict | None = None) -> tuple[eigen.EigenResult, Band]:
     """Every eigenpair of the symmetric pencil (K, M) with lambda < (2 pi up_to)^2, ascending; `lower`
-    lies a little below the lowest (rigid-body modes at ~0 lie above it). K and M must be AIJ matrices (MUMPS computes inertia only from a Cholesky of AIJ or SBAIJ).
+    lies a little below the lowest (rigid-body modes at ~0 lie above it).
     Raises InputError when too many modes lie below, SolveError when the modes found disagree with
     the inertia count."""
     t0 = time.perf_counter()
@@ -63,7 +63,11 @@ def solve_band(K: PETSc.Mat, M: PETSc.Mat, up_to: float, lower: float,
     elif method == "shift-and-invert":
         res = eigen.eigensolve(K, M, n, lower, "direct", options=options)
     else:
-        res = slicing.eigensolve_interval(K, M, lower, upper, options=options)
+        Ka, Ma = slicing.as_aij(K), slicing.as_aij(M)
+        res = slicing.eigensolve_interval(Ka, Ma, lower, upper, options=options)
+        for A, B in ((Ka, K), (Ma, M)):
+            if A is not B:
+                A.destroy()
     inside = res.values < upper           # shift-and-invert may also find unstable modes below `lower`
     if len(res.values) != n or not inside.all():
         for v in res.vectors:

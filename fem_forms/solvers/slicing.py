@@ -35,11 +35,18 @@ def _set_options(prefix: str, options: dict) -> list:
     return [prefix + k for k in options]
 
 
+def as_aij(A: PETSc.Mat) -> PETSc.Mat:
+    """A itself if AIJ, else an AIJ copy: SLEPc's spectrum slicing factors K - sigma M by Cholesky."""
+    return A.convert("aij", PETSc.Mat()) if A.getType().endswith("baij") else A   # out=None: in place
+
+
 def inertia_below(K: PETSc.Mat, M: PETSc.Mat, sigma: float, prefix: str = "fem_forms_inertia_") -> int:
     """The number of eigenvalues of K x = lambda M x below sigma: negative pivots of K - sigma M."""
     A = K.copy()
     A.axpy(-sigma, M, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
     A.setOption(PETSc.Mat.Option.SYMMETRIC, True)
+    if A.getType().endswith("baij") and not A.getType().endswith("sbaij"):
+        A.convert("sbaij")             # in place: MUMPS has no Cholesky of BAIJ, only of AIJ and SBAIJ
     ksp = PETSc.KSP().create(K.getComm())
     ksp.setOptionsPrefix(prefix)
     ksp.setOperators(A)
@@ -61,7 +68,8 @@ def inertia_below(K: PETSc.Mat, M: PETSc.Mat, sigma: float, prefix: str = "fem_f
 def eigensolve_interval(K: PETSc.Mat, M: PETSc.Mat, lower: float, upper: float,
                         options: dict | None = None, prefix: str = "fem_forms_slice_") -> EigenResult:
     """Every eigenpair of the symmetric pencil (K, M) with lower <= lambda <= upper, ascending,
-    vectors M-normalised. Neither bound may be an eigenvalue (lower is usually a little below 0)."""
+    vectors M-normalised. Neither bound may be an eigenvalue (lower is usually a little below 0).
+    K and M must be AIJ (see as_aij)."""
     t0 = time.perf_counter()
     merged = dict(EPS_DEFAULTS) | {"st_" + k: v for k, v in LDLT.items()}
     merged["eps_krylovschur_nev"] = PER_SHIFT
