@@ -11,7 +11,9 @@ closed form of a pulsating sphere it gives sinc(ka) (1 + ika) e^{-ika} times the
 0.3 % off at ka = 0.1, 7 % at 0.5, 19 % at 1. It keeps what makes small, low modes quiet: opposite
 faces of a bending bar cancel (the acoustic short circuit); an oscillating sphere comes out 2/3 of its
 exact, already weak, dipole pressure at small ka. The baffled-plate Rayleigh integral (1/2 pi over the
-surface) would double a compact body's pressure and lose the cancellation.
+surface) would double a compact body's pressure and lose the cancellation. For a thin part it cancels too
+much: against a boundary element solve on the struck bar it is 7.8 dB too quiet in the median, up to
+17 dB for the lowest bending modes (benchmarks/radiation_bem.md).
 """
 from __future__ import annotations
 
