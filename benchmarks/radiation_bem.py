@@ -128,7 +128,7 @@ def main() -> None:
         lines.append(f"| {i + 1} | {f:.0f} | {ka:.2f} | {ours:.3e} | {bem:.3e} | {db:+.1f} | {ours_t[-1]:.3f} | "
                      f"{bem_t[-1]:.1f} |")
         print(lines[-1], flush=True)
-    text = (f"Sphere check (BEM on a gmsh sphere, h = a/5, against the pulsating sphere's closed form): "
+    text = ("Sphere check (BEM on a gmsh sphere, h = a/5, against the pulsating sphere's closed form): "
             + ", ".join(f"ka = {ka}: |p_bem / p_exact| = {q:.4f}" for ka, q in sphere) + ".\n\n"
             f"Struck bar on {' x '.join(map(str, args.cells))} P2 cells ({res.model.dofs:,} dofs; "
             f"{len(tris):,} boundary triangles, {1000 * d['mesh']['size'][0] / args.cells[0]:.0f} mm cells along the bar), listener "

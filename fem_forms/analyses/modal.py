@@ -384,6 +384,8 @@ def run(scene: Scene, out, echo: bool = False) -> dict:
     if echo and MPI.COMM_WORLD.rank == 0:
         freqs = ", ".join(f"{f:.6g}" for f in summary["frequencies_hz"])
         rigid = f", {summary['rigid_modes']} rigid-body modes" if summary["rigid_modes"] else ""
+        if "band" in summary:
+            rigid += f", all below {summary['band']['up_to_hz']:g} Hz by an inertia count"
         print(f"{scene.title}: {summary['dofs']} dofs, {len(summary['frequencies_hz'])} modes{rigid}, "
               f"{summary['wall_time_s']:.2f} s -> {out}")
         print(f"  frequencies [Hz]: {freqs}")
