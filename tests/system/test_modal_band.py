@@ -109,3 +109,28 @@ def test_bad_up_to_is_refused_in_one_line(tmp_path, capsys, name, modal, message
     code = main(["run", str(path), "--out", str(tmp_path / "out"), "-q"])
     lines = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(lines) == 1 and message in lines[0], lines
+
+
+SLICED_ON_TWO_RANKS = """
+import json, sys
+from mpi4py import MPI
+import fem_forms as ff
+from fem_forms.analyses import modal_band
+from fem_forms.analyses.modal import solve_modal
+modal_band.SLICE_ABOVE = 0
+res = solve_modal(ff.Scene.from_dict(json.loads(sys.argv[1])))
+summary = res.summary()                      # collective
+if MPI.COMM_WORLD.rank == 0:
+    print(json.dumps([summary["band"]["method"], summary["frequencies_hz"]]))
+"""
+
+
+def test_spectrum_slicing_on_two_ranks_finds_the_dense_modes(tmp_path):
+    limit = 60_000.0
+    ref = dense_frequencies(Scene.from_dict(bar(limit)))
+    below = ref[(np.abs(ref) >= 1.0) & (ref < limit)]
+    p = mpirun(["-c", SLICED_ON_TWO_RANKS, json.dumps(bar(limit))], n=2)
+    assert p.returncode == 0, p.stderr[-2000:]
+    method, freqs = json.loads(p.stdout.strip().splitlines()[-1])
+    assert method == "spectrum slicing"
+    assert freqs == pytest.approx(below, rel=1e-8)
