@@ -2,7 +2,7 @@
 
 Rivlin & Thomas's pure-shear tear test (1953) on a soft silicone strip (demos/scenes/torn_silicone_strip.toml):
 64 x 16 x 1 mm, clamped along its long edges, an edge notch of 16 mm along the middle, pulled apart to twice
-its height in steps of 2.5 %. Compressible neo-Hookean (E = 1 MPa, nu = 0.45), AT1 phase field with Gc = 1 kJ/m^2,
+its height in steps of 5 %. Compressible neo-Hookean (E = 1 MPa, nu = 0.45), AT1 phase field with Gc = 1 kJ/m^2,
 l = 2 mm on 1 mm cells, all of psi degraded (split = "none": nothing is compressed). Far ahead of the notch the strip is in pure shear; as
 the notch grows by da, a band of the strip's height h0 is unloaded, so the crack runs when W(lambda) h0 = Gc
 (with the mesh correction: Gc (1 + 3 h / (8 l))), W the strain energy per volume of plane-stress pure shear,

@@ -153,6 +153,9 @@ def study(scene_path: Path, out: Path, degrees: list[int], refine: int, override
 def estimate_errors(good: list[Run], degrees: list[int]) -> None:
     """Each converged run's error against the finest run and the highest degree's Richardson limit:
     relative to the finest run's key numbers, or absolute (error_kind) when those are at round-off."""
+    shortest = min(len(r.values) for r in good)      # `up_to` finds more modes on some meshes than on others:
+    for r in good:                                   # compare the modes every run has
+        r.values = r.values[:shortest]
     finest = max(good, key=lambda r: (r.degree, r.level))
     limits = []
     for degree in sorted(set(degrees)):

@@ -5,7 +5,8 @@ K is the tangent of the scene's energy (model.jacobian, i.e. ufl.derivative twic
 equilibrium under the scene's loads, found by the static analysis. M is the consistent mass
 rho u.v, or its diagonal (HRZ) lumping. Supported dofs map to infinite eigenvalues (K diagonal 1,
 M diagonal 0). Parts without supports are solved about a small negative shift; their rigid-body
-modes (omega^2 ~ 0) are counted and left out of the reported modes.
+modes (omega^2 ~ 0) are counted and left out of the reported modes. `up_to` asks for every mode
+below a frequency instead of a count (modal_band.py: counted by inertia, then found).
 """
 from __future__ import annotations
 
@@ -28,6 +29,7 @@ from fem_forms.model import Model, build_model
 from fem_forms.physics.inertia import Inertia
 from fem_forms.output import fields, probes, results, sound
 from fem_forms.output.guard import attempt
+from fem_forms.analyses.modal_band import Band, solve_band
 from fem_forms.scene import Scene
 from fem_forms.solvers import eigen, linear
 
@@ -69,6 +71,7 @@ class ModalResult:
     iterations: int
     eigensolve_time_s: float = 0.0     # SLEPc setup + solve (factorisation included)
     wall_time_s: float = 0.0
+    band: Band | None = None           # `up_to`: the inertia counts and what was found
 
     @property
     def frequencies_hz(self) -> np.ndarray:
@@ -103,6 +106,10 @@ class ModalResult:
             "wall_time_s": self.wall_time_s,
             "peak_memory_mb": peak_memory_mb(m.mesh.comm),
         }
+        if self.band is not None:
+            out["band"] = self.band.summary(self.rigid_modes)
+            out["modes_below_limit"] = out["band"]["modes_below_limit"]
+            out["eigensolver"].update(method=self.band.method, inner="mumps")
         if self.static is not None:
             s = self.static.summary()
             out["static"] = {k: s[k] for k in ("newton_iterations", "load_steps", "residual_norm",
@@ -116,10 +123,11 @@ def _owned_constrained(bcs: list) -> np.ndarray:
     return np.unique(np.concatenate(idx)) if idx else np.empty(0, dtype=np.int32)
 
 
-def assemble_operators(model: Model, kind: str = "direct", lumped: bool = False) -> Operators:
+def assemble_operators(model: Model, kind: str = "direct", lumped: bool = False,
+                       mat_type: str | None = None) -> Operators:
     """K (tangent at model.u, supported rows/columns -> diagonal 1) and M (-> diagonal 0)."""
     mesh, V = model.mesh, model.V
-    mat_type = "baij" if kind == "direct" else "aij"     # GAMG rejects BAIJ
+    mat_type = mat_type or ("baij" if kind == "direct" else "aij")     # GAMG rejects BAIJ
     a = model.compiled("jacobian")
     K = fpetsc.create_matrix(a, mat_type)
     fpetsc.assemble_matrix(K, a, bcs=model.bcs, diagonal=1.0)
@@ -177,12 +185,20 @@ def assemble_operators(model: Model, kind: str = "direct", lumped: bool = False)
 
 
 def _strike_point_check(model: Model, scene: Scene) -> None:
+    """The strike point must lie in the part, the listener (if any) in the air."""
     if scene.sound is None:
         return
     try:
         probes.evaluate(model.u, {"strike": scene.sound.point})
     except InputError:
         raise InputError(f"sound.strike.point = {scene.sound.point}: point lies outside the mesh") from None
+    if scene.sound.listener is None:
+        return
+    try:
+        probes.evaluate(model.u, {"listener": scene.sound.listener})
+    except InputError:
+        return
+    raise InputError(f"sound.listener = {scene.sound.listener}: lies in or on the part; it must be in the air")
 
 
 def _sign_reference(V: fem.FunctionSpace) -> fem.Function:
@@ -195,14 +211,45 @@ def _sign_reference(V: fem.FunctionSpace) -> fem.Function:
     return w
 
 
+def _lowest(ops: Operators, scene: Scene, kind: str, symmetric: bool, nns, free_target: float,
+            rigid_below: float):
+    """`count`: the lowest elastic modes, about 0 for a supported part, else about free_target."""
+    count = scene.modal.count
+    # supported: target 0. If the supports leave rigid-body motion, K is singular: the solve then
+    # fails or finds too few elastic modes, and is repeated as for an unsupported part.
+    attempts = ([(0.0, count)] if scene.fix else []) + [(free_target, count + RIGID_EXTRA)]
+    for i, (target, nev) in enumerate(attempts):
+        last = i == len(attempts) - 1
+        try:
+            res = eigen.eigensolve(ops.K, ops.M, nev, target, kind, symmetric=symmetric,
+                                   options=scene.solver.petsc, near_nullspace=nns)
+        except (PETSc.Error, SolveError) as e:
+            if last or isinstance(e, SolveError):     # retry only a failed factorisation
+                raise SolveError(f"{scene.title}: modal solve failed: {e}") from None
+            continue
+        rigid = np.abs(res.values) < rigid_below
+        elastic = np.flatnonzero(~rigid)[:count]
+        if len(elastic) == count:
+            return res, rigid, elastic, target
+        for vec in res.vectors:
+            vec.destroy()
+        if last:
+            raise SolveError(f"{scene.title}: only {len(elastic)} elastic modes among the {res.converged} "
+                             f"converged ({int(rigid.sum())} rigid-body modes); ask for fewer modes")
+
+
 def solve_modal(scene: Scene, material=None, model: Model | None = None) -> ModalResult:
-    """The scene's `[modal] count` lowest elastic modes. Raises InputError for bad input and
-    SolveError when the prestress solve or the eigensolver fails."""
+    """The scene's `[modal] count` lowest elastic modes, or all below `up_to`. Raises InputError for
+    bad input and SolveError when the prestress solve or the eigensolver fails."""
     t0 = time.perf_counter()
     spec = scene.modal
     model = model or build_model(scene, material)
     model.only_ufl_terms("modal analysis")
     _strike_point_check(model, scene)
+    symmetric = model.conservative or not spec.prestress
+    if spec.up_to is not None and not symmetric:
+        raise InputError("modal.up_to: needs a symmetric stiffness, and follower loads under prestress "
+                         "make it non-symmetric; use count")
     static = None
     if spec.prestress:
         static = solve_static(scene, material, model=model)
@@ -212,38 +259,28 @@ def solve_modal(scene: Scene, material=None, model: Model | None = None) -> Moda
     else:
         model.load.set(0.0)                     # at rest: follower loads add no load stiffness
         model.u.x.array[:] = 0.0
-    kind = scene.solver.linear
+    kind = "direct" if spec.up_to is not None else scene.solver.linear   # up_to counts with a factorisation
     if kind == "auto":
         kind = "direct" if model.dofs <= DIRECT_UP_TO_DOFS else "iterative"
     ops = assemble_operators(model, kind, lumped=spec.mass == "lumped")
-    symmetric = model.conservative or not spec.prestress
     nns = linear.rigid_body_modes(model.V) if kind == "iterative" else None
 
     free_target = -SHIFT_FRACTION * ops.omega2_scale
     rigid_below = RIGID_FRACTION * abs(free_target)
-    # supported: target 0. If the supports leave rigid-body motion, K is singular: the solve then
-    # fails or finds too few elastic modes, and is repeated as for an unsupported part.
-    attempts = ([(0.0, spec.count)] if scene.fix else []) + [(free_target, spec.count + RIGID_EXTRA)]
-    for i, (target, nev) in enumerate(attempts):
-        last = i == len(attempts) - 1
-        try:
-            res = eigen.eigensolve(ops.K, ops.M, nev, target, kind, symmetric=symmetric,
-                                   options=scene.solver.petsc, near_nullspace=nns)
-        except (PETSc.Error, SolveError) as e:
-            if last or isinstance(e, SolveError):     # retry only a failed factorisation
-                ops.destroy()
+    band = None
+    try:
+        if spec.up_to is not None:
+            try:
+                res, band = solve_band(ops.K, ops.M, spec.up_to, free_target, scene.solver.petsc)
+            except (PETSc.Error, SolveError) as e:
                 raise SolveError(f"{scene.title}: modal solve failed: {e}") from None
-            continue
-        rigid = np.abs(res.values) < rigid_below
-        elastic = np.flatnonzero(~rigid)[: spec.count]
-        if len(elastic) == spec.count:
-            break
-        for vec in res.vectors:
-            vec.destroy()
-        if last:
-            ops.destroy()
-            raise SolveError(f"{scene.title}: only {len(elastic)} elastic modes among the {res.converged} "
-                             f"converged ({int(rigid.sum())} rigid-body modes); ask for fewer modes")
+            rigid = np.abs(res.values) < rigid_below
+            elastic, target = np.flatnonzero(~rigid), band.lower
+        else:
+            res, rigid, elastic, target = _lowest(ops, scene, kind, symmetric, nns, free_target, rigid_below)
+    except BaseException:
+        ops.destroy()
+        raise
 
     w = _sign_reference(model.V)
     modes, gammas = [], []
@@ -258,9 +295,9 @@ def solve_modal(scene: Scene, material=None, model: Model | None = None) -> Moda
         gammas.append([vec.dot(b) for b in ops.translations])   # participation phi^T M r_d
     for vec in res.vectors:
         vec.destroy()
-    emf = np.asarray(gammas) ** 2 / ops.total_mass if scene.fix else None
+    emf = np.asarray(gammas).reshape(-1, 3) ** 2 / ops.total_mass if scene.fix else None
     result = ModalResult(model, res.values[elastic], modes, int(rigid.sum()), ops.total_mass, emf,
-                         static, target, kind, res.converged, res.iterations, res.solve_time)
+                         static, target, kind, res.converged, res.iterations, res.solve_time, band=band)
     ops.destroy()
     result.wall_time_s = time.perf_counter() - t0
     return result
@@ -347,6 +384,8 @@ def run(scene: Scene, out, echo: bool = False) -> dict:
     if echo and MPI.COMM_WORLD.rank == 0:
         freqs = ", ".join(f"{f:.6g}" for f in summary["frequencies_hz"])
         rigid = f", {summary['rigid_modes']} rigid-body modes" if summary["rigid_modes"] else ""
+        if "band" in summary:
+            rigid += f", all below {summary['band']['up_to_hz']:g} Hz by an inertia count"
         print(f"{scene.title}: {summary['dofs']} dofs, {len(summary['frequencies_hz'])} modes{rigid}, "
               f"{summary['wall_time_s']:.2f} s -> {out}")
         print(f"  frequencies [Hz]: {freqs}")

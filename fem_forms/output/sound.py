@@ -2,10 +2,14 @@
 
 A unit impulse at point p along direction d excites mode i (mass-normalised phi_i) with modal
 velocity phi_i(p).d, so its modal coordinate rings as (phi_i(p).d / omega_d,i) exp(-zeta_i omega_i t)
-sin(omega_d,i t). We listen at the struck point along d, which multiplies each term by phi_i(p).d
-once more: the amplitudes (phi_i(p).d)^2 / omega_d,i are then independent of eigenvector signs and
-of the basis the solver picked within repeated eigenvalues (serial and MPI runs write the same WAV).
-Damping is Rayleigh's, per mode: zeta_i = alpha / (2 omega_i) + beta omega_i / 2.
+sin(omega_d,i t). Without a listener we hear the struck point's motion along d, which multiplies each
+term by phi_i(p).d once more. With `listener`, each mode's displacement amplitude field
+(phi_i(p).d / omega_d,i) phi_i radiates the pressure P_i at the listener (output/radiation.py), heard as
+|P_i| exp(-zeta_i omega_i t) sin(omega_d,i t + arg P_i): a mode that moves the air little is quiet.
+Both are products of two factors linear in phi_i, so independent of eigenvector signs (and, summed
+over a repeated eigenvalue, of the basis the solver picked): serial and MPI runs write the same WAV.
+Damping is Rayleigh's, zeta_i = alpha / (2 omega_i) + beta omega_i / 2, or interpolated in a table of
+(frequency, zeta) pairs.
 """
 from __future__ import annotations
 
@@ -15,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from fem_forms.output import probes
+from fem_forms.output.radiation import Radiation
 from fem_forms.scene import SoundSpec
 
 PEAK_FLOOR_DB = -60.0        # spectrum peaks reported down to this level below the strongest
@@ -26,14 +31,21 @@ def rayleigh_damping(omega: np.ndarray, alpha: float, beta: float) -> np.ndarray
     return alpha / (2.0 * omega) + beta * omega / 2.0
 
 
+def table_damping(freqs_hz: np.ndarray, pairs: list) -> np.ndarray:
+    """Damping ratio per mode, linear in frequency between the [f, zeta] pairs, constant beyond them."""
+    f, zeta = np.asarray(pairs, dtype=float).T
+    return np.interp(freqs_hz, f, zeta)
+
+
 def synthesize(freqs_hz: np.ndarray, amplitudes: np.ndarray, zetas: np.ndarray, duration: float,
-               sample_rate: int) -> np.ndarray:
-    """Sum of a_i exp(-zeta_i omega_i t) sin(omega_d,i t), omega_i = 2 pi f_i (undamped)."""
+               sample_rate: int, phases: np.ndarray | None = None) -> np.ndarray:
+    """Sum of a_i exp(-zeta_i omega_i t) sin(omega_d,i t + phase_i), omega_i = 2 pi f_i (undamped)."""
     t = np.arange(int(round(duration * sample_rate))) / sample_rate
     signal = np.zeros_like(t)
-    for f, a, z in zip(freqs_hz, amplitudes, zetas):
+    phases = np.zeros(len(freqs_hz)) if phases is None else phases
+    for f, a, z, ph in zip(freqs_hz, amplitudes, zetas, phases):
         w = 2 * math.pi * f
-        signal += a * np.exp(-z * w * t) * np.sin(w * math.sqrt(1.0 - z * z) * t)
+        signal += a * np.exp(-z * w * t) * np.sin(w * math.sqrt(1.0 - z * z) * t + ph)
     return signal
 
 
@@ -85,8 +97,11 @@ def spectrogram_png(path: Path, samples: np.ndarray, sample_rate: int, freqs_hz,
     f_low = min(freqs_hz) if len(freqs_hz) else 100.0
     nfft = 2 ** math.ceil(math.log2(max(256, 8 * sample_rate / f_low)))
     nfft = max(16, min(nfft, 2 ** int(math.log2(max(len(samples) // 16, 16)))))
-    _, _, _, image = ax.specgram(samples, NFFT=nfft, Fs=sample_rate, noverlap=3 * nfft // 4,
-                                 cmap="magma", scale="dB")
+    cmap = plt.get_cmap("magma").copy()
+    cmap.set_bad(cmap(0.0))                         # a silent stretch (-inf dB) is drawn as the floor
+    with np.errstate(divide="ignore"):
+        _, _, _, image = ax.specgram(samples, NFFT=nfft, Fs=sample_rate, noverlap=3 * nfft // 4,
+                                     cmap=cmap, scale="dB")
     top_db = float(np.nanmax(image.get_array()))
     image.set_clim(top_db - 90, top_db)              # 90 dB of dynamic range
     fig.colorbar(image, ax=ax, label="dB", pad=0.08)
@@ -103,6 +118,16 @@ def spectrogram_png(path: Path, samples: np.ndarray, sample_rate: int, freqs_hz,
     plt.close(fig)
 
 
+def damping_ratios(f_hz: np.ndarray, spec: SoundSpec) -> np.ndarray:
+    """zeta per mode from the table or Rayleigh's law; inf for modes that do not oscillate (f <= 0)."""
+    omega = 2 * math.pi * np.maximum(f_hz, 0.0)
+    ok = omega > 0
+    safe = np.where(ok, omega, 1.0)
+    zeta = table_damping(safe / (2 * math.pi), spec.modal_damping) if spec.modal_damping is not None else \
+        rayleigh_damping(safe, spec.alpha, spec.beta)
+    return np.where(ok, zeta, np.inf)
+
+
 def modal_sound(result, spec: SoundSpec, out: Path) -> dict:
     """Strike the modes of a ModalResult, write sound.wav and spectrogram.png (rank 0) and return
     the results.json entry, with the peaks measured from the written WAV's spectrum."""
@@ -111,19 +136,29 @@ def modal_sound(result, spec: SoundSpec, out: Path) -> dict:
                      for f in result.modes])                         # collective, all ranks agree
     f_hz = result.frequencies_hz
     omega = 2 * math.pi * np.maximum(f_hz, 0.0)
-    with np.errstate(divide="ignore"):
-        zeta = np.where(omega > 0, rayleigh_damping(np.where(omega > 0, omega, 1.0), spec.alpha, spec.beta),
-                        np.inf)
+    zeta = damping_ratios(f_hz, spec)
     audible = (f_hz > 0) & (f_hz < spec.sample_rate / 2) & (zeta < 1.0)   # oscillating, below Nyquist
     omega_d = omega * np.sqrt(np.maximum(1.0 - zeta**2, 0.0))
-    amps = np.where(audible, proj**2 / np.where(audible, omega_d, 1.0), 0.0)
+    a = np.where(audible, proj / np.where(audible, omega_d, 1.0), 0.0)    # modal displacement amplitude
+    if spec.listener is None:
+        amps, phases = a * proj, np.zeros_like(a)
+    else:
+        radiation = Radiation(result.model.V, spec.listener, spec.air_density, spec.speed_of_sound)
+        p = np.array([a[i] * radiation.pressure(mode, omega[i]) if audible[i] else 0.0
+                      for i, mode in enumerate(result.modes)])        # collective
+        amps, phases = np.abs(p), np.angle(p)
     entry = {"wav": "sound.wav", "spectrogram": "spectrogram.png", "peaks_hz": [],
              "modes_used": int(np.count_nonzero(audible & (amps > 0))),
+             "heard": "strike point motion [m]" if spec.listener is None else "pressure at the listener [Pa]",
              "modal_amplitudes": amps.tolist(), "damping_ratios": np.where(audible, zeta, np.nan).tolist(),
              "strike": {"point": spec.point, "direction": spec.direction},
              "sample_rate": spec.sample_rate, "duration_s": spec.duration}
+    if spec.listener is not None:
+        entry["listener"] = {"point": spec.listener, "air_density": spec.air_density,
+                             "speed_of_sound": spec.speed_of_sound, "phases_rad": phases.tolist()}
     if comm.rank == 0:
-        signal = synthesize(f_hz[audible], amps[audible], zeta[audible], spec.duration, spec.sample_rate)
+        signal = synthesize(f_hz[audible], amps[audible], zeta[audible], spec.duration, spec.sample_rate,
+                            phases[audible])
         write_wav(out / "sound.wav", signal, spec.sample_rate)
         rate, pcm = read_wav(out / "sound.wav")
         entry["peaks_hz"] = spectrum_peaks(pcm, rate)

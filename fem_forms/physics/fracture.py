@@ -69,6 +69,9 @@ class PhaseField(Term):
         if self.split == "none":
             return lambda G: g * psi(G)
         if self.split == "spectral":
+            if not small_strain or material is None:
+                raise InputError("fracture.split = 'spectral': for model = 'linear' only (small strain)")
+
             def spectral(G):
                 plus = tensile_energy(ufl.sym(G) - ufl.Identity(3), material.mu, material.lmbda)
                 return psi(G) - (1 - g) * plus

@@ -18,6 +18,7 @@ CASES = {
     "isotropic": [[1e-3, 0, 0], [0, 1e-3, 0], [0, 0, 1e-3]],
     "zero": [[0, 0, 0], [0, 0, 0], [0, 0, 0]],
     "rotated": None,
+    "rotated double positive": None,
 }
 
 
@@ -25,7 +26,8 @@ def case(name: str) -> np.ndarray:
     if CASES[name] is not None:
         return np.array(CASES[name], dtype=float)
     Q = np.linalg.qr(np.random.default_rng(3).normal(size=(3, 3)))[0]
-    return Q @ np.diag([4e-3, -1e-3, -1e-3]) @ Q.T               # a double eigenvalue in a rotated frame
+    pair = [1e-3, 1e-3, -2e-3] if "positive" in name else [4e-3, -1e-3, -1e-3]
+    return Q @ np.diag(pair) @ Q.T                                 # a double eigenvalue in a rotated frame
 
 
 def reference(eps: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:

@@ -54,3 +54,11 @@ def test_a_tolerance_on_absolute_errors_is_relative_to_the_part_size():
     runs = [Run(1, 0, {}, None, wall=1.0, error_finest=5e-3, size=1.0, error_kind="absolute", ok=True),
             Run(2, 0, {}, None, wall=2.0, error_finest=1e-5, size=1.0, error_kind="absolute", ok=True)]
     assert cheapest_meeting(runs, 1e-3).wall == 2.0           # 5 mm on a 1 m part misses 1e-3; 10 um meets it
+
+
+def test_runs_with_different_numbers_of_modes_compare_the_modes_all_have():
+    # `up_to`: a coarse mesh's stiffer modes may leave one of them above the limit
+    runs = _ladder({(1, 0): [110.0], (1, 1): [101.0, 300.0], (2, 0): [102.0, 290.0], (2, 1): [100.2, 280.0],
+                    (2, 2): [100.0, 279.0, 400.0]}, size=400.0)
+    estimate_errors(runs, [1, 2])
+    np.testing.assert_allclose([r.error_finest for r in runs], [0.1, 0.01, 0.02, 0.002, 0.0], atol=1e-15)

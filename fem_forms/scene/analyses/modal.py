@@ -11,6 +11,8 @@ from fem_forms.scene.reader import Key, Section, Table
 MODAL_KEYS = (
     Key("count", "integer", "number of elastic modes", default=6, minimum=1, maximum=500,
         note="must be a whole number of modes in 1..500"),
+    Key("up_to", "number", "every elastic mode below this frequency, however many (instead of count)",
+        unit="Hz", exclusive_minimum=0),
     Key("prestress", "boolean", "modes about the static equilibrium under the scene's loads", default=False),
     Key("mass", "string", "mass matrix", default="consistent", choices=("consistent", "lumped")),
 )
@@ -21,8 +23,14 @@ _MODAL = {k.name: k for k in MODAL_KEYS}
 class ModalSpec:
     """[modal]: how many elastic modes, about which state, with which mass matrix."""
     count: int = _MODAL["count"].field()
+    up_to: float | None = _MODAL["up_to"].field()   # Hz: all modes below it (count then unused)
     prestress: bool = _MODAL["prestress"].field()   # True: tangent at the static equilibrium under the loads
     mass: str = _MODAL["mass"].field()              # "consistent" | "lumped"
+
+
+def _modal_rules(s: ModalSpec, t: Table) -> None:
+    if s.up_to is not None and t.has("count"):
+        raise InputError(f"{t.key('up_to')}: give either count or up_to, not both")
 
 
 MAX_SAMPLES = 2**26
@@ -36,6 +44,14 @@ SOUND_KEYS = (
     Key("damping", "table", "Rayleigh damping zeta = alpha / (2 omega) + beta omega / 2", keys=(
         Key("alpha", "number", "mass-proportional damping", default=1.0, unit="1/s", minimum=0),
         Key("beta", "number", "stiffness-proportional damping", default=1e-7, unit="s", minimum=0))),
+    Key("modal_damping", "points", "[f, zeta] pairs: each mode's damping ratio interpolated linearly in f, "
+        "constant beyond the ends (instead of damping)", unit="Hz, 1", length=2, min_items=1,
+        note="must list at least one [f, zeta] pair"),
+    Key("listener", "vector", "hear the radiated sound pressure at this point in the air instead of the "
+        "motion of the struck point", unit="m", length=3),
+    Key("air_density", "number", "density of the air the part radiates into", default=1.2, unit="kg/m^3",
+        exclusive_minimum=0),
+    Key("speed_of_sound", "number", "speed of sound in that air", default=343.0, unit="m/s", exclusive_minimum=0),
 )
 _SOUND = {k.name: k for k in SOUND_KEYS}
 _DAMPING = {k.name: k for k in _SOUND["damping"].keys}
@@ -50,9 +66,27 @@ class SoundSpec:
     alpha: float = _DAMPING["alpha"].field()      # Rayleigh damping zeta = alpha / (2 omega) + beta omega / 2
     beta: float = _DAMPING["beta"].field()
     sample_rate: int = _SOUND["sample_rate"].field()
+    modal_damping: list | None = _SOUND["modal_damping"].field()   # [[f, zeta], ...]: replaces alpha, beta
+    listener: list | None = _SOUND["listener"].field()             # None: the struck point's motion
+    air_density: float = _SOUND["air_density"].field()
+    speed_of_sound: float = _SOUND["speed_of_sound"].field()
+
+
+def _damping_table_rules(pairs: list, key: str) -> None:
+    for i, (f, zeta) in enumerate(pairs):
+        if f <= 0:
+            raise InputError(f"{key}[{i}] = {[f, zeta]}: the frequency must be positive")
+        if i and f <= pairs[i - 1][0]:
+            raise InputError(f"{key}[{i}] = {[f, zeta]}: frequencies must increase")
+        if not 0 <= zeta < 1:
+            raise InputError(f"{key}[{i}] = {[f, zeta]}: zeta must lie in [0, 1)")
 
 
 def _sound_rules(s: SoundSpec, t: Table) -> None:
+    if s.modal_damping is not None:
+        if t.has("damping"):
+            raise InputError(f"{t.key('modal_damping')}: give either damping (Rayleigh) or modal_damping, not both")
+        _damping_table_rules(s.modal_damping, t.key("modal_damping"))
     norm = math.sqrt(sum(c * c for c in s.direction))
     if norm == 0:
         raise InputError(f"sound.strike.direction = {s.direction}: must not be the zero vector")
@@ -73,7 +107,7 @@ ANALYSIS = Analysis(
     runner="fem_forms.analyses.modal:run",
     sections=(
         Section("modal", "how many elastic modes, about which state, with which mass matrix", ModalSpec,
-                keys=MODAL_KEYS),
+                keys=MODAL_KEYS, rules=_modal_rules),
         Section("sound", "a modal impulse response at a struck point, written as a WAV", SoundSpec,
                 keys=SOUND_KEYS, rules=_sound_rules, absent=lambda: None),
     ),
