@@ -11,9 +11,10 @@ A transcript is the demo's stdout with its output folder written as out/<name> (
 printed digit (a rounding flip); two numbers below 1e-8 in size are both round-off (a residual force, a
 round-trip mismatch) and equal. Timings (seconds printed with at most two decimals and followed by " s":
 "36.2 s", "2.72 s"), which vary from run to run, are not compared; "0.866 s" (a period) is. Solver effort
-("18 Newton iterations", "191 staggered sweeps"; not steps or cut-backs) may differ by a quarter (at least 1): the Newton path is not
-reproducible between a cold and a warm form cache (the README's first scene, direct solver: 18 iterations cold,
-17 warm, the same answer; the cause is not found yet), so these counts are not pinned.
+("18 Newton iterations", "191 staggered sweeps"; not steps or cut-backs) may differ by a quarter (at least 1): a Newton
+path whose last iterations sit at round-off moves by one when the last bits move (the README's first scene, direct
+solver: 18 iterations, 17 with element tables that FFCx generated under two BLAS threads, fem_forms/threads.py; another
+machine's BLAS kernels do the same), so these counts are not pinned.
 """
 from __future__ import annotations
 

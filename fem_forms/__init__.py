@@ -10,6 +10,10 @@ Python API::
 The API prints nothing while it works: no FFCx compile log (``quiet_jit(verbose=True)`` shows it) and no
 progress (``show_progress()`` shows load steps, Newton iterations and residuals on stderr).
 """
+from fem_forms import threads
+
+threads.pin_blas_environment()          # before numpy loads OpenBLAS (fem_forms/threads.py says why)
+
 from fem_forms.analyses.modal import ModalResult, solve_modal, write_modal_outputs
 from fem_forms.analyses.static import write_static_outputs
 from fem_forms.equilibrium import StaticResult, solve_static
@@ -28,5 +32,6 @@ __all__ = ["quiet_jit", "show_progress", "InputError", "SolveError", "Scene", "L
            "solve_modal", "write_modal_outputs"]
 __version__ = "0.1.0"
 
+threads.pin_loaded_blas()
 quiet_jit()
 patient_jit()

@@ -138,7 +138,7 @@ def test_the_readme_quotes_the_verification_manual():
 
 def test_a_changed_demo_number_makes_its_page_stale():
     """The comparison every demo run goes through (tests/system/demo_runs.py): timings, round-off and a solver
-    effort within a quarter pass (17 Newton iterations for 18: a warm and a cold form cache take different Newton paths);
+    effort within a quarter pass (17 Newton iterations for 18: last-bit changes move a Newton path at round-off by one);
     a changed count, a digit beyond a rounding flip, an effort beyond a quarter or changed words fail."""
     page = "beam: 3075 dofs, 18 Newton iterations, 4.06 s\n  tip u = (-0.0586, 1.2e-14) m, period 0.866 s\n"
     same = page.replace("4.06 s", "9.31 s").replace("1.2e-14", "-3.5e-15").replace("-0.0586", "-0.0587")

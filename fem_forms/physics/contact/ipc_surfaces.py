@@ -10,6 +10,7 @@ import ipctk
 import numpy as np
 import scipy.sparse as sp
 
+from fem_forms import threads
 from fem_forms.meshes.boundary_surface import BoundarySurface
 from fem_forms.physics.contact.mesh_obstacle import FileObstacle, inside
 
@@ -17,6 +18,7 @@ SHORTEN = 0.8          # a step that would make surfaces touch is cut to this sh
 REACH = 2.0            # no step moves a surface node farther than this many mean surface edges
 # Tight Inclusion CCD stopped after this many iterations returns a conservative time of impact: its default (1e7)
 # took 247 s on two parallel patches passing through each other, 1e4 took 0.2 s for the same impact (0.477 vs 0.480)
+threads.pin_ipctk(ipctk)              # one TBB thread: its sums in a fixed order (fem_forms/threads.py)
 CCD = ipctk.TightInclusionCCD(1e-6, 10_000)
 
 
