@@ -10,6 +10,8 @@ from pathlib import Path
 
 import gmsh
 
+from fem_forms.meshes.occ_parts import fine_in_box
+
 MM = 1e-3
 WIDTH, THICK = 6 * MM, 5 * MM
 CENTRE, R_IN, R_OUT = (12 * MM, 30 * MM), 9 * MM, 15 * MM
@@ -35,16 +37,8 @@ def build(out: Path, h_fine: float = 0.4 * MM, h_coarse: float = 1.5 * MM) -> Pa
         whole = max(pieces, key=lambda dt: occ.getMass(*dt))     # gmsh 4.11 also hands back the pieces
         occ.remove([dt for dt in pieces if dt != whole])
         occ.synchronize()
-        field = gmsh.model.mesh.field
-        box = field.add("Box")
-        field.setNumber(box, "VIn", h_fine)
-        field.setNumber(box, "VOut", h_coarse)
-        for key, value in (("XMin", cx - R_OUT), ("XMax", cx + R_OUT), ("YMin", cy - R_OUT), ("YMax", cy + 4 * MM),
-                           ("Thickness", 4 * MM)):
-            field.setNumber(box, key, value)
-        field.setAsBackgroundMesh(box)
-        gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
-        gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
+        fine_in_box(gmsh, {"XMin": cx - R_OUT, "XMax": cx + R_OUT, "YMin": cy - R_OUT, "YMax": cy + 4 * MM,
+                           "Thickness": 4 * MM}, h_fine, h_coarse)
         volume = [t for d, t in occ.extrude([whole], 0, 0, THICK, numElements=[1]) if d == 3]
         occ.synchronize()
         gmsh.model.setPhysicalName(3, gmsh.model.addPhysicalGroup(3, volume), "hook")

@@ -31,3 +31,17 @@ def write_part(path: Path, build: Callable, h: float) -> Path:
     """mesh_part written to `path`; the path (for a scene's mesh.file)."""
     mesh_part(path, build, h)
     return path
+
+
+def fine_in_box(gmsh, bounds: dict, h_in: float, h_out: float) -> None:
+    """Cells of size h_in inside a box (gmsh Box field keys: XMin, XMax, YMin, YMax, ZMin, ZMax, Thickness of the
+    transition), h_out elsewhere, and only there: sizes from points and boundaries off (a crack's band, a notch)."""
+    field = gmsh.model.mesh.field
+    box = field.add("Box")
+    field.setNumber(box, "VIn", h_in)
+    field.setNumber(box, "VOut", h_out)
+    for key, value in bounds.items():
+        field.setNumber(box, key, value)
+    field.setAsBackgroundMesh(box)
+    gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
+    gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)

@@ -10,6 +10,8 @@ from pathlib import Path
 
 import gmsh
 
+from fem_forms.meshes.occ_parts import fine_in_box
+
 
 def build(out: Path, half_width: float = 0.5, half_height: float = 0.75, thickness: float = 0.01,
           ell: float = 0.01, h_fine: float = 0.0033, h_coarse: float = 0.05) -> Path:
@@ -20,16 +22,8 @@ def build(out: Path, half_width: float = 0.5, half_height: float = 0.75, thickne
         occ = gmsh.model.occ
         s = occ.addRectangle(0, 0, 0, half_width, half_height)
         occ.synchronize()
-        field = gmsh.model.mesh.field
-        box = field.add("Box")
-        field.setNumber(box, "VIn", h_fine)
-        field.setNumber(box, "VOut", h_coarse)
-        for key, value in (("XMin", 0.0), ("XMax", half_width), ("YMin", 0.0), ("YMax", 4 * ell),
-                           ("Thickness", 0.1 * half_height)):
-            field.setNumber(box, key, value)
-        field.setAsBackgroundMesh(box)
-        gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
-        gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
+        fine_in_box(gmsh, {"XMin": 0.0, "XMax": half_width, "YMin": 0.0, "YMax": 4 * ell,
+                           "Thickness": 0.1 * half_height}, h_fine, h_coarse)
         occ.extrude([(2, s)], 0, 0, thickness, numElements=[1])
         occ.synchronize()
         gmsh.model.addPhysicalGroup(3, [t for _, t in gmsh.model.getEntities(3)], 1)
