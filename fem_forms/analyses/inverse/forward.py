@@ -99,12 +99,22 @@ def predicted_displacement(u: fem.Function, pts_rest: np.ndarray, pts_target: np
     u.x.scatter_forward()
 
 
+def forward_model(fscene: Scene, loaded: LoadedMesh, carved: dict | None = None):
+    """The forward model on the rest mesh; `carved` ({"extra": .., "density": ..}, a carving's fields on
+    `loaded`) puts its stiffness factor in the forms and its density in the density field."""
+    carved = carved or {}
+    model = build_model(fscene, loaded=loaded, extra=carved.get("extra"))
+    if carved.get("density") is not None:
+        model.parameters.set_density(carved["density"])
+    return model
+
+
 def solve_at_target(fscene: Scene, loaded: LoadedMesh, pts_rest: np.ndarray, pts_target: np.ndarray,
-                    design_scale: float = 0.0) -> ForwardSolve:
+                    design_scale: float = 0.0, carved: dict | None = None) -> ForwardSolve:
     """Newton from the predicted equilibrium at full load, at most EQUILIBRIUM_NEWTON_STEPS steps
     (CURVED_NEWTON_STEPS for degree 2). `design_scale`: the design's own residual scale (the loads on the
     target shape), whose snes_rtol its Newton stopped at; the check accepts that too."""
-    model = build_model(fscene, loaded=loaded)
+    model = forward_model(fscene, loaded, carved)
     steps = EQUILIBRIUM_NEWTON_STEPS if fscene.discretization.degree == 1 else CURVED_NEWTON_STEPS
     predicted_displacement(model.u, pts_rest, pts_target)
     model.load.set(1.0)
@@ -148,9 +158,9 @@ def solve_at_target(fscene: Scene, loaded: LoadedMesh, pts_rest: np.ndarray, pts
                         tolerance / max(scale, 1e-300), set_by)
 
 
-def solve_along_path(fscene: Scene, loaded: LoadedMesh) -> ForwardSolve:
+def solve_along_path(fscene: Scene, loaded: LoadedMesh, carved: dict | None = None) -> ForwardSolve:
     """Load continuation from the rest shape (the scene's steps and cut-backs), as `fem-forms run` would."""
-    static = solve_static(fscene, model=build_model(fscene, loaded=loaded))
+    static = solve_static(fscene, model=forward_model(fscene, loaded, carved))
     converged = static.report.converged
     inertia = tangent_inertia(static.model.compiled("jacobian"), static.model.bcs) if converged else None
     return ForwardSolve("path", static, inertia)
