@@ -179,7 +179,8 @@ def check_stance(carving: Carving, static, out: Path, title: str, picture_too: b
         problems.append(f"the carved rest shape, sagged in the forward check, misses the balance goal: {why}")
     if picture_too:
         picture(out / "balance.png", rest.mesh, void, at_rest, dict(at_rest, deformed=bent), title,
-                f" ({b.goal}, rest shape and its sag)", sag=fields.node_values(static.u), up=carving.setting.frame[0])
+                f" ({b.goal}: the rest shape to fabricate, sagged in the forward check)",
+                sag=fields.node_values(static.u), up=carving.setting.frame[0], labels=("rest shape", "sagged"))
         summary["picture"] = "balance.png"
     return summary, problems
 
