@@ -147,3 +147,12 @@ def test_carving_needs_the_direct_method(tmp_path, capsys):
     d["inverse"] = {"method": "adjoint"}
     code, _, err, _ = run_scene(tmp_path, d, capsys)
     assert code != 0 and "inverse.method = 'adjoint': with [balance]" in err
+
+
+def test_goal_out_of_reach_stops_before_the_rest_shape(designed, tmp_path, capsys):
+    """A light fill (300 kg/m^3) moves too little mass for the 1 degree margin on this mesh: exit 3, one line,
+    no rest shape designed."""
+    mesh, _, _ = designed
+    code, data, err, out = run_scene(tmp_path, scene(mesh, fill_density=300.0, fill_stiffness=0.1), capsys)
+    assert code == 3 and "no carving makes the part stand with the requested margin" in err
+    assert len(err.strip().splitlines()) == 1 and not (out / "rest_shape.msh").exists()
