@@ -8,7 +8,8 @@ its own weight. `analysis = "inverse"` designs the rest shape to cast so that it
 solid part that target topples (`[balance] goal = "check"` reports it: the sagged shape is the target, so
 the designed part sags into a figure that falls over). With `goal = "stand"` the interior is carved on the
 target (a 3 mm wall kept, the centre of mass inside the sole shrunk by h tan 2 deg), the rest shape is
-designed for the carved part (voids: no weight, 1e-6 of the stiffness), and the forward check loads the
+designed for the carved part (voids: no weight, 1e-6 of the stiffness), the carving is redone once with each
+cell's mass from its rest volume (and the rest shape again if a cell changed), and the forward check loads the
 written, carved rest shape, lets it sag, and measures both the mismatch to the target and the stance.
 Prints both designs' mismatch and toppling angles, the carved share and the files to print or cast.
 """

@@ -7,7 +7,7 @@ import time
 from dolfinx import fem
 import numpy as np
 
-from fem_forms.analyses.inverse.carving import balance_line, carve_on_target, check_stance
+from fem_forms.analyses.inverse.carving import balance_line, check_stance, design_carved
 from fem_forms.analyses.inverse.check import check_rest_shape, picture
 from fem_forms.design.direct import solve_direct
 from fem_forms.design.fixed_point import solve_fixed_point
@@ -33,9 +33,7 @@ def design_rest_shape(scene: Scene, material=None) -> InverseResult:
     V = fem.VectorFunctionSpace(loaded.mesh, ("Lagrange", scene.discretization.degree))
     probes.evaluate(fem.Function(V), scene.output.probes)       # a probe outside the target: bad input
     if scene.balance is not None:                               # direct only (the scene's rules)
-        cut = carve_on_target(scene, loaded)
-        res = solve_direct(scene, material, loaded, **cut.design_fields())
-        res.carving = cut
+        res = design_carved(scene, material, loaded, solve_direct)
     else:
         res = METHODS[scene.inverse.method](scene, material, loaded)
     res.solve_time = time.perf_counter() - t0

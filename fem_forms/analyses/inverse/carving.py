@@ -5,20 +5,26 @@ For a fixed target the two decouple: the sagged shape is the target, so the carv
 (the balance LP of fem_forms/analyses/balance on the target mesh), and the rest shape is then designed with
 the carved cells at the fill density and a residual stiffness (balance's fill_stiffness, 1e-6 for an empty
 fill: the DG0 `stiffness_factor` scaling psi, as in elastic balance scenes). Mass is rho times a cell's REST
-volume (gravity acts per rest volume), while the LP weighs the cells by their TARGET volumes: the two differ
-by the cells' volume change in the sag (nearly none for a nearly incompressible material). So the carving is
-designed on target volumes and then measured, never predicted: the forward check loads the written, carved
-rest shape (volume groups "solid" and "void"), solves its sag, and takes the stance from each cell's rest
-mass carried to the sagged shape. A stance that fails there makes the design unusable."""
+volume (gravity acts per rest volume), while the first carving weighs the cells by their TARGET volumes: the
+two differ by the cells' volume change in the sag (nearly none for a nearly incompressible material). So the
+carving is designed on target volumes, the rest shape designed, and the carving redone once with each cell's
+moments scaled by its rest / target volume measured on that rest shape (for P1, exactly the weights of the
+checked sag); if that changes any cell, the rest shape is designed again. Then the stance is measured, never
+predicted: the forward check loads the written, carved rest shape (volume groups "solid" and "void"), solves
+its sag, and takes the stance from each cell's rest mass carried to the sagged shape. A stance that fails
+there makes the design unusable."""
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from pathlib import Path
 import time
+from typing import Callable
 
 from dolfinx import fem
+from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
 import numpy as np
+import ufl
 
 from fem_forms.analyses.balance import setting
 from fem_forms.analyses.balance.body import Body
@@ -26,10 +32,12 @@ from fem_forms.analyses.balance.design import Setting, design
 from fem_forms.analyses.balance.elastic import stiffness_factors
 from fem_forms.analyses.balance.evaluate import evaluate, unmet
 from fem_forms.analyses.balance.output import boundary_faces, picture
+from fem_forms.design.parameters import InverseResult
 from fem_forms.errors import SolveError
 from fem_forms.meshes import LoadedMesh
 from fem_forms.output import fields
 from fem_forms.output.stl import write_stl
+from fem_forms.physics import quadrature
 from fem_forms.scene import Scene
 from fem_forms.scene.analyses.balance import fill_stiffness
 
@@ -55,6 +63,29 @@ class Carving:
     on_target: dict               # evaluate() of the binary carving on the target (target volumes)
     timing: object = None         # the LPs' cost (lp.Timing), rank 0
     design_time_s: float = 0.0
+    recarved_cells: int = 0       # cells the re-carve on rest-volume weights changed
+    inverse_solves: int = 0       # rest-shape designs (2 when the re-carve changed the carving)
+
+    def recarve(self, ratios: np.ndarray) -> bool:
+        """Carve again with each cell's moments scaled by its rest / target volume (the cell's mass is rho x
+        its rest volume, placed on the target: for P1 exactly what the forward check's sag weighs). Keeps
+        the first carving if the re-carve misses the goal. Whether the carving changed."""
+        t0 = time.perf_counter()
+        body = replace(self.body, moments=self.body.moments * ratios[:, None])
+        try:
+            solid, P = design(body, self.setting)
+        except SolveError:
+            return False
+        numbers = evaluate(body, self.setting, solid)
+        self.design_time_s += time.perf_counter() - t0
+        if unmet(numbers, self.setting):
+            return False
+        comm = self.loaded.mesh.comm
+        self.recarved_cells = comm.allreduce(int(np.sum(solid != self.solid)), op=MPI.SUM)
+        self.body, self.solid, self.on_target = body, solid, numbers
+        if P is not None and self.timing is not None:
+            self.timing = self.timing.add(P.timing)
+        return self.recarved_cells > 0
 
     @property
     def carved(self) -> np.ndarray:
@@ -129,6 +160,39 @@ class Carving:
         return at_rest, bent, rest, void
 
 
+def rest_volume_ratios(v: fem.Function) -> np.ndarray:
+    """Per owned cell of the target mesh: its rest volume over its target volume, int det(I + grad v) dx over
+    int 1 dx (exact: det is a polynomial of degree 3 (p - 1) in each straight-sided cell)."""
+    mesh = v.function_space.mesh
+    Q = fem.FunctionSpace(mesh, ("DG", 0))
+    w = ufl.TestFunction(Q)
+    q = max(1, 3 * (v.function_space.ufl_element().degree() - 1))
+    dx = ufl.dx(metadata=quadrature.metadata(mesh.topology.cell_name(), q))
+    n = mesh.topology.index_map(3).size_local
+    dofs = Q.dofmap.list.array[:n]
+    values = []
+    for integrand in (ufl.det(ufl.Identity(3) + ufl.grad(v)), fem.Constant(mesh, 1.0)):
+        vec = fpetsc.assemble_vector(fem.form(integrand * w * dx))
+        values.append(vec.array[dofs].copy())
+        vec.destroy()
+    return values[0] / values[1]
+
+
+def design_carved(scene: Scene, material, loaded: LoadedMesh, solve: Callable) -> InverseResult:
+    """The carving on the target, the rest shape of the carved part by `solve` (the direct method), and one
+    re-carve with each cell weighed by its REST volume (its mass) measured on that rest shape; if that
+    changes the carving, the rest shape is designed again. (The rest volumes of the second design differ
+    from those of the first by a second-order change: the forward check measures the result.)"""
+    cut = carve_on_target(scene, loaded)
+    res = solve(scene, material, loaded, **cut.design_fields())
+    cut.inverse_solves = 1
+    if res.converged and scene.balance.goal != "check" and cut.recarve(rest_volume_ratios(res.v)):
+        res = solve(scene, material, loaded, **cut.design_fields())
+        cut.inverse_solves = 2
+    res.carving = cut
+    return res
+
+
 def carve_on_target(scene: Scene, loaded: LoadedMesh) -> Carving:
     """The goal's carving of the part on the target shape; SolveError (one line) when no carving meets it."""
     t0 = time.perf_counter()
@@ -165,6 +229,7 @@ def check_stance(carving: Carving, static, out: Path, title: str, picture_too: b
                "carvable_cells": comm.allreduce(int(carving.body.carvable.sum())),
                "carved_cells": comm.allreduce(int(carving.carved.sum())),
                "carved_fraction": carving.on_target["carved_fraction"], "mass_on_target": carving.on_target["mass"],
+               "recarved_cells": carving.recarved_cells, "inverse_solves": carving.inverse_solves,
                "on_target": _pick(carving.on_target), "void_surface": "void.stl"}
     if carving.timing is not None:
         summary["lp"] = {"setup_s": carving.timing.setup_s, "solve_s": carving.timing.solve_s,
