@@ -97,6 +97,10 @@ def test_carved_rest_shape_resolved_independently_sags_into_the_target_and_stand
     assert mass.sum() == pytest.approx(s["mass"], rel=1e-9)
     assert np.allclose(com, s["center_of_mass"], atol=1e-6 * size)
     assert angle == pytest.approx(s["toppling_angle_deg"], abs=1e-3)
+    # the re-carve weighed each cell by its rest volume; it kept the carving here (no second rest-shape
+    # design), so the program's stance on the target is the measured one
+    assert b["recarved_cells"] == 0 and b["inverse_solves"] == 1
+    assert b["on_target"]["toppling_angle_deg"] == pytest.approx(angle, abs=1e-6)
 
 
 def test_solid_rest_shape_sags_into_the_target_and_topples(designed, tmp_path):
@@ -119,7 +123,8 @@ def test_two_ranks_give_the_same_carving_and_stance(designed, tmp_path):
     par = json.loads((tmp_path / "par" / "results.json").read_text())
     assert par["mpi_ranks"] == 2 and par["usable"]
     a, b = serial["balance"], par["balance"]
-    assert a["carved_cells"] == b["carved_cells"]
+    for key in ("carved_cells", "recarved_cells", "inverse_solves"):
+        assert a[key] == b[key]
     for key in ("carved_fraction", "mass"):
         assert a[key] == pytest.approx(b[key], rel=1e-9)
     for key in ("toppling_angle_deg", "stability_margin"):
