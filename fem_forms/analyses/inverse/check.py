@@ -125,7 +125,8 @@ def check_rest_shape(scene: Scene, res: InverseResult, out: Path, carving=None) 
     # independent forward check: the mesh just written (its very arrays, loaded as any file mesh is:
     # checked, distributed) and the forward problem's forms on it
     vmap = res.v.function_space.dofmap
-    fscene = forward.forward_scene(scene, out / "rest_shape.msh", vmap.index_map.size_global * vmap.index_map_bs)
+    fscene = forward.forward_scene(scene, out / "rest_shape.msh", vmap.index_map.size_global * vmap.index_map_bs,
+                                   carved=carving is not None and carving.any_carved)
 
     def written():                               # called on rank 0, where the gathered arrays are
         points, cells, ctype = gathered
