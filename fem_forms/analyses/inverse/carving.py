@@ -60,7 +60,8 @@ class Carving:
     body: Body                    # the part on the target shape
     setting: Setting
     solid: np.ndarray             # 0/1 per carvable cell of body
-    on_target: dict               # evaluate() of the binary carving on the target (target volumes)
+    on_target: dict               # evaluate() of the binary carving on the target (after the re-carve: each
+                                  # cell's moments weighed by its rest volume, i.e. its mass)
     timing: object = None         # the LPs' cost (lp.Timing), rank 0
     design_time_s: float = 0.0
     recarved_cells: int = 0       # cells the re-carve on rest-volume weights changed
