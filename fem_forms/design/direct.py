@@ -4,6 +4,7 @@ from __future__ import annotations
 import time
 
 from dolfinx import fem
+import numpy as np
 import ufl
 
 from fem_forms.design.parameters import InverseResult, cellwise_exact, one_point_scene, target_scene
@@ -15,8 +16,11 @@ from fem_forms.solvers import continuation, snes
 from fem_forms.solvers.linear import rigid_body_modes
 
 
-def solve_direct(scene: Scene, material=None, loaded: LoadedMesh | None = None) -> InverseResult:
-    """Inverse elastostatics with load continuation (secant predictor, automatic cut-back)."""
+def solve_direct(scene: Scene, material=None, loaded: LoadedMesh | None = None, extra: dict | None = None,
+                 density: np.ndarray | None = None) -> InverseResult:
+    """Inverse elastostatics with load continuation (secant predictor, automatic cut-back). `extra` enters
+    the Context (a carving's DG0 `stiffness_factor`), `density` (per owned cell of `loaded`) replaces the
+    materials' (a carving's fill density in its carved cells)."""
     t0 = time.perf_counter()
     loaded = loaded or load_mesh(target_scene(scene))
     mesh = loaded.mesh
@@ -26,7 +30,10 @@ def solve_direct(scene: Scene, material=None, loaded: LoadedMesh | None = None) 
     w = fem.Function(V)                                  # the variation: d/dw, then w = 0 (u = -v)
 
     def build(sc: Scene):
-        physics = scene_physics(sc, loaded, w - v, V, material, rest_map=G, bc_sign=-1.0, rest_offset=v)
+        physics = scene_physics(sc, loaded, w - v, V, material, rest_map=G, bc_sign=-1.0, rest_offset=v,
+                                extra=extra)
+        if density is not None:
+            physics.context.parameters.set_density(density)
         physics.terms.only_ufl("inverse design")
         physics.context.deformation = ufl.inv(G) + ufl.grad(w) * ufl.inv(G)
         return inverse_forms(physics.terms, physics.context, v, w), physics, sc.discretization.quadrature

@@ -29,6 +29,7 @@ class InverseResult:
     # direct method: the inverse residual at the target under the full load (rest = target); its Newton
     # stopped at snes_rtol of it, which is what the forward check's equilibrium test holds it to
     residual_scale: float = 0.0
+    carving: object = None          # [balance] in an inverse scene: the carving designed on the target
 
 
 def target_scene(scene: Scene) -> MeshSpec:

@@ -50,7 +50,7 @@ class Scene:
     modal: ModalSpec = field(default_factory=ModalSpec)
     sound: SoundSpec | None = None     # None: no sound
     inverse: InverseSpec = field(default_factory=InverseSpec)
-    balance: BalanceSpec = field(default_factory=BalanceSpec)
+    balance: BalanceSpec | None = field(default_factory=BalanceSpec)   # inverse scenes: None without [balance]
     dynamic: DynamicSpec = field(default_factory=DynamicSpec)
     damping: DampingSpec = field(default_factory=DampingSpec)
     thermal: ThermalSpec | None = None     # None: no temperature field

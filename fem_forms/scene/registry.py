@@ -31,12 +31,13 @@ def names() -> tuple[str, ...]:
 
 def owned_sections() -> dict[str, tuple[tuple[Analysis, ...], Section]]:
     """Every analysis-owned section by table name, with its owners (a table several analyses read, such
-    as [thermal], has several) and its first declaration."""
+    as [thermal], has several) and its main declaration: the one of the analysis named like the table
+    ([balance] of analysis = "balance"; an inverse scene reads it too), else the first."""
     out: dict = {}
     for a in ANALYSES.values():
         for s in a.sections:
             owners, first = out.get(s.name, ((), s))
-            out[s.name] = (owners + (a,), first)
+            out[s.name] = (owners + (a,), s if a.name == s.name else first)
     return out
 
 

@@ -25,6 +25,7 @@ CHECKS = {"loaded_vs_unloaded_modes": "test_loaded_vs_unloaded_modes_demo",    #
           "struck_bar": "test_struck_bar_demo_scene",
           "leaning_figure": "test_leaning_figure_demo",
           "soft_figure": "test_soft_figure_demo",
+          "sag_and_stand": "test_sag_and_stand_demo",
           "spinning_top": "test_spinning_top_demo",
           "floating_boat": "test_floating_boat_demo",
           "roly_poly": "test_roly_poly_demo",

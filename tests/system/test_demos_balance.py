@@ -136,3 +136,43 @@ def test_soft_figure_demo(demo):
     solves, = grab(r"static solves (\d+)", text)
     assert 1 <= solves <= 4
     assert (out / "stand" / "balance.png").stat().st_size > 0
+
+
+# --- inverse + balance: sag and stand ------------------------------------------------------------
+def test_sag_and_stand_demo(demo):
+    """The target's toppling angle as a solid part against the closed form of its two boxes (lean 8.5 cm);
+    each printed sagged toppling angle is atan(margin / height) of the printed sagged CoM over the clamped
+    sole [-0.03, 0.06] x [0, 0.04]: the solid design topples, the carved one stands with the 2 degree margin;
+    both forward checks land on the target (P1: the exact discrete inverse); the solid part's mass is rho
+    times its rest volume, a little more than the target's (the column is compressed by its weight), the
+    carved one's that less the carved share; the rest shape and the core to cast are written, the core
+    inside the rest shape's bounding box."""
+    import meshio
+    text, out = demo("sag_and_stand")
+    lean, rho = 0.085, 1100.0
+    vf, vc = 0.09 * 0.04 * 0.03, 0.04 * 0.04 * 0.14
+    x = (vf * 0.015 + vc * (0.04 + lean / 2)) / (vf + vc)
+    z = (vf * 0.015 + vc * 0.10) / (vf + vc)
+    num = rf"({NUMBER})"
+    masses = {}
+    for label, stands in (("solid", "False"), ("carved", "True")):
+        mismatch, = grab(rf"{label}: largest rest offset {NUMBER} mm, forward check lands within {num} m", text)
+        assert mismatch < 1e-12
+        target, sagged = grab(rf"{label}: on the target toppling angle {num} deg; sagged \(forward check\) "
+                              rf"toppling angle {num} deg, stands {stands}", text)
+        *c, masses[label] = grab(rf"{label}: sagged CoM \({num}, {num}, {num}\) m, mass {num} kg", text)
+        margin = min(0.06 - c[0], c[0] + 0.03, c[1], 0.04 - c[1])
+        assert sagged == pytest.approx(math.degrees(math.atan2(margin, c[2])), abs=2e-3)
+        if label == "solid":
+            assert target == pytest.approx(math.degrees(math.atan2(0.06 - x, z)), abs=1e-4)
+            assert sagged < 0
+        else:
+            assert sagged >= 2.0
+    assert 1.0 < masses["solid"] / (rho * (vf + vc)) < 1.005
+    frac, = grab(rf"carved fraction {num}", text)
+    assert masses["carved"] == pytest.approx(masses["solid"] * (1 - frac), rel=2e-3)
+    rest = meshio.read(out / "carved" / "rest_shape.stl").points
+    void = meshio.read(out / "carved" / "void.stl").points
+    assert len(void) > 0
+    assert np.all(void.min(axis=0) >= rest.min(axis=0)) and np.all(void.max(axis=0) <= rest.max(axis=0))
+    assert (out / "carved" / "balance.png").stat().st_size > 0

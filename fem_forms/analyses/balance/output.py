@@ -106,11 +106,11 @@ def _rocking(ax, nums: dict, up: np.ndarray) -> None:
 
 def picture(path: Path, mesh, carved: np.ndarray, before: dict, after: dict, title: str,
             extra: str = "", sag: np.ndarray | None = None, up: np.ndarray | None = None,
-            check: bool = False) -> None:
+            check: bool = False, labels: tuple = ("rigid", "sagged")) -> None:
     """Two panels, each with the marks `overlays` names (CoM, support polygon, axis, buoyancy and waterline,
     or rocking circle): the part solid and carved; or, given the sag (displacement per local geometry node,
     elastic = true), the design rigid and sagged; one panel for a `check` (nothing carved). `up`: against
-    gravity (default +z), drawn vertical."""
+    gravity (default +z), drawn vertical. `labels`: the two panels' names with a sag."""
     flags = mesh.comm.gather(carved, root=0)
     g = gather_mesh(mesh)
     gs = gather_mesh(mesh, sag) if sag is not None else None
@@ -128,7 +128,7 @@ def picture(path: Path, mesh, carved: np.ndarray, before: dict, after: dict, tit
     void = boundary_faces(cells[carved_all]) if carved_all.any() else None
     panels = [("solid", before, False, points), ("carved", after, True, points)]
     if gs is not None:
-        panels = [("rigid", after, True, points), ("sagged", after["deformed"], True, gs[0])]
+        panels = [(labels[0], after, True, points), (labels[1], after["deformed"], True, gs[0])]
     elif check:                                    # goal "check": nothing carved, one panel says it all
         panels = [("as it is", after, False, points)]
     fig = plt.figure(figsize=(11 if len(panels) == 2 else 6, 5.5))

@@ -7,6 +7,7 @@ import time
 from dolfinx import fem
 import numpy as np
 
+from fem_forms.analyses.inverse.carving import balance_line, check_stance, design_carved
 from fem_forms.analyses.inverse.check import check_rest_shape, picture
 from fem_forms.design.direct import solve_direct
 from fem_forms.design.fixed_point import solve_fixed_point
@@ -25,12 +26,16 @@ METHODS = {"direct": solve_direct, "adjoint": solve_adjoint, "fixed-point": solv
 
 
 def design_rest_shape(scene: Scene, material=None) -> InverseResult:
-    """Run the scene's inverse method (mesh loading and compilation included in solve_time)."""
+    """Run the scene's inverse method (mesh loading and compilation included in solve_time); with
+    [balance], the carving first, on the target (res.carving), and the rest shape of the carved part."""
     t0 = time.perf_counter()
     loaded = load_mesh(target_scene(scene))
     V = fem.VectorFunctionSpace(loaded.mesh, ("Lagrange", scene.discretization.degree))
     probes.evaluate(fem.Function(V), scene.output.probes)       # a probe outside the target: bad input
-    res = METHODS[scene.inverse.method](scene, material, loaded)
+    if scene.balance is not None:                               # direct only (the scene's rules)
+        res = design_carved(scene, material, loaded, solve_direct)
+    else:
+        res = METHODS[scene.inverse.method](scene, material, loaded)
     res.solve_time = time.perf_counter() - t0
     return res
 
@@ -51,8 +56,13 @@ def run(scene: Scene, out: Path, echo: bool = False) -> dict:
     problems = [] if res.converged else [f"the {res.method} method did not reach a rest shape: {res.message}"]
     check = None
     if res.converged:
-        check = check_rest_shape(scene, res, out)
+        check = check_rest_shape(scene, res, out, res.carving)
         problems += check.problems
+        if res.carving is not None:
+            res.carving.write_void(out, res.v)
+            summary["balance"], stance = check_stance(res.carving, check.static, out, scene.title,
+                                                      scene.output.picture)
+            problems += stance
         summary["target_mismatch_max"] = check.mismatch_max
         summary["design_gap_max"] = check.design_gap_max
         if check.solve is not None:
@@ -82,6 +92,8 @@ def run(scene: Scene, out: Path, echo: bool = False) -> dict:
                  f" ({check.matched_mismatch_max:.3g} m where matched)") + f" -> {out}")
         if line := summary_line(summary):
             print(line + " (the rest shape under its loads)")
+        if "balance" in summary:
+            print(balance_line(summary["balance"]))
     if problems:
         raise SolveError(f"{scene.title}: no usable rest shape: {'; '.join(problems)}")
     return summary

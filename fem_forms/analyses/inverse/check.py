@@ -98,11 +98,12 @@ def _write_and_inspect(scene: Scene, out: Path, gathered, target, groups, size: 
     return problems, drawn
 
 
-def check_rest_shape(scene: Scene, res: InverseResult, out: Path) -> ForwardCheck:
+def check_rest_shape(scene: Scene, res: InverseResult, out: Path, carving=None) -> ForwardCheck:
     """Write the rest shape (volume .msh + STL), check it crosses no support plane and does not
     intersect itself, then load the written arrays as a mesh, solve the forward problem on it (from the
     target, or along the load path: scene.inverse.check), check the equilibrium is stable and measure
-    the largest distance of the deformed shape from the target."""
+    the largest distance of the deformed shape from the target. `carving` (carving.Carving): its volume
+    groups written, and read back from the loaded mesh into the forward model's stiffness and density."""
     mesh = res.loaded.mesh
     comm = mesh.comm
     size = mesh_size(mesh)
@@ -112,7 +113,7 @@ def check_rest_shape(scene: Scene, res: InverseResult, out: Path) -> ForwardChec
     designed = fields.gather_mesh(mesh, fields.node_values(res.deformed_offset)) \
         if res.deformed_offset is not None else target
     groups = fields.gather_facet_groups(res.loaded)
-    cell_groups = _material_groups(scene, res.loaded)
+    cell_groups = _material_groups(scene, res.loaded) if carving is None else carving.cell_groups()
     problems, drawn = _write_and_inspect(scene, out, gathered, target, groups, size, cell_groups) \
         if comm.rank == 0 else ([], None)
     problems = comm.bcast(problems, root=0)
@@ -124,7 +125,8 @@ def check_rest_shape(scene: Scene, res: InverseResult, out: Path) -> ForwardChec
     # independent forward check: the mesh just written (its very arrays, loaded as any file mesh is:
     # checked, distributed) and the forward problem's forms on it
     vmap = res.v.function_space.dofmap
-    fscene = forward.forward_scene(scene, out / "rest_shape.msh", vmap.index_map.size_global * vmap.index_map_bs)
+    fscene = forward.forward_scene(scene, out / "rest_shape.msh", vmap.index_map.size_global * vmap.index_map_bs,
+                                   carved=carving is not None and carving.any_carved)
 
     def written():                               # called on rank 0, where the gathered arrays are
         points, cells, ctype = gathered
@@ -134,8 +136,9 @@ def check_rest_shape(scene: Scene, res: InverseResult, out: Path) -> ForwardChec
         return arrays
     try:
         loaded = from_arrays(comm, written)
-        solve = (forward.solve_at_target(fscene, loaded, pts_rest, pts_design, res.residual_scale)
-                 if scene.inverse.check == "equilibrium" else forward.solve_along_path(fscene, loaded))
+        carved = carving.on_mesh(loaded) if carving is not None else None
+        solve = (forward.solve_at_target(fscene, loaded, pts_rest, pts_design, res.residual_scale, carved)
+                 if scene.inverse.check == "equilibrium" else forward.solve_along_path(fscene, loaded, carved))
     except InputError as e:
         return ForwardCheck(np.inf, None, problems + [f"the rest shape is not a valid mesh: {e}"], drawn=drawn)
     static = solve.static

@@ -68,8 +68,10 @@ class ForwardSolve:
         return out
 
 
-def forward_scene(scene: Scene, rest_mesh: Path, dofs: int) -> Scene:
-    """The static scene of the rest shape written to `rest_mesh`, with the check's linear solver."""
+def forward_scene(scene: Scene, rest_mesh: Path, dofs: int, carved: bool = False) -> Scene:
+    """The static scene of the rest shape written to `rest_mesh`, with the check's linear solver. A carved
+    part (voids at 1e-6 of the stiffness) is solved with LU at any size: CG + GAMG failed its first linear
+    solve on the carved sag-and-stand figure (P2, 119k dofs), and the equilibrium check has no retry."""
     fscene = copy.deepcopy(scene)
     fscene.analysis = "static"
     fscene.mesh = MeshSpec(generator="file", file=rest_mesh)
@@ -77,7 +79,9 @@ def forward_scene(scene: Scene, rest_mesh: Path, dofs: int) -> Scene:
     if fscene.several_materials:                # each material's cells, carried over as a volume group
         for m in fscene.materials:
             m.where = Selector("group", group=m.name, key=f"{m.key}.where")
-    if fscene.solver.linear == "auto" and dofs >= CHECK_ITERATIVE_ABOVE_DOFS:
+    if fscene.solver.linear == "auto" and carved:
+        fscene.solver.linear = "direct"
+    elif fscene.solver.linear == "auto" and dofs >= CHECK_ITERATIVE_ABOVE_DOFS:
         fscene.solver.linear = "iterative-then-direct"
         # GAMG graph squared on the finest level only, threshold 0.01: on the Chen arm 265 CG iterations
         # instead of 462 (7 Newton steps instead of 8), the path check's solve 2.0 -> 1.3 s CPU
@@ -99,12 +103,22 @@ def predicted_displacement(u: fem.Function, pts_rest: np.ndarray, pts_target: np
     u.x.scatter_forward()
 
 
+def forward_model(fscene: Scene, loaded: LoadedMesh, carved: dict | None = None):
+    """The forward model on the rest mesh; `carved` ({"extra": .., "density": ..}, a carving's fields on
+    `loaded`) puts its stiffness factor in the forms and its density in the density field."""
+    carved = carved or {}
+    model = build_model(fscene, loaded=loaded, extra=carved.get("extra"))
+    if carved.get("density") is not None:
+        model.parameters.set_density(carved["density"])
+    return model
+
+
 def solve_at_target(fscene: Scene, loaded: LoadedMesh, pts_rest: np.ndarray, pts_target: np.ndarray,
-                    design_scale: float = 0.0) -> ForwardSolve:
+                    design_scale: float = 0.0, carved: dict | None = None) -> ForwardSolve:
     """Newton from the predicted equilibrium at full load, at most EQUILIBRIUM_NEWTON_STEPS steps
     (CURVED_NEWTON_STEPS for degree 2). `design_scale`: the design's own residual scale (the loads on the
     target shape), whose snes_rtol its Newton stopped at; the check accepts that too."""
-    model = build_model(fscene, loaded=loaded)
+    model = forward_model(fscene, loaded, carved)
     steps = EQUILIBRIUM_NEWTON_STEPS if fscene.discretization.degree == 1 else CURVED_NEWTON_STEPS
     predicted_displacement(model.u, pts_rest, pts_target)
     model.load.set(1.0)
@@ -148,9 +162,9 @@ def solve_at_target(fscene: Scene, loaded: LoadedMesh, pts_rest: np.ndarray, pts
                         tolerance / max(scale, 1e-300), set_by)
 
 
-def solve_along_path(fscene: Scene, loaded: LoadedMesh) -> ForwardSolve:
+def solve_along_path(fscene: Scene, loaded: LoadedMesh, carved: dict | None = None) -> ForwardSolve:
     """Load continuation from the rest shape (the scene's steps and cut-backs), as `fem-forms run` would."""
-    static = solve_static(fscene, model=build_model(fscene, loaded=loaded))
+    static = solve_static(fscene, model=forward_model(fscene, loaded, carved))
     converged = static.report.converged
     inertia = tangent_inertia(static.model.compiled("jacobian"), static.model.bcs) if converged else None
     return ForwardSolve("path", static, inertia)

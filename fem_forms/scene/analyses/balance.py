@@ -86,8 +86,31 @@ def _rules(s: BalanceSpec, t: Table) -> None:
     s.axis = [c / math.sqrt(sum(c * c for c in s.axis)) for c in s.axis]
 
 
-def _check(scene) -> None:
+def _inverse_rules(s: BalanceSpec, t: Table) -> None:
+    """[balance] in an inverse scene: the sag is the inverse design's own, so elastic has no place."""
+    _rules(s, t)
+    if s.elastic:
+        raise InputError(f"{t.key('elastic')} = true: not in an inverse scene (its sagged shape is the target, "
+                         "so the carving is designed there and the rest shape for the carving); remove it")
+
+
+def check_carving(scene) -> None:
+    """Rules of [balance] in an inverse scene (absent: scene.balance is None): the balance rules, with the
+    carved cells' stiffness as in an elastic balance scene."""
     b = scene.balance
+    if b is None:
+        return
+    if scene.inverse.method != "direct":
+        raise InputError(f"inverse.method = {scene.inverse.method!r}: with [balance] (carving) only 'direct'")
+    if scene.several_materials:
+        raise InputError("balance: carving in an inverse scene takes one [material] (the carved rest mesh's "
+                         "volume groups are \"solid\" and \"void\")")
+    _check(scene, elastic=True)
+
+
+def _check(scene, elastic: bool | None = None) -> None:
+    b = scene.balance
+    elastic = b.elastic if elastic is None else elastic
     for m in scene.materials:
         if m.rho <= 0:
             raise InputError(f"{m.key}.rho: balance design needs a positive density")
@@ -96,8 +119,8 @@ def _check(scene) -> None:
                          "no mass (lighter fills hollow the part, heavier ones ballast it)")
     if b.goal == "swim" and b.waterline is None:
         raise InputError("balance.waterline: missing (required for goal = 'swim')")
-    if b.elastic and b.fill_density > 0 and b.fill_stiffness is None:
-        raise InputError(f"balance.fill_stiffness: missing: with elastic = true the fill (fill_density = "
+    if elastic and b.fill_density > 0 and b.fill_stiffness is None:
+        raise InputError(f"balance.fill_stiffness: missing: with elastic = true or in an inverse scene the fill (fill_density = "
                          f"{b.fill_density}) is a second material; give its Young's modulus over the solid's, "
                          f"E_fill / E")
     contact = getattr(scene, "contact", None)
@@ -109,12 +132,18 @@ def _check(scene) -> None:
                          "balance.contact_tolerance)")
 
 
+BALANCE = Section("balance", "what must balance and how the interior may be carved", BalanceSpec,
+                  keys=COMMON_KEYS, variants=VARIANTS, rules=_rules)
+# [balance] in an inverse scene: the same keys, the carving designed on the target; absent: no carving
+INVERSE_BALANCE = Section("balance", "inverse: carve the interior too, designed on the target shape (elastic "
+                          "refused: the sag is the inverse design's own)", BalanceSpec, keys=COMMON_KEYS,
+                          variants=VARIANTS, rules=_inverse_rules, absent=lambda: None)
+
 ANALYSIS = Analysis(
     name="balance",
     doc="mass properties, and carving the interior so the part stands, spins, floats upright or rocks back",
     runner="fem_forms.analyses.balance:run",
-    sections=(Section("balance", "what must balance and how the interior may be carved", BalanceSpec,
-                      keys=COMMON_KEYS, variants=VARIANTS, rules=_rules),
+    sections=(BALANCE,
               CONTACT),                  # [contact]: elastic = true, the sag resting on a floor instead of clamps
     outputs=("results.json", "void.stl", "outer.stl", "density.xdmf", "balance.png", "solid.vtu (when carved)"),
     check=_check,

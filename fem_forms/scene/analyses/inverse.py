@@ -6,6 +6,7 @@ from pathlib import Path
 
 from fem_forms.errors import InputError
 from fem_forms.scene.analyses import Analysis
+from fem_forms.scene.analyses.balance import INVERSE_BALANCE, check_carving
 from fem_forms.scene.reader import Key, Section, Table, Variants
 from fem_forms.scene.selectors import Selector
 
@@ -66,6 +67,9 @@ ANALYSIS = Analysis(
     doc="the rest shape that deforms into the given shape under the loads, checked by a forward solve",
     runner="fem_forms.analyses.inverse:run",
     sections=(Section("inverse", "how to find the rest shape that deforms into the target", InverseSpec,
-                      keys=COMMON_KEYS, variants=VARIANTS, rules=_rules),),
-    outputs=("results.json", "rest_shape.msh", "rest_shape.stl", "fields.xdmf", "inverse.png"),
+                      keys=COMMON_KEYS, variants=VARIANTS, rules=_rules),
+              INVERSE_BALANCE),          # [balance]: carve the interior too (designed on the target)
+    outputs=("results.json", "rest_shape.msh", "rest_shape.stl", "fields.xdmf", "inverse.png",
+             "void.stl (with [balance])"),
+    check=check_carving,
 )
