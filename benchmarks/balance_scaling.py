@@ -26,11 +26,11 @@ import time
 
 
 import fem_forms as ff
-from fem_forms.analyses.balance import _gravity, setting
 from fem_forms.analyses.balance import elastic as sag
-from fem_forms.analyses.balance.body import Body
-from fem_forms.analyses.balance.design import design
-from fem_forms.analyses.balance.evaluate import evaluate, unmet
+from fem_forms.design.balance import gravity as _gravity, setting
+from fem_forms.design.balance.body import Body
+from fem_forms.design.balance.design import design
+from fem_forms.design.balance.evaluate import evaluate, unmet
 from fem_forms.meshes import load_mesh
 from fem_forms.meshes.occ_parts import mesh_part
 

@@ -7,8 +7,9 @@ import numpy as np
 import pytest
 
 import fem_forms as ff
-from fem_forms.analyses.balance.body import Body
-from fem_forms.analyses.balance.elastic import SagModel, stiffness_factors
+from fem_forms.analyses.balance.elastic import SagModel
+from fem_forms.design.balance import stiffness_factors
+from fem_forms.design.balance.body import Body
 from fem_forms.output.fields import node_values
 from fem_forms.scene.analyses.balance import EMPTY_FILL_STIFFNESS, fill_stiffness
 from helpers import run_scene

@@ -8,8 +8,8 @@ import pytest
 from scipy.optimize import linprog
 from scipy.spatial.distance import cdist
 
-from fem_forms.analyses.balance import lp, rows, sifting
-from fem_forms.analyses.balance.body import _beyond, _cell_nodes, surface_points
+from fem_forms.design.balance import lp, rows, sifting
+from fem_forms.design.balance.body import _beyond, _cell_nodes, surface_points
 
 
 def cells(n, seed):

@@ -5,7 +5,7 @@ from dolfinx import mesh as dmesh
 from mpi4py import MPI
 import numpy as np
 
-from fem_forms.analyses.balance.output import overlays, panel_title, picture
+from fem_forms.output.balance import overlays, panel_title, picture
 
 SWING = {"mass": 0.512, "center_of_mass": [0.0, 0.0, -0.012], "support_polygon": [[0, 0, -0.05], [0.01, 0, -0.05]],
          "toppling_angle_deg": -3.0, "curvature_center": [0.0, 0.0, 0.0], "curvature_radius": 0.05,

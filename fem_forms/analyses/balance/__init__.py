@@ -1,7 +1,8 @@
 """Balance design (issue 14): mass properties, and carving the interior so that the part stands, spins,
 floats upright or rocks back (Make It Stand, Spin-It, buoyancy design, Make it swing), optionally on the
 shape sagging under gravity. Each design is a linear program in the carvable cells' solid fractions
-(goals.py), binarised and checked from the binary carving's own mass properties (evaluate.py).
+(fem_forms/design/balance/goals.py), binarised and checked from the binary carving's own mass properties
+(evaluate.py there); this package runs it on the rest shape (rigid) or on the sagging one (elastic.py).
 
 run(scene, out, echo): results.json, void.stl, outer.stl, density.xdmf, balance.png.
 """
@@ -13,32 +14,17 @@ import time
 
 import numpy as np
 
-from fem_forms.analyses.balance.body import Body
-from fem_forms.analyses.balance.design import Setting, design
 from fem_forms.analyses.balance.elastic import sag_design
-from fem_forms.analyses.balance.evaluate import evaluate, unmet
-from fem_forms.analyses.balance.output import picture, write_outputs
+from fem_forms.design.balance import gravity, setting
+from fem_forms.design.balance.body import Body
+from fem_forms.design.balance.design import Setting, design
+from fem_forms.design.balance.evaluate import evaluate, unmet
 from fem_forms.errors import SolveError
-from fem_forms.meshes import load_mesh, mesh_size
+from fem_forms.meshes import load_mesh
 from fem_forms.output import results
+from fem_forms.output.balance import picture, write_outputs
 from fem_forms.output.fields import node_values
-from fem_forms.physics.regions import MaterialRegions
 from fem_forms.scene import Scene
-
-
-def _gravity(scene: Scene) -> np.ndarray:
-    """[balance] gravity, else the scene's gravity load, else -z."""
-    g = scene.balance.gravity or next((ld.g for ld in scene.load if ld.type == "gravity"), [0.0, 0.0, -9.81])
-    return np.asarray(g, dtype=float)
-
-
-def setting(scene: Scene, mesh, loaded=None) -> Setting:
-    """The design's densities (one per owned cell of `loaded` with several materials), gravity and size."""
-    rho = scene.material.rho
-    if scene.several_materials:
-        regions = MaterialRegions(loaded, scene.materials)
-        rho = regions.cell_values([m.rho for m in scene.materials])[:regions.n_owned]
-    return Setting(scene.balance, rho, _gravity(scene), mesh_size(mesh))
 
 
 def _rigid(scene: Scene, st: Setting, body: Body) -> dict:
@@ -61,7 +47,7 @@ def run(scene: Scene, out, echo: bool = False) -> dict:
     out = Path(out)
     b = scene.balance
     if b.elastic:
-        r = sag_design(scene, _gravity(scene), lambda loaded: setting(scene, loaded.mesh, loaded))
+        r = sag_design(scene, gravity(scene), lambda loaded: setting(scene, loaded.mesh, loaded))
         mesh, body, st = r["mesh"], r["rest"], r["setting"]
     else:
         loaded = load_mesh(scene.mesh)

@@ -20,9 +20,10 @@ from dolfinx import fem
 from mpi4py import MPI
 import numpy as np
 
-from fem_forms.analyses.balance.body import Body
-from fem_forms.analyses.balance.design import Setting, design
-from fem_forms.analyses.balance.evaluate import evaluate, unmet
+from fem_forms.design.balance import stiffness_factors
+from fem_forms.design.balance.body import Body
+from fem_forms.design.balance.design import Setting, design
+from fem_forms.design.balance.evaluate import evaluate, unmet
 from fem_forms.equilibrium import StaticResult, solve_static
 from fem_forms.errors import SolveError
 from fem_forms.meshes import load_mesh
@@ -71,13 +72,6 @@ class SagModel:
         for term in self.model.terms.with_role("contact"):
             term.resume(0.0)                         # each sag's pseudo-time starts at 0 (friction's slip eps)
         return solve_static(self.scene, model=self.model)
-
-
-def stiffness_factors(body: Body, solid: np.ndarray, fill_stiffness: float) -> np.ndarray:
-    """Per owned cell: 1 for solid cells, `fill_stiffness` for carved ones."""
-    f = np.ones(len(body.ids))
-    f[body.carvable] = np.where(solid > 0.5, 1.0, fill_stiffness)
-    return f
 
 
 def sag_design(scene: Scene, gravity: np.ndarray, setting: Callable[[object], Setting]) -> dict:

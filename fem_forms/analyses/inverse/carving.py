@@ -2,7 +2,7 @@
 stands (spins, floats, rocks) on the TARGET shape, then design the rest shape of the carved part.
 
 For a fixed target the two decouple: the sagged shape is the target, so the carving is designed there
-(the balance LP of fem_forms/analyses/balance on the target mesh), and the rest shape is then designed with
+(the balance LP of fem_forms/design/balance on the target mesh), and the rest shape is then designed with
 the carved cells at the fill density and a residual stiffness (balance's fill_stiffness, 1e-6 for an empty
 fill: the DG0 `stiffness_factor` scaling psi, as in elastic balance scenes). Mass is rho times a cell's REST
 volume (gravity acts per rest volume), while the first carving weighs the cells by their TARGET volumes: the
@@ -26,16 +26,15 @@ from mpi4py import MPI
 import numpy as np
 import ufl
 
-from fem_forms.analyses.balance import setting
-from fem_forms.analyses.balance.body import Body
-from fem_forms.analyses.balance.design import Setting, design
-from fem_forms.analyses.balance.elastic import stiffness_factors
-from fem_forms.analyses.balance.evaluate import evaluate, unmet
-from fem_forms.analyses.balance.output import boundary_faces, picture
+from fem_forms.design.balance import setting, stiffness_factors
+from fem_forms.design.balance.body import Body
+from fem_forms.design.balance.design import Setting, design
+from fem_forms.design.balance.evaluate import evaluate, unmet
 from fem_forms.design.parameters import InverseResult
 from fem_forms.errors import SolveError
 from fem_forms.meshes import LoadedMesh
 from fem_forms.output import fields
+from fem_forms.output.balance import boundary_faces, picture
 from fem_forms.output.stl import write_stl
 from fem_forms.physics import quadrature
 from fem_forms.scene import Scene

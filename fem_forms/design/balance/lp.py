@@ -18,7 +18,7 @@ import numpy as np
 from scipy.optimize import Bounds, LinearConstraint, milp
 from scipy.spatial import cKDTree
 
-from fem_forms.analyses.balance import sifting
+from fem_forms.design.balance import sifting
 
 INTEGRAL = 1e-6          # an LP value this close to 0 or 1 counts as integral
 MIP_GAP = 1e-2           # binarise's MILP stops within 1 % of the free cells' share of the objective (a few

@@ -8,8 +8,8 @@ import math
 
 import numpy as np
 
-from fem_forms.analyses.balance import goals
-from fem_forms.analyses.balance.body import Body
+from fem_forms.design.balance import goals
+from fem_forms.design.balance.body import Body
 from fem_forms.design.floating import flotation, tetrahedra
 from fem_forms.design.mass_properties import total_moments
 from fem_forms.design.support import SupportPolygon, fit_sphere, ground_frame

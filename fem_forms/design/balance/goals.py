@@ -22,7 +22,7 @@ import time
 
 import numpy as np
 
-from fem_forms.analyses.balance import lp, rows, sifting
+from fem_forms.design.balance import lp, rows, sifting
 from fem_forms.errors import SolveError
 
 CENTER_TOLERANCE = 2e-4      # x the part's size: CoM off the axis / vertical

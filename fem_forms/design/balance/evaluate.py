@@ -7,9 +7,9 @@ import math
 from mpi4py import MPI
 import numpy as np
 
-from fem_forms.analyses.balance import goals
-from fem_forms.analyses.balance.body import Body
-from fem_forms.analyses.balance.design import Setting, rocking_center, tip
+from fem_forms.design.balance import goals
+from fem_forms.design.balance.body import Body
+from fem_forms.design.balance.design import Setting, rocking_center, tip
 from fem_forms.design.floating import flotation, tetrahedra
 from fem_forms.design.mass_properties import MassProperties, total_moments
 from fem_forms.design.support import SupportPolygon
