@@ -1,7 +1,7 @@
 """[sound.impact]: the sound of a dynamic run's contacts. An aluminium bar (200 x 20 x 10 mm, P2) thrown at a floor
 tilted 3 degrees hits it with one end; the WAV's spectrum (the test's own FFT) peaks at the free-free
 Euler-Bernoulli bending frequencies through the 10 mm thickness, (beta_n L)^2 / (2 pi L^2) sqrt(E t^2 / (12 rho)),
-beta_n L = 4.730, 7.853, 10.996; 2 ranks write the same WAV for a prescribed push; bad input is one line, exit status 2. The exact
+beta_n L = 4.730, 7.853, 10.996; 2 ranks write the same WAV; bad input is one line, exit status 2. The exact
 oscillator recursion is checked against the closed form of a step force."""
 import json
 import math
@@ -56,46 +56,23 @@ def test_the_impact_rings_at_the_bending_modes(tmp_path):
     assert peaks[np.argmax(level)] == pytest.approx(euler_bernoulli()[0], rel=0.03)   # the first one is loudest
 
 
-# The impact sound's own parallel work (modes on 2 ranks, the modal forces summed over each rank's surface nodes,
-# the contact patch's weights, the WAV on rank 0) under a prescribed motion: the bar pushed rigidly into the
-# tilted floor's barrier and back (a half sine, 0.2 ms), each step recorded as the march records it. (The march
-# itself, dynamic contact on 2 ranks, hangs in the Newton solve on main too, the bouncing-ball scene of
-# test_contact_dynamics included: a rank leaves SNES while the other assembles a tangent.)
-PRESCRIBED = """
-import json, sys, types
-from pathlib import Path
-import numpy as np
-from fem_forms import Scene
-from fem_forms.analyses.dynamic.impact import ImpactRecorder, impact_entry
-from fem_forms.analyses.dynamic.system import build_system
-scene = Scene.from_dict(json.loads(sys.argv[1]))
-out = Path(sys.argv[2])
-out.mkdir(parents=True, exist_ok=True)
-system = build_system(scene)
-recorder = ImpactRecorder(scene.sound)
-for t in np.linspace(0.0, 3e-4, 61):
-    system.u.x.array[2::3] = -4.5e-5 * np.sin(np.pi * min(t, 2e-4) / 2e-4)
-    system.u.x.scatter_forward()
-    recorder(system, t)
-entry = impact_entry(types.SimpleNamespace(system=system), recorder, scene.sound, out)
-if system.model.mesh.comm.rank == 0:
-    (out / "entry.json").write_text(json.dumps(entry))
-"""
-
-
 @pytest.mark.skipif(MPIRUN is None, reason="no mpirun")
 def test_two_ranks_write_the_same_impact_wav(tmp_path):
+    """The whole run on 2 ranks: the march with contact (it hung in the first tangent's assembly before the array
+    terms allowed new nonzeros on every rank), the modes, the modal forces summed over each rank's surface nodes,
+    the WAV on rank 0."""
     from scipy.io import wavfile
-    runs = {}
-    for n in (1, 2):
-        p = mpirun(["-c", PRESCRIBED, json.dumps(SCENE), str(tmp_path / f"np{n}")], n=n)
-        assert p.returncode == 0, p.stderr[-2000:]
-        entry = json.loads((tmp_path / f"np{n}" / "entry.json").read_text())
-        runs[n] = entry, wavfile.read(str(tmp_path / f"np{n}" / "impact.wav"))[1].astype(float)
-    (e1, w1), (e2, w2) = runs[1], runs[2]
-    assert e1["peak_force_N"] > 0 and e1["modes_used"] == e2["modes_used"] > 3
-    assert e2["peak_modal_force"] == pytest.approx(e1["peak_modal_force"], rel=1e-6, abs=1e-9 * e1["peak_force_N"])
+    code, r1, _, out = run_scene(tmp_path, SCENE)
+    assert code == 0
+    p = mpirun(["-m", "fem_forms", "run", str(tmp_path / "scene.toml"), "--out", str(tmp_path / "mpi"), "-q"])
+    assert p.returncode == 0, p.stderr[-2000:]
+    r2 = json.loads((tmp_path / "mpi" / "results.json").read_text())
+    assert r2["mpi_ranks"] == 2
+    e1, e2 = r1["impact_sound"], r2["impact_sound"]
+    assert e2["peak_force_N"] == pytest.approx(e1["peak_force_N"], rel=1e-6) and e1["modes_used"] == e2["modes_used"]
     assert e2["peaks_hz"] == pytest.approx(e1["peaks_hz"], rel=1e-6) and len(e1["peaks_hz"]) >= 3
+    w1 = wavfile.read(str(out / "impact.wav"))[1].astype(float)
+    w2 = wavfile.read(str(tmp_path / "mpi" / "impact.wav"))[1].astype(float)
     assert len(w1) == len(w2) and np.abs(w1 - w2).max() <= 1.0          # 16-bit samples: at most one step apart
 
 
