@@ -10,7 +10,7 @@ radiates half a metre to the side (`impact.wav`, `impact_spectrogram.png`). The 
 the WAV's strongest spectral peaks next to the nearest mode, and the first flexural mode against
 Euler-Bernoulli (free-free, (beta L)^2 = 22.373); it draws the WAV's spectrum with the modes marked.
 
-Run: `.venv/bin/python demos/dropped_aluminium_part.py [OUT_DIR]`.
+Run: `.venv/bin/python demos/dropped_aluminium_part.py [OUT_DIR]` (also under `mpirun -n 2`: the same numbers).
 """
 import math
 import sys
