@@ -91,6 +91,8 @@ def without(d: dict, *names) -> dict:
     (with_(SCENE, "sound.strike", {"point": [0.0, 0.0, 0.0], "direction": [0.0, 0.0, 1.0]}),
      "sound.strike: a struck part's ring is for analysis = 'modal'"),
     (with_(with_(SCENE, "sound.count", 4), "sound.up_to", 5000.0), "sound.up_to: give either count or up_to"),
+    (with_(SCENE, "sound.listener", [0.1, 0.01, 0.005]),
+     "sound.listener = [0.1, 0.01, 0.005]: lies in or on the part; it must be in the air"),
 ])
 def test_bad_impact_input_is_one_line(tmp_path, capsys, scene, message):
     path = tmp_path / "scene.toml"
