@@ -25,6 +25,18 @@ import numpy as np
 from petsc4py import PETSc
 import ufl
 
+from fem_forms.errors import InputError
+from fem_forms.output import probes
+
+
+def check_listener(u: fem.Function, listener) -> None:
+    """InputError if the listener lies in or on the part (the radiated pressure is heard in the air)."""
+    try:
+        probes.evaluate(u, {"listener": listener})
+    except InputError:
+        return
+    raise InputError(f"sound.listener = {listener}: lies in or on the part; it must be in the air")
+
 
 class Radiation:
     """Pressure amplitude at one listener point from displacement fields of one function space."""

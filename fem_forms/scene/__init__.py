@@ -16,6 +16,7 @@ from fem_forms.scene.analyses.balance import BalanceSpec
 from fem_forms.scene.analyses.contact_section import ContactSpec
 from fem_forms.scene.analyses.fracture_section import FractureSpec, fracture_scene_rules
 from fem_forms.scene.analyses.dynamic import DampingSpec, DynamicSpec
+from fem_forms.scene.analyses.impact_section import ImpactSoundSpec
 from fem_forms.scene.analyses.inverse import InverseSpec
 from fem_forms.scene.analyses.modal import ModalSpec, SoundSpec
 from fem_forms.scene.analyses.thermal_section import ThermalSpec
@@ -48,7 +49,7 @@ class Scene:
     solver: SolverSpec = field(default_factory=SolverSpec)
     output: OutputSpec = field(default_factory=OutputSpec)
     modal: ModalSpec = field(default_factory=ModalSpec)
-    sound: SoundSpec | None = None     # None: no sound
+    sound: SoundSpec | ImpactSoundSpec | None = None     # None: no sound; a dynamic scene's: [sound.impact]
     inverse: InverseSpec = field(default_factory=InverseSpec)
     balance: BalanceSpec | None = field(default_factory=BalanceSpec)   # inverse scenes: None without [balance]
     dynamic: DynamicSpec = field(default_factory=DynamicSpec)

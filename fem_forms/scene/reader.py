@@ -261,6 +261,7 @@ class Section:
     absent: Callable | None = None              # the value when the table is missing (default: spec())
     attr: str = ""                              # the Scene attribute it is read into (default: name)
     either: bool = False                        # a table or an array of tables (read as a list)
+    refuse: tuple = ()                          # (sub-key, why) pairs: keys another analysis's table reads
 
     def parse(self, data: Any, base_dir: Path = Path(".")) -> Any:
         """The spec (a list of specs for an array of tables) from the table's data."""
@@ -286,6 +287,9 @@ class Section:
         return keys
 
     def _one(self, t: Table) -> Any:
+        for name, why in self.refuse:
+            if t.has(name):
+                raise InputError(f"{t.key(name)}: {why}")
         values = t.read_variant(self.keys, self.variants) if self.variants else t.read_keys(self.keys)
         t.done()
         spec = self.spec(**values)

@@ -141,6 +141,19 @@ def section_schema(section: Section) -> dict:
     return table
 
 
+def _distinct(owners, first: Section) -> list:
+    """The declarations of `first`'s table by other analyses that are not `first` nor a narrowing of it (a
+    narrowing has the same keys or fewer)."""
+    out = []
+    for a in owners:
+        d = registry.section_of(a, first.name)
+        if d is first or any(d is o for o in out):
+            continue
+        if not {k.name for k in d.all_keys()} <= {k.name for k in first.all_keys()}:
+            out.append(d)
+    return out
+
+
 def scene_schema() -> dict:
     """The whole scene: core sections, analysis-owned sections allowed only for their analysis."""
     owned = registry.owned_sections()
@@ -157,6 +170,10 @@ def scene_schema() -> dict:
             props[s.name] = section_schema(s)
             names = " or ".join(repr(a.name) for a in owned[s.name][0])
             props[s.name]["description"] = f"{s.doc} (analysis = {names} only; {manual(s.name)})"
+            others_decl = _distinct(owned[s.name][0], s)
+            if others_decl:                   # declared apart by another analysis ([sound]): either shape here,
+                props[s.name] = {"description": props[s.name]["description"],   # the analysis's rule narrows
+                                 "anyOf": [section_schema(d) for d in [s, *others_decl]]}
         others = [name for name, (owners, _) in owned.items() if analysis not in owners]
         if others or narrowed:
             cond = {"properties": {"analysis": {"const": analysis.name}}}

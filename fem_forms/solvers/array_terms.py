@@ -82,7 +82,12 @@ class ArrayTerms:
         w.destroy()
 
     def add_hessian(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
-        """Every term's Hessian into the assembled tangent, Dirichlet rows and columns left out."""
+        """Every term's Hessian into the assembled tangent, Dirichlet rows and columns left out. New nonzeros are
+        allowed on every rank first: a term that allows them only where it adds entries (add_entries) changes
+        MatAssemblyEnd's collective steps on those ranks alone, and 2 ranks hung there (a part falling onto the
+        floor with contact nodes on one rank only)."""
+        if self.terms:
+            A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
         for t in self.terms:
             t.add_hessian(x, A, self.constrained)
         if self.terms:

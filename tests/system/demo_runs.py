@@ -39,7 +39,8 @@ CHECKS = {"loaded_vs_unloaded_modes": "test_loaded_vs_unloaded_modes_demo",    #
           "figure_on_table": "test_figure_on_table_demo",
           "bimetal_strip": "test_bimetal_strip_demo",
           "printed_hook": "test_printed_hook_demo",
-          "torn_silicone_strip": "test_torn_silicone_strip_demo"}
+          "torn_silicone_strip": "test_torn_silicone_strip_demo",
+          "dropped_aluminium_part": "test_dropped_aluminium_part_demo"}
 NUMBER = r"[-+]?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?"
 
 

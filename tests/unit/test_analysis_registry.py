@@ -13,7 +13,9 @@ HEATED_END = {"boundary": [{"where": {"axis": "x", "at": 0.0}, "temperature": 1.
 NEEDS = {"thermal": {"thermal": {"conductivity": 1.0, "specific_heat": 1.0, **HEATED_END}}}
 COMPLETE = {"thermal": {**HEATED_END, "conductivity": 1.0, "specific_heat": 1.0}, "contact": {"self": True}}
 # tables of other sections a section needs in one analysis (balance reads [contact] with elastic = true only)
-ALONG = {("balance", "contact"): {"balance": {"elastic": True}}}
+ALONG = {("balance", "contact"): {"balance": {"elastic": True}},
+         ("dynamic", "sound"): {"contact": {"obstacle": [{"name": "a", "shape": "plane", "point": [0.0, 0.0, -1.0],
+                                                          "normal": [0.0, 0.0, 1.0]}]}}}   # [sound.impact] names it
 REQUIRED = {"vector": [0.0, 0.0, 1.0], "number": 1.0, "integer": 1, "string": "a"}
 
 

@@ -32,6 +32,8 @@ def table_schema(section: Section) -> dict:
         # a narrower declaration of a table another analysis owns (thermal's [dynamic]): in its analysis's rule
         s = next(r["then"]["properties"][section.name] for r in SCHEMA["allOf"]
                  if section.name in r["then"].get("properties", {}))
+    elif "anyOf" in s and "type" not in s:      # [sound]: the struck part's or the impact's; its owner's first
+        s = s["anyOf"][0]
     if section.either:                           # [material]: a table, or an array of the same tables
         assert s["oneOf"][1]["items"] == s["oneOf"][0]
         return s["oneOf"][0]

@@ -9,6 +9,7 @@ from pathlib import Path
 
 from mpi4py import MPI
 
+from fem_forms.analyses.dynamic.impact import ImpactRecorder, impact_entry
 from fem_forms.analyses.dynamic.output import MotionWriter, write_csvs, write_gif, write_history_png
 from fem_forms.analyses.dynamic.solve import DynamicResult, solve_dynamic
 from fem_forms.errors import SolveError
@@ -39,8 +40,9 @@ def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> d
                                   scene.output.picture)
         writer(system, t, step)
 
+    recorder = ImpactRecorder(scene.sound) if scene.sound is not None else None   # [sound.impact]
     try:
-        result = solve_dynamic(scene, out, Path(restart) if restart else None, on_frame=frame)
+        result = solve_dynamic(scene, out, Path(restart) if restart else None, on_frame=frame, on_step=recorder)
     finally:
         if writer is not None:
             writer.close()
@@ -69,6 +71,11 @@ def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> d
         warnings.append("plasticity: the plastic work is not in the energy account; energy_balance_error "
                         "includes it")
     files = {"probes": "probes.csv", "energy": "energy.csv"}
+    if recorder is not None and recorder.times:
+        impact = attempt(warnings, "impact sound", lambda: impact_entry(result, recorder, scene.sound, out))
+        if impact is not None:
+            summary["impact_sound"] = impact
+            files["impact_sound"], files["impact_spectrogram"] = impact["wav"], impact["spectrogram"]
     if scene.output.fields:
         files["motion"] = "motion.xdmf"
     if scene.output.picture and comm.rank == 0:
@@ -84,6 +91,8 @@ def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> d
         print(f"{scene.title}: {summary['dofs']} dofs, {scene.dynamic.scheme}, {summary['steps']} steps to "
               f"t = {summary['time_reached']:.6g} s, {summary['newton_iterations']} Newton iterations, "
               f"energy balance {_balance(summary)}, {summary['wall_time_s']:.2f} s -> {out}")
+        if "impact_sound" in summary:
+            print(_impact_line(summary["impact_sound"]))
         if line := summary_line(summary):
             print(line + (f" at t = {summary['strength']['time']:.6g} s" if summary["strength"].get("time") is
                           not None else ""))
@@ -96,3 +105,10 @@ def _balance(summary: dict) -> str:
     """The energy balance as the summary line says it: relative, or absolute when the energies are round-off."""
     rel = summary["energy_balance_error"]
     return f"error {rel:.2e}" if rel is not None else f"{summary['energy_imbalance']:.2e} J (energies at round-off)"
+
+
+def _impact_line(s: dict) -> str:
+    """The impact sound as the summary line says it: contact time, peak force, the WAV's strongest peaks."""
+    peaks = ", ".join(f"{p:.0f}" for p in s["peaks_hz"][:8])
+    return (f"  impact on {s['obstacle']!r}: contact {1e3 * s['contact_time_s']:.3g} ms, peak force "
+            f"{s['peak_force_N']:.4g} N, {s['modes_used']} modes -> {s['wav']}, spectrum peaks [Hz]: {peaks}")

@@ -153,9 +153,10 @@ def probe_row(points: probes.ProbeSet, system: DynamicSystem, t: float) -> list:
 
 
 def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = None,
-                  on_frame=None) -> DynamicResult:
+                  on_frame=None, on_step=None) -> DynamicResult:
     """March the scene's [dynamic] span; `on_frame(system, t, step)` every output_every steps (and at
-    t = 0); checkpoints into out/checkpoint every checkpoint_every steps; `restart` continues from one."""
+    t = 0); `on_step(system, t)` at t = 0 and after every accepted step (the state then committed);
+    checkpoints into out/checkpoint every checkpoint_every steps; `restart` continues from one."""
     t0 = time.perf_counter()
     dyn = scene.dynamic
     for m in scene.materials:
@@ -199,6 +200,8 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
             watch.step(0.0)
         if on_frame:
             on_frame(system, 0.0, 0)
+        if on_step:
+            on_step(system, 0.0)
 
     state = {"t": t_start}
 
@@ -211,6 +214,8 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
             watch.step(t)
         if on_frame and step % dyn.output_every == 0:
             on_frame(system, t, step)
+        if on_step:
+            on_step(system, t)
         if out is not None and dyn.checkpoint_every and step % dyn.checkpoint_every == 0:
             checkpoint.save(out / "checkpoint", result, t, step, h)
 

@@ -7,6 +7,7 @@ from fem_forms.errors import InputError
 from fem_forms.scene.analyses import Analysis
 from fem_forms.scene.analyses.contact_section import CONTACT
 from fem_forms.scene.analyses.fracture_section import FRACTURE
+from fem_forms.scene.analyses.impact_section import IMPACT_SOUND, check_impact
 from fem_forms.scene.analyses.thermal_section import THERMAL, check_coupled
 from fem_forms.scene.reader import Key, Section, Table
 
@@ -100,6 +101,7 @@ def _check(scene) -> None:
         raise InputError("contact: not with dynamic.scheme = 'central-difference' (the barrier needs the implicit "
                          "step's step filter); use 'newmark' or 'generalized-alpha'")
     check_coupled(scene)
+    check_impact(scene)
 
 
 ANALYSIS = Analysis(
@@ -113,8 +115,9 @@ ANALYSIS = Analysis(
         THERMAL,                         # [thermal]: transient heat, staggered with the motion step by step
         CONTACT,                         # [contact]: obstacles and self-contact in the implicit step
         FRACTURE,                        # [fracture]: the damage minimized with the motion in each implicit step
+        IMPACT_SOUND,                    # [sound.impact]: the contact forces ring the part's modes
     ),
     outputs=("results.json", "probes.csv", "energy.csv", "motion.xdmf", "motion.gif", "history.png",
-             "checkpoint/"),
+             "checkpoint/", "impact.wav", "impact_spectrogram.png"),
     check=_check,
 )

@@ -34,10 +34,11 @@ def _modal_rules(s: ModalSpec, t: Table) -> None:
 
 
 MAX_SAMPLES = 2**26
-SOUND_KEYS = (
-    Key("strike", "table", "where and how the body is struck", required=True, keys=(
-        Key("point", "vector", "struck point", unit="m", required=True, length=3),
-        Key("direction", "vector", "direction of the blow (normalised)", required=True, length=3))),
+STRIKE = Key("strike", "table", "where and how the body is struck", required=True, keys=(
+    Key("point", "vector", "struck point", unit="m", required=True, length=3),
+    Key("direction", "vector", "direction of the blow (normalised)", required=True, length=3)))
+# the keys every [sound] shares (a struck part's here, a dynamic scene's impact in impact_section.py)
+HEARING_KEYS = (
     Key("duration", "number", "length of the sound", default=2.0, unit="s", exclusive_minimum=0),
     Key("sample_rate", "integer", "samples per second of the WAV", default=44100, unit="Hz",
         minimum=1000, maximum=384000, note="must lie in 1000..384000 Hz"),
@@ -53,6 +54,7 @@ SOUND_KEYS = (
         exclusive_minimum=0),
     Key("speed_of_sound", "number", "speed of sound in that air", default=343.0, unit="m/s", exclusive_minimum=0),
 )
+SOUND_KEYS = (STRIKE, *HEARING_KEYS)
 _SOUND = {k.name: k for k in SOUND_KEYS}
 _DAMPING = {k.name: k for k in _SOUND["damping"].keys}
 
@@ -82,17 +84,22 @@ def _damping_table_rules(pairs: list, key: str) -> None:
             raise InputError(f"{key}[{i}] = {[f, zeta]}: zeta must lie in [0, 1)")
 
 
-def _sound_rules(s: SoundSpec, t: Table) -> None:
+def hearing_rules(s, t: Table) -> None:
+    """The rules of the shared [sound] keys: one damping law, a damping table that makes sense, a WAV that fits."""
     if s.modal_damping is not None:
         if t.has("damping"):
             raise InputError(f"{t.key('modal_damping')}: give either damping (Rayleigh) or modal_damping, not both")
         _damping_table_rules(s.modal_damping, t.key("modal_damping"))
+    if s.duration * s.sample_rate > MAX_SAMPLES:
+        raise InputError(f"{t.key('duration')} = {s.duration}: too long (at most {MAX_SAMPLES} samples)")
+
+
+def _sound_rules(s: SoundSpec, t: Table) -> None:
+    hearing_rules(s, t)
     norm = math.sqrt(sum(c * c for c in s.direction))
     if norm == 0:
         raise InputError(f"sound.strike.direction = {s.direction}: must not be the zero vector")
     s.direction = [c / norm for c in s.direction]
-    if s.duration * s.sample_rate > MAX_SAMPLES:
-        raise InputError(f"{t.key('duration')} = {s.duration}: too long (at most {MAX_SAMPLES} samples)")
 
 
 def _check(scene) -> None:
@@ -109,7 +116,9 @@ ANALYSIS = Analysis(
         Section("modal", "how many elastic modes, about which state, with which mass matrix", ModalSpec,
                 keys=MODAL_KEYS, rules=_modal_rules),
         Section("sound", "a modal impulse response at a struck point, written as a WAV", SoundSpec,
-                keys=SOUND_KEYS, rules=_sound_rules, absent=lambda: None),
+                keys=SOUND_KEYS, rules=_sound_rules, absent=lambda: None,
+                refuse=(("impact", "the sound of contacts is for analysis = 'dynamic' with [contact] (a modal "
+                                   "scene hears a struck part: [sound.strike])"),)),
     ),
     outputs=("results.json", "modes.xdmf", "modes.png", "sound.wav", "spectrogram.png"),
     check=_check,
