@@ -19,7 +19,8 @@ from scipy.optimize import brentq
 from helpers import MODAL_E, MODAL_L, MODAL_RHO, MODAL_T, ROOT, to_toml
 from helpers import modal_beam as beam
 from fem_forms import Scene
-from fem_forms.analyses.modal import solve_modal, write_modal_outputs
+from fem_forms.analyses.modal import write_modal_outputs
+from fem_forms.modes import solve_modal
 
 PYTHON = str(ROOT / ".venv" / "bin" / "python")
 L, T, E, RHO = MODAL_L, MODAL_T, MODAL_E, MODAL_RHO          # slender square beam, nu = 0
@@ -172,9 +173,9 @@ def test_a_failing_picture_never_loses_the_frequencies(tmp_path, monkeypatch):
         raise RuntimeError("no canvas")
     import fem_forms as ff
     scene = ff.Scene.from_dict(beam(count=2))
-    good = modal.write_modal_outputs(modal.solve_modal(scene), tmp_path / "good")
+    good = modal.write_modal_outputs(solve_modal(scene), tmp_path / "good")
     monkeypatch.setattr(modal, "modes_picture", broken)
-    bad = modal.write_modal_outputs(modal.solve_modal(scene), tmp_path / "bad")
+    bad = modal.write_modal_outputs(solve_modal(scene), tmp_path / "bad")
     assert bad["frequencies_hz"] == pytest.approx(good["frequencies_hz"], rel=1e-12)
     assert any("modes.png failed after the converged solve" in w for w in bad["warnings"])
     assert "picture" not in bad["files"] and (tmp_path / "bad" / "results.json").exists()

@@ -18,9 +18,9 @@ from pathlib import Path
 from mpi4py import MPI
 import numpy as np
 
-from fem_forms.analyses.modal import solve_modal
 from fem_forms.errors import SolveError
 from fem_forms.model import build_model
+from fem_forms.modes import solve_modal
 from fem_forms.output import impact_sound, sound
 from fem_forms.output.radiation import Radiation, check_listener
 from fem_forms.scene.analyses.modal import ModalSpec
