@@ -99,7 +99,8 @@ def test_carved_rest_shape_resolved_independently_sags_into_the_target_and_stand
     assert angle == pytest.approx(s["toppling_angle_deg"], abs=1e-3)
     # the re-carve weighed each cell by its rest volume; it kept the carving here (no second rest-shape
     # design), so the program's stance on the target is the measured one
-    assert b["recarved_cells"] == 0 and b["inverse_solves"] == 1
+    assert b["recarved_cells"] == 0 and b["inverse_solves"] == 1 and b["recarve"] == "the same carving"
+    assert b["on_target_weights"] == "rest volumes of the first rest shape"
     assert b["on_target"]["toppling_angle_deg"] == pytest.approx(angle, abs=1e-6)
 
 
@@ -137,6 +138,7 @@ def test_two_ranks_give_the_same_carving_and_stance(designed, tmp_path):
     ({"elastic": True}, "balance.elastic = true: not in an inverse scene"),
     ({"goal": "swim"}, "balance.waterline: missing"),
     ({"fill_density": 500.0}, "balance.fill_stiffness: missing"),
+    ({"gravity": [0.0, 0.0, 9.81]}, "balance.gravity = [0.0, 0.0, 9.81]: differs from the gravity load's g"),
 ])
 def test_bad_balance_in_an_inverse_scene_is_one_line(tmp_path, capsys, balance, message):
     d = scene("figure.msh", **balance)

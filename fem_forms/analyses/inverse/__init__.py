@@ -59,7 +59,8 @@ def run(scene: Scene, out: Path, echo: bool = False) -> dict:
         check = check_rest_shape(scene, res, out, res.carving)
         problems += check.problems
         if res.carving is not None:
-            res.carving.write_void(out, res.v)
+            if not any("cannot write" in p for p in check.problems):
+                problems += [p for p in [res.carving.write_void(out, res.v)] if p]
             summary["balance"], stance = check_stance(res.carving, check.static, out, scene.title,
                                                       scene.output.picture)
             problems += stance

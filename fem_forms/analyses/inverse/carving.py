@@ -65,6 +65,8 @@ class Carving:
     design_time_s: float = 0.0
     recarved_cells: int = 0       # cells the re-carve on rest-volume weights changed
     inverse_solves: int = 0       # rest-shape designs (2 when the re-carve changed the carving)
+    weights: str = "target volumes"   # what on_target's moments weigh each cell by
+    recarve_outcome: str = "not run (goal check)"
 
     def recarve(self, ratios: np.ndarray) -> bool:
         """Carve again with each cell's moments scaled by its rest / target volume (the cell's mass is rho x
@@ -74,15 +76,20 @@ class Carving:
         body = replace(self.body, moments=self.body.moments * ratios[:, None])
         try:
             solid, P = design(body, self.setting)
-        except SolveError:
+        except SolveError as e:
+            self.recarve_outcome = f"first carving kept: no carving on rest-volume weights ({e})"
             return False
         numbers = evaluate(body, self.setting, solid)
         self.design_time_s += time.perf_counter() - t0
-        if unmet(numbers, self.setting):
+        if why := unmet(numbers, self.setting):
+            self.recarve_outcome = f"first carving kept: the re-carve misses the goal ({why})"
             return False
         comm = self.loaded.mesh.comm
         self.recarved_cells = comm.allreduce(int(np.sum(solid != self.solid)), op=MPI.SUM)
         self.body, self.solid, self.on_target = body, solid, numbers
+        self.weights = "rest volumes of the first rest shape"
+        self.recarve_outcome = (f"changed {self.recarved_cells} cells: rest shape designed again"
+                                if self.recarved_cells else "the same carving")
         if P is not None and self.timing is not None:
             self.timing = self.timing.add(P.timing)
         return self.recarved_cells > 0
@@ -131,16 +138,21 @@ class Carving:
         factor, density = self._cell_values(mesh, void)
         return {"extra": {"stiffness_factor": factor}, "density": density}
 
-    def write_void(self, out: Path, v: fem.Function) -> None:
-        """void.stl: the carved cells' surface on the REST shape (target + v), normals into the void."""
+    def write_void(self, out: Path, v: fem.Function) -> str | None:
+        """void.stl: the carved cells' surface on the REST shape (target + v), normals into the void. A write
+        error becomes the returned problem on every rank (never rank 0's traceback while the others wait)."""
         mesh = self.loaded.mesh
         gathered = fields.gather_mesh(mesh, fields.node_values(v))
         flags = fields.gather_cell_values(mesh, self.carved)
+        problem = None
         if mesh.comm.rank == 0:
             points, cells, _ = gathered
             void = boundary_faces(cells[flags]) if flags.any() else np.empty((0, 3), dtype=np.int64)
-            write_stl(out / "void.stl", points, void[:, ::-1], "carved void")
-        mesh.comm.barrier()
+            try:
+                write_stl(out / "void.stl", points, void[:, ::-1], "carved void")
+            except OSError as e:
+                problem = f"cannot write the void surface: {e}"
+        return mesh.comm.bcast(problem, root=0)
 
     def sagged(self, static) -> tuple[dict, dict, Body, np.ndarray]:
         """The stance of the forward check's result: the carved rest mesh it loaded (its void group), each
@@ -162,11 +174,13 @@ class Carving:
 
 def rest_volume_ratios(v: fem.Function) -> np.ndarray:
     """Per owned cell of the target mesh: its rest volume over its target volume, int det(I + grad v) dx over
-    int 1 dx (exact: det is a polynomial of degree 3 (p - 1) in each straight-sided cell)."""
+    int 1 dx, exact: on a reference cell the integrand is det(dX/dxi) of the rest map, of degree 3 (p - 1) in a
+    straight-sided tetrahedron and 3p - 1 in each direction of a hexahedron (Qp)."""
     mesh = v.function_space.mesh
     Q = fem.FunctionSpace(mesh, ("DG", 0))
     w = ufl.TestFunction(Q)
-    q = max(1, 3 * (v.function_space.ufl_element().degree() - 1))
+    p = v.function_space.ufl_element().degree()
+    q = 3 * p - 1 if mesh.topology.cell_name() == "hexahedron" else max(1, 3 * (p - 1))
     dx = ufl.dx(metadata=quadrature.metadata(mesh.topology.cell_name(), q))
     n = mesh.topology.index_map(3).size_local
     dofs = Q.dofmap.list.array[:n]
@@ -186,6 +200,8 @@ def design_carved(scene: Scene, material, loaded: LoadedMesh, solve: Callable) -
     cut = carve_on_target(scene, loaded)
     res = solve(scene, material, loaded, **cut.design_fields())
     cut.inverse_solves = 1
+    if not res.converged:
+        cut.recarve_outcome = "not run: no rest shape"
     if res.converged and scene.balance.goal != "check" and cut.recarve(rest_volume_ratios(res.v)):
         res = solve(scene, material, loaded, **cut.design_fields())
         cut.inverse_solves = 2
@@ -210,13 +226,9 @@ def carve_on_target(scene: Scene, loaded: LoadedMesh) -> Carving:
     return Carving(scene, loaded, body, st, solid, numbers, timing, time.perf_counter() - t0)
 
 
-NUMBERS = ("mass", "center_of_mass", "carved_fraction", "stability_margin", "toppling_angle_deg", "stands",
-           "meets_margin", "support_polygon", "spin_ratio", "metacentric_height", "com_distance_from_axis",
-           "com_depth_below_center", "max_displacement")
-
-
 def _pick(numbers: dict) -> dict:
-    return {k: numbers[k] for k in NUMBERS if k in numbers}
+    """evaluate()'s numbers as results.json holds them (all of them: each goal is judged by its own)."""
+    return {k: v for k, v in numbers.items() if k != "deformed"}
 
 
 def check_stance(carving: Carving, static, out: Path, title: str, picture_too: bool) -> tuple[dict, list]:
@@ -229,7 +241,8 @@ def check_stance(carving: Carving, static, out: Path, title: str, picture_too: b
                "carvable_cells": comm.allreduce(int(carving.body.carvable.sum())),
                "carved_cells": comm.allreduce(int(carving.carved.sum())),
                "carved_fraction": carving.on_target["carved_fraction"], "mass_on_target": carving.on_target["mass"],
-               "recarved_cells": carving.recarved_cells, "inverse_solves": carving.inverse_solves,
+               "recarved_cells": carving.recarved_cells, "recarve": carving.recarve_outcome,
+               "inverse_solves": carving.inverse_solves, "on_target_weights": carving.weights,
                "on_target": _pick(carving.on_target), "void_surface": "void.stl"}
     if carving.timing is not None:
         summary["lp"] = {"setup_s": carving.timing.setup_s, "solve_s": carving.timing.solve_s,

@@ -105,6 +105,10 @@ def check_carving(scene) -> None:
     if scene.several_materials:
         raise InputError("balance: carving in an inverse scene takes one [material] (the carved rest mesh's "
                          "volume groups are \"solid\" and \"void\")")
+    load_g = next((ld.g for ld in scene.load if ld.type == "gravity"), None)
+    if b.gravity is not None and load_g is not None and list(b.gravity) != list(load_g):
+        raise InputError(f"balance.gravity = {list(b.gravity)}: differs from the gravity load's g = {list(load_g)}, "
+                         "which sags the part; the stance is judged under that one (leave balance.gravity out)")
     _check(scene, elastic=True)
 
 
