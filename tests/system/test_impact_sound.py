@@ -114,3 +114,22 @@ def test_the_oscillator_recursion_is_exact_for_a_step_force():
         ref = F / w[i] ** 2 * (1 - e * (np.cos(wd * t) + z[i] * w[i] / wd * np.sin(wd * t)))
         assert np.abs(q[i] - ref).max() < 1e-10 * np.abs(ref).max()      # across the held force too
         assert np.abs(v[i] - F / (w[i] * math.sqrt(1 - z[i] ** 2)) * e * np.sin(wd * t)).max() < 1e-9 * F / w[i]
+
+
+def test_the_oscillators_follow_an_ode_solve_of_a_half_sine_pulse_off_the_audio_grid():
+    """A contact-like pulse, sin(pi t / T) over T = 0.25 ms, known at 5 us steps (not on the 44.1 kHz grid: the
+    sub-steps resample it), against scipy's DOP853 on the same piecewise-linear force: the first-order hold's
+    ramp term and the sub-steps at work, within 2e-3 of the response's size (the resampling, not round-off)."""
+    from scipy.integrate import solve_ivp
+    w, z = np.array([2 * math.pi * 580.0, 2 * math.pi * 7600.0]), np.array([0.002, 0.004])
+    times = np.arange(0.0, 0.4e-3 + 1e-12, 5e-6)
+    pulse = np.where(times <= 0.25e-3, np.sin(math.pi * times / 0.25e-3), 0.0) * 1e3
+    forces = np.column_stack([pulse, 0.5 * pulse])
+    q, _ = modal_response(times, forces, w, z, 2e-3, 44100)
+    t = np.arange(q.shape[1]) / 44100
+    for i in range(2):
+        f = lambda s, y, i=i: [y[1], np.interp(s, times, forces[:, i]) - 2 * z[i] * w[i] * y[1] - w[i] ** 2 * y[0]]  # noqa: E731
+        ref = solve_ivp(f, (0.0, t[-1]), [0.0, 0.0], method="DOP853", t_eval=t, rtol=1e-11, atol=1e-16,
+                        max_step=1e-6).y[0]
+        assert np.abs(ref).max() > 0
+        assert np.abs(q[i] - ref).max() < 2e-3 * np.abs(ref).max()           # measured 2e-4, 6e-4

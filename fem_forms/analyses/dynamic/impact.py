@@ -18,7 +18,7 @@ from pathlib import Path
 from mpi4py import MPI
 import numpy as np
 
-from fem_forms.errors import SolveError
+from fem_forms.errors import InputError, SolveError
 from fem_forms.model import build_model
 from fem_forms.modes import solve_modal
 from fem_forms.output import impact_sound, sound
@@ -72,9 +72,13 @@ def free_modes(system, spec):
     modal = ModalSpec(count=spec.count) if spec.count is not None else ModalSpec(up_to=spec.up_to)
     mscene = replace(scene, analysis="modal", modal=modal, sound=None, contact=None, fracture=None, thermal=None)
     model = build_model(mscene, loaded=system.model.loaded)
-    if not np.array_equal(model.V.tabulate_dof_coordinates(), system.model.V.tabulate_dof_coordinates()):
-        raise SolveError("impact sound: the modal space's dofs differ from the run's")   # cannot happen on one mesh
-    return solve_modal(mscene, model=model)
+    same = np.array_equal(model.V.tabulate_dof_coordinates(), system.model.V.tabulate_dof_coordinates())
+    if not model.mesh.comm.allreduce(same, op=MPI.LAND):       # every rank raises, or none (cannot happen)
+        raise SolveError("impact sound: the modal space's dofs differ from the run's")
+    try:
+        return solve_modal(mscene, model=model)
+    except InputError as e:               # e.g. more modes below up_to than the solver keeps: known only now
+        raise SolveError(f"impact sound: [sound] up_to / count: {e}") from None
 
 
 def impact_entry(result, recorder: ImpactRecorder, spec, out: Path) -> dict:
@@ -125,13 +129,28 @@ def impact_entry(result, recorder: ImpactRecorder, spec, out: Path) -> dict:
     if spec.listener is not None:
         entry["listener"] = {"point": spec.listener, "air_density": spec.air_density,
                              "speed_of_sound": spec.speed_of_sound}
-    if comm.rank == 0:
-        t = np.asarray(recorder.times)            # the sound starts at the first recorded step (a --restart's)
-        q, v = impact_sound.modal_response(t - t[0], g, omega[keep], zeta[keep], spec.duration, spec.sample_rate)
-        signal = impact_sound.heard(q, v, omega[keep], weights)
-        sound.write_wav(out / WAV, signal, spec.sample_rate)
-        rate, pcm = sound.read_wav(out / WAV)
-        entry["peaks_hz"] = sound.spectrum_peaks(pcm, rate)
-        sound.spectrogram_png(out / PICTURE, pcm, rate, f_hz[keep], f"{system.scene.title}: impact")
-    entry["peaks_hz"] = comm.bcast(entry["peaks_hz"], root=0)
+    failed = None
+    if comm.rank == 0:                            # a failure here is every rank's (never rank 0's alone)
+        try:
+            _synthesize(recorder, g, omega[keep], zeta[keep], weights, spec, out, entry, f_hz[keep],
+                        system.scene.title)
+        except Exception as e:                    # noqa: BLE001 (the run's caller turns it into one warning)
+            failed = f"{type(e).__name__}: {(str(e).strip().splitlines() or [''])[0]}"
+    failed, entry["peaks_hz"] = comm.bcast((failed, entry["peaks_hz"]), root=0)
+    if failed:
+        raise SolveError(f"impact sound: {failed}")
     return entry
+
+
+def _synthesize(recorder: ImpactRecorder, g: np.ndarray, omega: np.ndarray, zeta: np.ndarray, weights: np.ndarray,
+                spec, out: Path, entry: dict, f_hz: np.ndarray, title: str) -> None:
+    """On rank 0: the oscillators at the audio rate, impact.wav, its spectrum peaks and spectrogram."""
+    t = np.asarray(recorder.times)                # the sound starts at the first recorded step (a --restart's)
+    q, v = impact_sound.modal_response(t - t[0], g, omega, zeta, spec.duration, spec.sample_rate)
+    if spec.listener is not None and len(g):      # a force still held at the end bends the part statically:
+        q = q - (g[-1] / omega**2)[:, None]       # that deflection radiates nothing (pressure needs motion)
+    signal = impact_sound.heard(q, v, omega, weights)
+    sound.write_wav(out / WAV, signal, spec.sample_rate)
+    rate, pcm = sound.read_wav(out / WAV)
+    entry["peaks_hz"] = sound.spectrum_peaks(pcm, rate)
+    sound.spectrogram_png(out / PICTURE, pcm, rate, f_hz, f"{title}: impact")

@@ -233,6 +233,10 @@ class ContactTerm(ArrayTerm):
         C.assemble()
         A.axpy(1.0, C, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
         C.destroy()
+        # the widening axpy (collective: every rank is here) resets A's options: new nonzeros allowed again on
+        # every rank, or the obstacle blocks that follow (add_entries) would allow them on some ranks only, and
+        # MatAssemblyEnd's collective steps then differ between ranks (2 ranks hung there)
+        A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
 
     def _add_blocks(self, A: PETSc.Mat, nodes: np.ndarray, blocks: np.ndarray, constrained: np.ndarray) -> None:
         """One 3x3 block per surface node on the diagonal of A (in every tangent's pattern)."""
