@@ -47,29 +47,39 @@ def free_ring(q0: np.ndarray, v0: np.ndarray, omega: np.ndarray, zeta: np.ndarra
 def modal_response(times: np.ndarray, forces: np.ndarray, omega: np.ndarray, zeta: np.ndarray, duration: float,
                    sample_rate: int) -> tuple[np.ndarray, np.ndarray]:
     """q and q' (m, n) at the n = duration x sample_rate audio samples t = j / sample_rate of the oscillators
-    at rest at t = times[0] = 0, driven by `forces` (steps, m), linear between the `times`, held after them."""
+    at rest at t = times[0] = 0, driven by `forces` (steps, m), linear between the `times`, held after them.
+    Only the span where a force acts is stepped (at rest before it, a closed-form ring after it): a long fall
+    or flight costs nothing."""
     times, forces = np.asarray(times, float), np.asarray(forces, float).reshape(len(times), -1)
     n = int(round(duration * sample_rate))
     m = len(omega)
+    q, v = np.zeros((m, n)), np.zeros((m, n))
+    acting = np.flatnonzero(np.any(forces != 0.0, axis=1))
+    if not len(acting):
+        return q, v
+    first, last = max(acting[0] - 1, 0), min(acting[-1] + 1, len(times) - 1)
+    start = min(n, int(math.floor(times[first] * sample_rate)))      # the oscillators rest until this sample
+    times, forces = times[first:last + 1], forces[first:last + 1]
     shortest = float(np.diff(times).min()) if len(times) > 1 else 1.0 / sample_rate
     k = int(min(MAX_SUBSTEPS, max(1, math.ceil(1.0 / (sample_rate * shortest) - 1e-9))))
     h = 1.0 / (sample_rate * k)
     forced = min(n, int(math.ceil(times[-1] * sample_rate)) + 1)     # samples until the force is held
-    fine = np.arange((forced - 1) * k + 1) * h
-    g = np.stack([np.interp(fine, times, forces[:, i]) for i in range(m)], axis=1) if m else np.zeros((len(fine), 0))
+    fine = start / sample_rate + np.arange(max(forced - 1 - start, 0) * k + 1) * h
+    g = np.stack([np.interp(fine, times, forces[:, i], left=0.0) for i in range(m)], axis=1) if m \
+        else np.zeros((len(fine), 0))
     Phi, G0, G1 = first_order_hold(omega, zeta, h)
-    q, v = np.zeros((m, n)), np.zeros((m, n))
     x = np.zeros((m, 2))
     for j in range(len(fine) - 1):
         x = np.einsum("mab,mb->ma", Phi, x) + G0 * g[j][:, None] + G1 * ((g[j + 1] - g[j]) / h)[:, None]
         if (j + 1) % k == 0:
-            q[:, (j + 1) // k], v[:, (j + 1) // k] = x[:, 0], x[:, 1]
-    if forced < n:                       # held force g_end: a static offset g_end / omega^2 and a free ring
+            q[:, start + (j + 1) // k], v[:, start + (j + 1) // k] = x[:, 0], x[:, 1]
+    end = max(forced, start + 1)
+    if end < n:                          # held force g_end: a static offset g_end / omega^2 and a free ring
         g_end = g[-1] if len(g) else np.zeros(m)
         static = g_end / omega**2
-        tau = np.arange(1, n - forced + 1) / sample_rate
+        tau = np.arange(1, n - end + 1) / sample_rate
         ring_q, ring_v = free_ring(x[:, 0] - static, x[:, 1], omega, zeta, tau)
-        q[:, forced:], v[:, forced:] = ring_q + static[:, None], ring_v
+        q[:, end:], v[:, end:] = ring_q + static[:, None], ring_v
     return q, v
 
 
