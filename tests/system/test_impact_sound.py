@@ -11,7 +11,7 @@ import pytest
 
 from fem_forms.cli import main
 from fem_forms.output.impact_sound import modal_response
-from helpers import MPIRUN, mpirun, run_scene, toml_dumps, with_
+from helpers import mpirun, run_scene, toml_dumps, with_
 
 L, T, E, RHO = 0.2, 0.01, 70e9, 2700.0
 BETA_L = (4.730, 7.853, 10.996)
@@ -56,7 +56,7 @@ def test_the_impact_rings_at_the_bending_modes(tmp_path):
     assert peaks[np.argmax(level)] == pytest.approx(euler_bernoulli()[0], rel=0.03)   # the first one is loudest
 
 
-@pytest.mark.skipif(MPIRUN is None, reason="no mpirun")
+@pytest.mark.mpi
 def test_two_ranks_write_the_same_impact_wav(tmp_path):
     """The whole run on 2 ranks: the march with contact (it hung in the first tangent's assembly before the array
     terms allowed new nonzeros on every rank), the modes, the modal forces summed over each rank's surface nodes,
