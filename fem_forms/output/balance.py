@@ -5,12 +5,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from dolfinx import fem
 from mpi4py import MPI
 import numpy as np
 
 from fem_forms.design.support import ground_frame
-from fem_forms.output.fields import gather_mesh, write_fields
+from fem_forms.output.fields import cell_function, gather_mesh, write_fields
 from fem_forms.output.stl import write_stl
 
 # faces of a tetrahedron and of a VTK-ordered hexahedron, outward for a positively oriented cell
@@ -30,18 +29,10 @@ def boundary_faces(cells: np.ndarray) -> np.ndarray:
     return once
 
 
-def density_function(mesh, density: np.ndarray) -> fem.Function:
-    f = fem.Function(fem.FunctionSpace(mesh, ("DG", 0)), name="density")
-    n = len(density)
-    f.x.array[f.function_space.dofmap.list.array[:n]] = density
-    f.x.scatter_forward()
-    return f
-
-
 def write_outputs(out: Path, mesh, density: np.ndarray, carved: np.ndarray, shift=None) -> dict:
     """void.stl, outer.stl (rank 0, from the gathered mesh), density.xdmf, and when cells were carved
     solid.vtu (the cells left solid: the part as built, a mesh any analysis can load); their names."""
-    write_fields(out / "density.xdmf", mesh, [density_function(mesh, density)])
+    write_fields(out / "density.xdmf", mesh, [cell_function(mesh, density, "density")])
     flags = mesh.comm.gather(carved, root=0)
     any_carved = mesh.comm.allreduce(bool(carved.any()), op=MPI.LOR)
     g = gather_mesh(mesh)

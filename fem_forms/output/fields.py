@@ -19,6 +19,15 @@ def p1_interpolant(f: fem.Function, name: str | None = None) -> fem.Function:
     return g
 
 
+def cell_function(mesh, values: np.ndarray, name: str) -> fem.Function:
+    """A DG0 Function holding `values` on the mesh's first len(values) local cells (owned, maybe ghosts too);
+    ghosts then take their owners' values."""
+    f = fem.Function(fem.FunctionSpace(mesh, ("DG", 0)), name=name)
+    f.x.array[f.function_space.dofmap.list.array[:len(values)]] = values
+    f.x.scatter_forward()
+    return f
+
+
 def write_fields(path: Path, mesh, functions: list) -> None:
     """One XDMF file (+ .h5) with the mesh and the given P1/DG0 functions, for ParaView."""
     with io.XDMFFile(mesh.comm, str(path), "w") as xdmf:

@@ -43,14 +43,6 @@ from fem_forms.scene.analyses.balance import fill_stiffness
 SOLID, VOID = "solid", "void"        # the carved rest mesh's volume groups
 
 
-def _dg0(mesh, cells: np.ndarray, values: np.ndarray, name: str) -> fem.Function:
-    """A DG0 Function with `values` on the local `cells` (ghosts taken from their owners)."""
-    f = fem.Function(fem.FunctionSpace(mesh, ("DG", 0)), name=name)
-    f.x.array[f.function_space.dofmap.list.array[cells]] = values
-    f.x.scatter_forward()
-    return f
-
-
 @dataclass
 class Carving:
     """The carving designed on the target shape: one rank's cells, their solid fractions, the LP's numbers."""
@@ -108,15 +100,14 @@ class Carving:
     def _cell_values(self, mesh, void: np.ndarray) -> tuple[fem.Function, np.ndarray]:
         """The stiffness factor (DG0) and the density per local cell, given which local cells are void."""
         b = self.setting.spec
-        n = len(void)
-        factor = _dg0(mesh, np.arange(n), np.where(void, fill_stiffness(b), 1.0), "stiffness_factor")
+        factor = fields.cell_function(mesh, np.where(void, fill_stiffness(b), 1.0), "stiffness_factor")
         return factor, np.where(void, b.fill_density, self.scene.material.rho)
 
     def design_fields(self) -> dict:
         """What the inverse design takes: the stiffness factor and the density on the target mesh."""
         mesh = self.loaded.mesh
-        factor = _dg0(mesh, np.arange(len(self.body.ids)),
-                      stiffness_factors(self.body, self.solid, fill_stiffness(self.setting.spec)), "stiffness_factor")
+        factors = stiffness_factors(self.body, self.solid, fill_stiffness(self.setting.spec))
+        factor = fields.cell_function(mesh, factors, "stiffness_factor")
         return {"extra": {"stiffness_factor": factor},
                 "density": self.body.density(self.solid, self.setting.rho, self.setting.spec.fill_density)}
 
