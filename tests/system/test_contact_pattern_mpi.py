@@ -38,7 +38,9 @@ if comm.rank == 0:                                     # an obstacle's block on 
     add_entries(A, np.array([1]), np.array([10]), np.array([2.0]), np.empty(0, PETSc.IntType))
 A.assemble()
 assert A.getValue(1, 10) == 2.0 if comm.rank == 0 else True
-print("assembled", comm.rank, flush=True)
+done = comm.tompi4py().allreduce(1)                  # every rank past the assembly; one line from rank 0
+if comm.rank == 0:
+    print(f"assembled on {done} ranks", flush=True)
 """
 
 
@@ -52,4 +54,4 @@ def test_contact_blocks_after_a_widened_pattern_assemble_on_two_ranks():
     except subprocess.TimeoutExpired:
         pytest.fail("two ranks hung in MatAssemblyEnd after contact blocks were added")
     assert proc.returncode == 0, proc.stderr
-    assert sorted(proc.stdout.split()) == ["0", "1", "assembled", "assembled"]
+    assert proc.stdout.strip() == "assembled on 2 ranks"        # (two ranks' own lines came interleaved)
