@@ -127,14 +127,10 @@ class Bordered:
         drv._jacobian(None, self._xf, drv.A, drv.A)
         self._assemble_border(self.R_p, self.Rp_vecs)
         self._assemble_border(self.c_u, self.cu_vecs)
-        if drv.multigrid:                                  # multigrid builds from an AIJ copy
-            if drv.P is None and drv.near_nullspace is not None:
-                drv.P = drv.A.convert("aij", PETSc.Mat())
-                drv.P.setNearNullSpace(drv.near_nullspace())
-            drv.P = drv.A.convert("aij", drv.P if drv.P is not None else PETSc.Mat())
-            if drv.pmg is not None:
-                drv.pmg.refresh(self.ksp, drv.P)
-        self.ksp.setOperators(drv.A, drv.P if drv.multigrid else drv.A)
+        P = drv.preconditioning_matrix(drv.A)             # multigrid's AIJ or LDL^T's SBAIJ copy, or A
+        if drv.pmg is not None:
+            drv.pmg.refresh(self.ksp, P)
+        self.ksp.setOperators(drv.A, P)
         self.ksp.setUp()
         self.Cp = np.array([[0.0 if f is None else float(f) if isinstance(f, (int, float))
                              else self.comm.allreduce(fem.assemble_scalar(f), op=MPI.SUM) for f in row]

@@ -18,7 +18,7 @@ from petsc4py import PETSc
 import ufl
 
 from fem_forms import progress
-from fem_forms.solvers import bounds as vi, linear, pmultigrid
+from fem_forms.solvers import bounds as vi, linear, pc_matrix, pmultigrid
 from fem_forms.solvers.linear import roundoff_floor  # noqa: F401 (snes.roundoff_floor, used by the inverse check)
 from fem_forms.solvers.array_terms import ArrayTerms
 from fem_forms.solvers.bordered import Bordered
@@ -105,14 +105,17 @@ class SNESDriver:
         merged.update(self.user_options)
         pmultigrid.drop_unused(merged, self.user_options)
         vi.options(merged, self.user_options, self.bounds)     # bounded: vinewtonrsls and its line search
-        # BAIJ assembles 2.5-3x faster, MUMPS takes it, multigrid builds from an AIJ copy (self.P); others get AIJ
+        pc_matrix.prefer_ldlt(merged, self.user_options, symmetric=self.p.energy is not None)  # an energy's tangent
+        # BAIJ assembles 2.5-3x faster, MUMPS takes it (LDL^T from an SBAIJ copy), multigrid builds from an AIJ
+        # copy (self.P); others get AIJ
         mumps = merged.get("pc_type") in ("lu", "cholesky") and merged.get("pc_factor_mat_solver_type") == "mumps"
         self.multigrid = merged.get("pc_type") in ("gamg", "hypre", "mg")
         self.pmg = pmultigrid.for_driver(getattr(self, "pmg", None), V, merged)
         if getattr(self, "P", None) is not None:
             self.P.destroy()
-        self.P = None
         block = (mumps or self.multigrid) and not self.arrays.widens      # a widened pattern: AIJ (MatAXPY)
+        fmt = pc_matrix.copy_format(merged, "baij" if block else "aij")
+        self.P = pc_matrix.PreconditioningMatrix(fmt, self.near_nullspace) if fmt else None
         self.A = fpetsc.create_matrix(self.a, "baij" if block else "aij")
         self._A_norm = None
         if self.bordered is not None:
@@ -124,7 +127,8 @@ class SNESDriver:
         snes = PETSc.SNES().create(self.comm)
         snes.setOptionsPrefix(self.prefix)
         snes.setFunction(self._residual, self.b)
-        snes.setJacobian(self._jacobian, self.A)
+        # PCSetFromOptions asks MUMPS for a factor of the preconditioning matrix already: one of the copy's format
+        snes.setJacobian(self._jacobian, self.A, self.A if self.P is None else self.P.placeholder(self.A))
         if self.E is not None:
             snes.setObjective(self._objective)
         snes.setMonitor(self._monitor)
@@ -186,25 +190,19 @@ class SNESDriver:
         A.assemble()
         self.arrays.add_hessian(x, A)
         self._A_norm = None                      # the round-off floor's |K|_inf, taken once per tangent
-        if snes is not None and self.multigrid:
+        if snes is not None and self.P is not None:
             if self.pc_reuse is None or self.pc_reuse.decide():
-                self._refresh_multigrid_matrix(snes, A)
+                P, new = self.P.refresh(A)
+                if new:        # handed to SNES inside its Jacobian callback: it gives P to the KSP right after
+                    snes.setJacobian(self._jacobian, A, P)
+                if self.pmg is not None:
+                    self.pmg.refresh(snes.getKSP(), P)
         self.assembly_time += time.perf_counter() - t
 
-    def _refresh_multigrid_matrix(self, snes, A) -> None:
-        """Copy the block tangent into the AIJ matrix multigrid builds from (0.2 of an AIJ assembly,
-        measured; only when the hierarchy is rebuilt). The first copy is handed to SNES here, inside its
-        Jacobian callback: SNES gives its preconditioning matrix to the KSP right after this call."""
-        if self.P is None:
-            self.P = PETSc.Mat()
-            A.convert("aij", self.P)
-            if self.near_nullspace is not None:
-                self.P.setNearNullSpace(self.near_nullspace())
-            snes.setJacobian(self._jacobian, A, self.P)
-        else:
-            A.convert("aij", self.P)
-        if self.pmg is not None:
-            self.pmg.refresh(snes.getKSP(), self.P)
+    def preconditioning_matrix(self, A: PETSc.Mat) -> PETSc.Mat:
+        """The matrix the preconditioner is built from, with the tangent A's current values: A itself, or its
+        copy in the format the preconditioner needs (pc_matrix.py); a solver outside SNES (bordered.py)."""
+        return A if self.P is None else self.P.refresh(A)[0]
 
     def _objective(self, snes, x) -> float:
         t = time.perf_counter()

@@ -2,11 +2,8 @@
 the block of tests/system/scalar_block.py (mean x-displacement of the far face prescribed, the traction
 resultant its multiplier): against a scipy solve of the assembled system (linear), against load control
 with the resultant found by a secant iteration (neo-Hookean), under continuation with a rejected step
-(the scalar rolled back), on 2 ranks, and without scalars the driver main has, bit for bit."""
+(the scalar rolled back), and on 2 ranks."""
 import json
-import os
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -152,38 +149,6 @@ def test_two_ranks_give_the_serial_answer(tmp_path):
     el = abs(par["lam"] - float(lam.value)) / abs(float(lam.value))
     print(f"2 ranks: {par['iterations']} iteration(s), errors against serial u {eu:.1e}, lam {el:.1e}")
     assert par["reason"].startswith("CONVERGED") and eu < 1e-10 and el < 1e-10
-
-
-_PLAIN = """
-import json, sys
-from system.array_spring import CASES, spring_problem
-from fem_forms.solvers.snes import SNESDriver
-p = spring_problem(False, **CASES["clamped P1"])
-drv = SNESDriver(p)
-rec = drv.solve_step()
-print(json.dumps({"iterations": rec.iterations, "history": [float(r).hex() for r in rec.residuals],
-                  "u": [float(x).hex() for x in p.u.x.array], "bordered": getattr(drv, "bordered", None) is None,
-                  "line_search": drv.options["snes_linesearch_type"]}))
-"""
-
-
-def test_without_scalars_the_driver_is_main_s_bit_for_bit(tmp_path):
-    """The same static solve (array_spring's clamped P1 block, energy line search) with this branch's driver
-    and with main's (git archive of main), in subprocesses: iterations, residual history and answer equal."""
-    tree = tmp_path / "main"
-    tree.mkdir()
-    archive = subprocess.run(["git", "-C", str(ROOT), "archive", "main", "fem_forms", "tests"],
-                             capture_output=True, check=True).stdout
-    subprocess.run(["tar", "-x", "-C", str(tree)], input=archive, check=True)
-    runs = {}
-    for name, root in (("branch", ROOT), ("main", tree)):
-        env = dict(os.environ, PYTHONPATH=f"{root}:{root / 'tests'}", OPENBLAS_NUM_THREADS="1")
-        r = subprocess.run([sys.executable, "-c", _PLAIN], capture_output=True, text=True, env=env, cwd=root)
-        assert r.returncode == 0, r.stderr
-        runs[name] = json.loads(r.stdout.strip().splitlines()[-1])
-    print(f"without scalars: {runs['branch']['iterations']} Newton iterations on both, line search "
-          f"{runs['branch']['line_search']}")
-    assert runs["branch"] == runs["main"]
 
 
 def test_an_iterative_k_solve_gives_the_direct_answer():
