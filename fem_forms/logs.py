@@ -1,4 +1,5 @@
-"""Keep FFCx's just-in-time compilation quiet without touching anybody else's logging.
+"""FFCx's just-in-time compilation as a run needs it: quiet (without touching anybody else's logging), patient
+with a form another process is compiling, and leaving no lock behind when a compile is interrupted.
 
 What prints the compile log in this stack (measured with an empty XDG_CACHE_HOME, dolfinx 0.5.2, ffcx 0.5.0,
 setuptools 66): ffcx builds each new form with cffi, cffi runs setuptools' bundled distutils, and distutils
@@ -11,8 +12,10 @@ on the root logger: a filter on the root logger drops exactly those, and the use
 """
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
+from pathlib import Path
 
 _DISTUTILS_DIRS = (f"{os.sep}distutils{os.sep}", f"{os.sep}_distutils{os.sep}")
 
@@ -48,3 +51,30 @@ def patient_jit(seconds: int = JIT_WAIT_S) -> None:
     import dolfinx.jit
     doc = dolfinx.jit.DOLFINX_DEFAULT_JIT_PARAMETERS["timeout"][1]
     dolfinx.jit.DOLFINX_DEFAULT_JIT_PARAMETERS["timeout"] = (int(seconds), doc)
+
+
+def release_interrupted_compiles() -> None:
+    """A compile stopped by Ctrl-C or SIGTERM gives up its cache entry as a failed compile does. FFCx takes the
+    entry (the module's .c file, created first as a lock) and marks it failed (renamed .c.failed) only on an
+    Exception; KeyboardInterrupt and the CLI's Terminated are not Exceptions, so the lock stayed and the next
+    run needing that form waited the whole JIT timeout (900 s), then failed with TimeoutError (seen after killed
+    runs). SIGKILL still leaves the lock: no code runs. ``import fem_forms`` installs it."""
+    import ffcx.codegeneration.jit as fj
+    if getattr(fj._compile_objects, "releases_interrupted", False):
+        return
+    original = fj._compile_objects
+
+    def compile_objects(decl, ufl_objects, object_names, module_name, parameters, cache_dir, *args, **kwargs):
+        try:
+            return original(decl, ufl_objects, object_names, module_name, parameters, cache_dir, *args, **kwargs)
+        except Exception:
+            raise                                    # FFCx's own handler marks the entry failed
+        except BaseException:
+            lock = Path(cache_dir) / f"{module_name}.c"
+            if not lock.with_suffix(".c.cached").exists():      # finished already: the entry is good
+                with contextlib.suppress(OSError):
+                    os.replace(lock, lock.with_suffix(".c.failed"))
+            raise
+
+    compile_objects.releases_interrupted = True
+    fj._compile_objects = compile_objects

@@ -211,3 +211,47 @@ def test_a_run_waits_for_a_form_another_process_is_compiling(tmp_path):
     for p in procs:
         out, err = p.communicate(timeout=120)
         assert p.returncode == 0 and out.strip() == "ok", err[-2000:]
+
+
+def test_an_interrupted_compile_leaves_no_lock_for_the_next_run(tmp_path):
+    """Ctrl-C while FFCx compiles a new form (a real SIGINT, delivered while the C compiler would run): the cache
+    entry is marked failed, not left as a lock, so the next run compiles the form at once instead of waiting the
+    JIT timeout out and failing with TimeoutError (here shortened to 5 s so that a leftover lock shows)."""
+    import subprocess
+    import sys
+    import textwrap
+    script = textwrap.dedent(f"""
+        import os, signal, sys, time
+        sys.path.insert(0, {str(ROOT)!r})
+        import fem_forms, dolfinx.jit, cffi
+        from dolfinx import fem, mesh
+        from mpi4py import MPI
+        import ufl
+        dolfinx.jit.DOLFINX_DEFAULT_JIT_PARAMETERS["cache_dir"] = ({str(tmp_path / 'jit')!r}, "")
+        dolfinx.jit.DOLFINX_DEFAULT_JIT_PARAMETERS["timeout"] = (5, "")
+        m = mesh.create_unit_cube(MPI.COMM_SELF, 1, 1, 1)
+        V = fem.FunctionSpace(m, ("Lagrange", 1))
+        u = fem.Function(V)
+        if sys.argv[1] == "interrupted":          # the form's compile, not the element's
+            def compile_until_interrupted(self, *a, **k):
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(30)
+            cffi.FFI.compile = compile_until_interrupted
+        try:
+            fem.form(u * u * u * ufl.dx)
+        except KeyboardInterrupt:
+            print("interrupted")
+        else:
+            print("ok")
+    """)
+    path = tmp_path / "jit_interrupted.py"
+    path.write_text(script)
+    runs = {}
+    for kind in ("interrupted", "again"):
+        p = subprocess.run([sys.executable, str(path), kind], capture_output=True, text=True, timeout=300)
+        runs[kind] = p
+        assert p.returncode == 0, p.stderr[-2000:]
+    assert runs["interrupted"].stdout.strip() == "interrupted", runs["interrupted"].stderr[-2000:]
+    assert runs["again"].stdout.strip() == "ok", runs["again"].stderr[-2000:]
+    entries = list((tmp_path / "jit").glob("libffcx_forms_*.c"))
+    assert entries and all(c.with_suffix(".c.cached").exists() for c in entries), entries
