@@ -2,7 +2,7 @@
 `fem-forms schema [--out FILE]`.
 
 Exit status: 0 solved, 2 bad input (one line on stderr naming the key), 3 no convergence (a static limit
-point included), 130 interrupted (Ctrl-C), 143 terminated (SIGTERM); an interrupt prints one line,
+point included), 1 a form's compile that never finished (another process's, or a killed run's lock), 130 interrupted (Ctrl-C), 143 terminated (SIGTERM); an interrupt prints one line,
 "fem-forms: interrupted", no traceback, and a static run leaves its last accepted load step and a results.json
 with "interrupted": true (output/interrupts.py, also under mpirun).
 Progress (load step, Newton iteration, residual, elapsed time) goes to stderr on rank 0 unless --quiet.
@@ -145,6 +145,12 @@ def main(argv: list[str] | None = None) -> int:
             page = manual_page(str(e)) if isinstance(e, InputError) else None
             print(f"fem-forms: error: {e}" + (f" (manual: {built(page)})" if page else ""), file=sys.stderr)
         return e.exit_status
+    except TimeoutError as e:     # FFCx waited out a form whose compile never finished (a killed run's lock)
+        if reporter:
+            reporter.close()
+        if rank == 0:
+            print(f"fem-forms: error: {' '.join(str(e).split())}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt as e:
         if reporter:
             reporter.close()
