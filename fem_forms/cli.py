@@ -2,8 +2,8 @@
 `fem-forms schema [--out FILE]`.
 
 Exit status: 0 solved, 2 bad input (one line on stderr naming the key), 3 no convergence (a static limit
-point included), 1 a form's compile that never finished (another process's, or a killed run's lock), 130 interrupted (Ctrl-C), 143 terminated (SIGTERM); an interrupt prints one line,
-"fem-forms: interrupted", no traceback, and a static run leaves its last accepted load step and a results.json
+point included), 1 a form whose compile never finished (a killed run's lock in the form cache), 130
+interrupted (Ctrl-C), 143 terminated (SIGTERM); an interrupt prints one line, "fem-forms: interrupted", no traceback, and a static run leaves its last accepted load step and a results.json
 with "interrupted": true (output/interrupts.py, also under mpirun).
 Progress (load step, Newton iteration, residual, elapsed time) goes to stderr on rank 0 unless --quiet.
 Results: results.json is written last and atomically, and a run removes an old results.json from its
@@ -20,7 +20,7 @@ from mpi4py import MPI
 
 from fem_forms.analyses import run_analysis
 from fem_forms.errors import InputError, SolveError
-from fem_forms.logs import quiet_jit
+from fem_forms.logs import quiet_jit, stale_compile_lock
 from fem_forms.output.interrupts import Terminated
 from fem_forms.output.progress_line import show_progress
 from fem_forms.output.results import forget_results
@@ -145,11 +145,14 @@ def main(argv: list[str] | None = None) -> int:
             page = manual_page(str(e)) if isinstance(e, InputError) else None
             print(f"fem-forms: error: {e}" + (f" (manual: {built(page)})" if page else ""), file=sys.stderr)
         return e.exit_status
-    except TimeoutError as e:     # FFCx waited out a form whose compile never finished (a killed run's lock)
+    except (TimeoutError, RuntimeError) as e:
+        if (lock := stale_compile_lock(e)) is None:
+            raise
         if reporter:
             reporter.close()
         if rank == 0:
-            print(f"fem-forms: error: {' '.join(str(e).split())}", file=sys.stderr)
+            print(f"fem-forms: error: a form's compile never finished (a run killed while compiling it left its lock "
+                  f"in the form cache): delete {lock} and run again", file=sys.stderr)
         return 1
     except KeyboardInterrupt as e:
         if reporter:

@@ -15,6 +15,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import os
+import re
 from pathlib import Path
 
 _DISTUTILS_DIRS = (f"{os.sep}distutils{os.sep}", f"{os.sep}_distutils{os.sep}")
@@ -78,3 +79,14 @@ def release_interrupted_compiles() -> None:
 
     compile_objects.releases_interrupted = True
     fj._compile_objects = compile_objects
+
+
+def stale_compile_lock(error: BaseException) -> str | None:
+    """The form-cache file to delete when `error` is FFCx giving up on a form whose compile never finished (a run
+    killed while compiling left its lock), else None. Serial runs see FFCx's TimeoutError; under MPI dolfinx
+    raises it again as a RuntimeError on every rank, naming the file on rank 0 only ("the form's .c file")."""
+    text = str(error)
+    if "JIT compilation timed out" not in text and "Compilation failed on root node" not in text:
+        return None
+    named = re.search(r"remove ([^\s)]+\.c)", text)
+    return named.group(1) if named else "the form's .c file"
