@@ -3,8 +3,9 @@
 
 Exit status: 0 solved, 2 bad input (one line on stderr naming the key), 3 no convergence (a static limit
 point included), 1 a form whose compile never finished (a killed run's lock in the form cache), 130
-interrupted (Ctrl-C), 143 terminated (SIGTERM); an interrupt prints one line, "fem-forms: interrupted", no traceback, and a static run leaves its last accepted load step and a results.json
-with "interrupted": true (output/interrupts.py, also under mpirun).
+interrupted (Ctrl-C), 143 terminated (SIGTERM); an interrupt prints one line, "fem-forms: interrupted", no
+traceback, and a static run leaves its last accepted load step and a results.json with "interrupted": true
+(output/interrupts.py, also under mpirun).
 Progress (load step, Newton iteration, residual, elapsed time) goes to stderr on rank 0 unless --quiet.
 Results: results.json is written last and atomically, and a run removes an old results.json from its
 output folder before it solves, so after an interrupted or failed rerun no results.json from an earlier
