@@ -6,8 +6,9 @@ indefinite with pivoting) instead of LU: half the factor's work and memory. MUMP
 or SBAIJ, not from the BAIJ the tangent is assembled as (BAIJ assembles 2.5-3x faster than AIJ, and dolfinx
 0.5.2 cannot assemble SBAIJ: it stores almost nothing); the BAIJ -> SBAIJ copy costs 0.009 s on a 60k-dof P2
 tangent serially, 0.03 s on a 33k-dof one on 2 ranks (PETSc converts row by row in parallel: 5 % of the PneuNet
-demo's solve, benchmarks/pneunet.md). Measured on a 31k-dof P2 neo-Hookean tangent (serial, medians of 3): BAIJ + LU 0.143 s assembly +
-1.261 s factor and solve; BAIJ -> SBAIJ + LDL^T 0.160 s + 0.757 s, the same solution to 3e-13."""
+demo's solve, benchmarks/pneunet.md). Measured on a 31k-dof P2 neo-Hookean tangent (serial, medians of 3):
+BAIJ + LU 0.143 s assembly + 1.261 s factor and solve; BAIJ -> SBAIJ + LDL^T 0.160 s + 0.757 s, the same solution
+to 3e-13."""
 from __future__ import annotations
 
 from typing import Callable
