@@ -330,7 +330,7 @@ class SNESDriver:
             iterations, krylov = iterations + its, krylov + kits
         self._set_state(self.x)
         return StepRecord(0.0, iterations, self._history,
-                          _REASONS.get(reason, str(reason)), reason > 0,
+                          _REASONS.get(reason, str(reason)), reason > 0 or self._stuck_at_equilibrium(reason),
                           krylov_iterations=krylov,
                           preconditioner_builds=self.pc_reuse.rebuilds - builds0 if self.pc_reuse else 0)
 
@@ -338,16 +338,13 @@ class SNESDriver:
         """SNES stopped on step length: near the answer the energy's change falls below its round-off,
         so the energy line search sees no decrease and takes a tiny step while the residual is still
         above what round-off allows (measured: 4.8e-5 left where 1e-9 was reachable). Full Newton steps
-        (no line search) converge quadratically from there: take up to 3 and keep them only if they
-        reduced the residual; with `polish_stuck` (staggered sub-solves) or a step-capping array term also after a
-        line search failed below 1e-6 of the load scale (measured: 1e-9 from a sub-solve's answer; contact 2e-9).
-        Returns (reason, Newton iterations, Krylov iterations) added."""
+        (no line search) converge quadratically from there: take up to 3, kept only if they reduced the residual;
+        also after a line search failed at an equilibrium (_stuck_at_equilibrium; measured: 1e-9 from a sub-solve's
+        answer; contact 2e-9). Returns (reason, Newton iterations, Krylov iterations) added."""
         if self.bounds is not None:       # a VI solve: setFromOptions resets its reduced KSP (PETSc error 60)
             return reason, 0, 0
         last = self._history[-1] if self._history else math.inf
-        near = (self.polish_stuck or self.arrays.caps) and last < 1e-6 * (getattr(self, "_load_scale", None) or 0.0)
-        stuck = near and reason == PETSc.SNES.ConvergedReason.DIVERGED_LINE_SEARCH
-        if not (stuck or reason == PETSc.SNES.ConvergedReason.CONVERGED_SNORM_RELATIVE) \
+        if not (self._stuck_at_equilibrium(reason) or reason == PETSc.SNES.ConvergedReason.CONVERGED_SNORM_RELATIVE) \
                 or last <= max(self.base_atol(), self.roundoff_floor(1.0)):
             return reason, 0, 0
         saved, history = self.x.copy(), list(self._history)
@@ -371,6 +368,14 @@ class SNESDriver:
         self._history = history
         saved.destroy()
         return reason, its, kits
+
+    def _stuck_at_equilibrium(self, reason: int) -> bool:
+        """Whether the energy line search failed on round-off with the residual below 1e-6 of the load scale
+        (acceptance.ACCEPTED's bar) where such stops are polished (`polish_stuck`, a step-capping term): an
+        equilibrium, kept when the polish does not improve it (rejecting it, 2 ranks took another frictional path)."""
+        last = self._history[-1] if self._history else math.inf
+        near = (self.polish_stuck or self.arrays.caps) and last < 1e-6 * (getattr(self, "_load_scale", None) or 0.0)
+        return near and reason == PETSc.SNES.ConvergedReason.DIVERGED_LINE_SEARCH
 
     def _set_line_search(self, kind: str) -> None:
         """petsc4py 3.18 has no SNESGetLineSearch: set the type through the options database, with every

@@ -172,7 +172,9 @@ def test_self_contact_and_a_floor_give_the_same_squeeze_on_two_ranks(tmp_path, r
         runs.append(json.loads((tmp_path / name / "results.json").read_text()))
     serial, two = runs
     assert two["mpi_ranks"] == 2 and two["intersection_free"]
-    # one path (ring_on_floor's 5 % steps): 5 runs on 2 ranks and serial within 4e-13, 3 more under 3x load
+    # one path (ring_on_floor's 5 % steps; 22 steps, 2 cut-backs near 0.95): serial and 2 ranks within 1e-8 (the
+    # last step ends after 34 or 36 Newton iterations); CI once saw -4.953 for -4.925 N: a line search that failed
+    # on round-off at 1e-8 was rejected and cut back (now accepted: SNESDriver._stuck_at_equilibrium)
     assert two["reactions"]["top"][2] == pytest.approx(serial["reactions"]["top"][2], rel=1e-6)
     assert two["contact"]["floor"]["force"][2] == pytest.approx(serial["contact"]["floor"]["force"][2], rel=1e-6)
     assert two["contact"]["self"]["active_points"] == serial["contact"]["self"]["active_points"]
