@@ -338,7 +338,7 @@ class SNESDriver:
         """SNES stopped on step length: near the answer the energy's change falls below its round-off,
         so the energy line search sees no decrease and takes a tiny step while the residual is still
         above what round-off allows (measured: 4.8e-5 left where 1e-9 was reachable). Full Newton steps
-        (no line search) converge quadratically from there: take up to 3, kept only if they reduced the residual;
+        (no line search) converge quadratically from there: take up to 3, kept if SNES converged and the residual fell;
         also after a line search failed at an equilibrium (_stuck_at_equilibrium; measured: 1e-9 from a sub-solve's
         answer; contact 2e-9). Returns (reason, Newton iterations, Krylov iterations) added."""
         if self.bounds is not None:       # a VI solve: setFromOptions resets its reduced KSP (PETSc error 60)
@@ -370,12 +370,12 @@ class SNESDriver:
         return reason, its, kits
 
     def _stuck_at_equilibrium(self, reason: int) -> bool:
-        """Whether the energy line search failed on round-off with the residual below 1e-6 of the load scale
-        (acceptance.ACCEPTED's bar) where such stops are polished (`polish_stuck`, a step-capping term): an
-        equilibrium, kept when the polish does not improve it (rejecting it, 2 ranks took another frictional path)."""
+        """Whether the energy line search failed on round-off below 1e-6 of the load scale (acceptance.ACCEPTED's bar)
+        in a solve _polish serves (`polish_stuck` or a step-capping term, no bounds): an equilibrium, accepted when the
+        polish did not converge (rejected, it sent 2 ranks down another frictional path than 1)."""
         last = self._history[-1] if self._history else math.inf
         near = (self.polish_stuck or self.arrays.caps) and last < 1e-6 * (getattr(self, "_load_scale", None) or 0.0)
-        return near and reason == PETSc.SNES.ConvergedReason.DIVERGED_LINE_SEARCH
+        return near and self.bounds is None and reason == PETSc.SNES.ConvergedReason.DIVERGED_LINE_SEARCH
 
     def _set_line_search(self, kind: str) -> None:
         """petsc4py 3.18 has no SNESGetLineSearch: set the type through the options database, with every

@@ -186,6 +186,6 @@ def test_a_line_search_that_fails_on_round_off_at_an_equilibrium_is_accepted():
     scale = drv.load_scale()
     rec = drv.solve_step()
     assert rec.reason == "DIVERGED_LINE_SEARCH" and rec.accepted
-    assert 10 * drv.base_atol() < rec.residuals[-1] < 1e-6 * scale     # measured 2.4e-7: polish did not converge
+    assert 10 * drv.base_atol() < rec.residuals[-1] < 1e-6 * scale     # 2.4e-7 of scale: the polish did not converge
     assert acceptance.why_rejected(drv, rec, load_scale=scale) is None
-    np.testing.assert_allclose(noisy.u.x.array, exact, rtol=0, atol=1e-6 * np.abs(exact).max())   # 2.4e-7
+    np.testing.assert_allclose(noisy.u.x.array, exact, rtol=0, atol=1e-6 * np.abs(exact).max())   # 2.4e-7 of max |u|
