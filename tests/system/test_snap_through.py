@@ -77,7 +77,9 @@ def pushed(tmp_path_factory):
     code, res, err, out = run_scene(tmp, d)
     assert code == 0, err
     rows = table(out / "probes.csv")
-    assert len(rows) == 30                                     # max_step: the path sampled evenly
+    # max_step: the path sampled evenly; the quadratic predictor starts one step so close to equilibrium (residual
+    # 5.5e-6 before any Newton step) that the energy line search fails on round-off and that step is halved: 31
+    assert len(rows) in (30, 31)
     return np.r_[0.0, -rows["crown_uz"]], np.r_[0.0, -rows["crown_Fz"]]
 
 
