@@ -66,31 +66,31 @@ class MotionWriter:
 
 def write_gif(path: Path, frames: list, title: str, fps: int = 12, label: str = "t = {:.4g} s") -> None:
     """Animated GIF (matplotlib + pillow) of the deformed boundary, true scale; frames are (value, boundary
-    surface) pairs, each frame titled `title: label.format(value)`."""
+    surface) pairs, each frame titled `title: label.format(value)`. Each frame is rendered once (matplotlib's
+    FuncAnimation renders every frame twice on Agg): the rocking toy's 51 frames 6.1 -> 4.0 s, the same bytes."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from matplotlib.animation import FuncAnimation, PillowWriter
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+    from PIL import Image
 
     allx = np.vstack([X + d for _, (X, _, d) in frames])
     lo, hi = allx.min(axis=0), allx.max(axis=0)
     fig = plt.figure(figsize=(5, 4))
     ax = fig.add_subplot(projection="3d")
-
-    def draw(k):
+    images = []
+    for t, (X, polys, d) in frames:
         ax.clear()
-        t, (X, polys, d) = frames[k]
         ax.add_collection3d(Poly3DCollection((X + d)[polys], facecolor=(0.35, 0.55, 0.8),
                                              edgecolor=(0, 0, 0, 0.2), linewidths=0.2))
         ax.set_xlim(lo[0], hi[0]), ax.set_ylim(lo[1], hi[1]), ax.set_zlim(lo[2], hi[2])
         ax.set_box_aspect(np.maximum(hi - lo, 0.05 * (hi - lo).max()))
         ax.set_axis_off()
         ax.set_title(f"{title}: {label.format(t)}", fontsize=9)
-
-    anim = FuncAnimation(fig, draw, frames=len(frames))
-    anim.save(str(path), writer=PillowWriter(fps=fps))
+        fig.canvas.draw()
+        images.append(Image.fromarray(np.asarray(fig.canvas.buffer_rgba()).copy()))
     plt.close(fig)
+    images[0].save(path, save_all=True, append_images=images[1:], duration=int(1000 / fps), loop=0)
 
 
 def write_history_png(path: Path, result) -> None:
