@@ -3,7 +3,6 @@
 The full manual (NAFEMS LE1, the FEniCSx tutorial beam) runs with `verification/run.py`."""
 import importlib.util
 import sys
-import time
 
 from helpers import ROOT
 
@@ -16,14 +15,11 @@ _spec.loader.exec_module(verification)
 def test_fast_benchmarks_meet_their_tolerances(tmp_path):
     fast = [c for c in verification.CASES if c.fast]
     assert {"nafems_fv32", "uniaxial_tension", "modal_cantilever"} <= {c.name for c in fast}
-    t0 = time.perf_counter()
     rows = verification.run_cases(fast, tmp_path, echo=False)
-    elapsed = time.perf_counter() - t0
     assert len(rows) == sum(len(c.rows) for c in fast)
     bad = [f"{r['case']} {r['quantity']}: {r['status']} {r.get('note') or verification._fmt_err(r)}"
            for r in rows if r["status"] != "pass"]
     assert not bad, "\n".join(bad)
-    assert elapsed < 120, f"the fast set took {elapsed:.0f} s (budget about 60 s)"
 
 
 def test_a_missing_results_key_is_reported_not_available_never_passed(tmp_path):
