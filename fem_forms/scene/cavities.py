@@ -22,7 +22,7 @@ def cavity_rules(loads: list, analysis: str, control: str) -> list[str]:
                              f"{analysis!r}); give the cavity's pressure instead")
         if ld.volume is not None and control == "arc-length":
             raise InputError(f"load[{i}].volume: solver.control = 'arc-length' steps the load factor; a volume-"
-                             "controlled cavity already passes its limit points: use control = 'load'")
+                             "controlled cavity already passes its pressure's limit points: use control = 'load'")
     if control == "arc-length" and analysis != "static":
         raise InputError(f"solver.control = 'arc-length': for analysis = 'static' only (this scene's is {analysis!r})")
     return names
