@@ -12,6 +12,13 @@ pressure`, `chambers_volume`), else recorded here after each accepted step. Run:
 `.venv/bin/python demos/pneunet_actuator.py [OUT_DIR] [H]` (H the cell size in m, default 0.006). Writes
 the mesh, results.json, fields.xdmf (every step), curve.csv, curve.png (tip angle and pressure against
 injected volume; tip angle against pressure) and stroke.gif (the deformed actuator at every accepted step, true scale).
+
+Stability, measured (benchmarks/pneunet_stability.py, benchmarks/pneunet.md): from about 19.3 ml on, the states
+this run follows are unstable equilibria under volume control. The tangent there has one negative eigenvalue the
+volume constraint does not hold, then two (one constraint holds at most one): a real actuator would snap, a
+chamber ballooning, to a branch of lower pressure and less bend (72.5 deg at 22 ml, reached by a descent
+prototype not yet in the solver). Newton converges to such saddles as readily as to minima; the numbers below
+19 ml are stable states.
 """
 import csv
 import math
