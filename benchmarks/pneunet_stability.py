@@ -75,5 +75,10 @@ def main() -> None:
         print(f"converged {report.converged}: {report.message}")
 
 
-if __name__ == "__main__" and MPI.COMM_WORLD.size == 1:
+if __name__ == "__main__":
+    if MPI.COMM_WORLD.size > 1:
+        if MPI.COMM_WORLD.rank == 0:
+            print("pneunet_stability.py: runs serially (it reads one MUMPS factor's inertia); run it without mpirun",
+                  file=sys.stderr)
+        sys.exit(2)
     main()
