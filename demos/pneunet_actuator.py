@@ -1,11 +1,11 @@
 """# A PneuNet bending actuator inflated by volume control
 
-A silicone body 100 x 20 x 15 mm (neo-Hookean, E = 100 kPa, nu = 0.49) with six chambers joined by a channel
-(one closed cavity, demos/geometry/pneunet.py) is clamped at x = 0 and inflated by injecting air: the scene
-prescribes the injected volume and the solver finds the chamber pressure with the displacement. The upper
-part lengthens, the solid base does not (its lowest 2 mm a ten times stiffer silicone, a second [[material]]
-on the mesh's volume group "layer"): the actuator curls down. The tip angle is the rotation about
-y of the end face, from two probes at its top and bottom edges.
+A silicone body 100 x 20 x 15 mm (Mooney-Rivlin from E = 100 kPa, nu = 0.49: C10 = 3/8 mu, C01 = 1/8 mu) with
+six chambers joined by a channel (one closed cavity, demos/geometry/pneunet.py) is clamped at x = 0 and inflated
+by injecting air: the scene prescribes the injected volume and the solver finds the chamber pressure with the
+displacement. The upper part lengthens, the solid base does not (its lowest 2 mm a ten times stiffer silicone,
+a second [[material]] on the mesh's volume group "layer"): the actuator curls down. The tip angle is the
+rotation about y of the end face, from two probes at its top and bottom edges.
 
 One point per accepted load step: from probes.csv when the static run writes it (`<probe>_ux..`, `chambers_
 pressure`, `chambers_volume`), else recorded here after each accepted step. Run:
@@ -13,12 +13,12 @@ pressure`, `chambers_volume`), else recorded here after each accepted step. Run:
 the mesh, results.json, fields.xdmf (every step), curve.csv, curve.png (tip angle and pressure against
 injected volume; tip angle against pressure) and stroke.gif (the deformed actuator at every accepted step, true scale).
 
-Stability, measured (benchmarks/pneunet_stability.py, benchmarks/pneunet.md): from about 19.3 ml on, the states
-this run follows are unstable equilibria under volume control. The tangent there has one negative eigenvalue the
-volume constraint does not hold, then two (one constraint holds at most one): a real actuator would snap, a
-chamber ballooning, to a branch of lower pressure and less bend (72.5 deg at 22 ml, reached by a descent
-prototype not yet in the solver). Newton converges to such saddles as readily as to minima; the numbers below
-19 ml are stable states.
+Why Mooney-Rivlin: under volume control the solver accepts only stable states (the tangent's inertia,
+solvers/multiplier_merit.py). With a neo-Hookean body the chamber roofs balloon past a pressure maximum
+(15.6 kPa near 18 ml): beyond it the evenly inflated actuator is a saddle point a real part snaps away from,
+and the solver follows the snap, the tip angle falling from 86.6 to 72.5 deg at 18.7 ml, 74 deg at 26 ml
+(measured, benchmarks/pneunet.md). A positive C01 stiffens the roofs as they stretch: the pressure rises
+all the way, every state is stable, and 26 ml curls the actuator past 90 deg.
 """
 import csv
 import math

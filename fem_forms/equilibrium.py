@@ -86,6 +86,7 @@ class StaticResult:
                        for n, v in self.probes.items()},
             **self.reactions,
             **({"cavities": self.cavities} if self.cavities else {}),
+            **({"unstable_rejected": r.unstable_rejected} if r.unstable_rejected else {}),
             **self.contact,
             **({"strength": self.strength} if self.strength else {}),
             **(self.fracture.summary() if self.fracture is not None else {}),

@@ -122,7 +122,8 @@ class Inflation(LoadTerm):
         v = model.residual.arguments()[0]
         return [GlobalScalar(f"{self.cavity} pressure", self.pressure, equation,
                              coupling=derivative_wrt_constant(model.residual, self.pressure),
-                             gradient=ufl.derivative(equation, model.unknown, v), slope=0.0)]
+                             gradient=ufl.derivative(equation, model.unknown, v), slope=0.0,
+                             multiplier=-1.0 / scale)]      # -p (V - V0): dR/dp = -dV/du = -(dc/du) / s
 
     # -- reporting ---------------------------------------------------------------------------------
     def volume(self) -> float:

@@ -16,13 +16,16 @@ class GlobalScalar:
     with its equation c(u, p) = 0 (`equation`: a UFL functional; the driver's norm measures it beside the
     field residual, so scale it to the residual's units where they differ much). The couplings are derived
     when left None: `coupling` dR/dp (a vector form in the residual's test function), `gradient` dc/du (a
-    vector form), `slope` dc/dp (a scalar form or a number)."""
+    vector form), `slope` dc/dp (a scalar form or a number). `multiplier` = k when p is the Lagrange multiplier of
+    c = 0 in the problem's energy E(u, p), its coupling k dc/du (and c independent of p): the bordered Newton
+    then has a merit function to descend (solvers/multiplier_merit.py)."""
     name: str
     value: fem.Constant
     equation: ufl.Form
     coupling: ufl.Form | None = None
     gradient: ufl.Form | None = None
     slope: ufl.Form | float | None = None
+    multiplier: float | None = None
 
 
 def derivative_wrt_constant(form: ufl.Form, constant: fem.Constant) -> ufl.Form | None:

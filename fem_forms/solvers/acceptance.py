@@ -36,18 +36,21 @@ def step_scale(record: StepRecord, load_scale: float = 0.0) -> float:
 
 
 def why_rejected(driver: SNESDriver, record: StepRecord, rtol: float | None = ACCEPTED,
-                 load_scale: float = 0.0, reassemble: bool = True) -> str | None:
+                 load_scale: float = 0.0, reassemble: bool = True, stable_only: bool = False) -> str | None:
     """Why the step `driver` just solved (its `record`) must be rejected, or None to accept it. In order:
-    SNES's reason; NaN or Inf in the unknown on any rank; the problem's `inadmissible()`; a residual above
-    `rtol` x step_scale(record, load_scale) and above the round-off floor (no residual test when rtol is
-    None). The residual is re-assembled at the state, independently of SNES, or with `reassemble` False taken
-    as SNES's last one (the same number where the state is SNES's last iterate, one assembly less); its value
-    is left in record.checked_residual."""
+    SNES's reason; NaN or Inf in the unknown on any rank; the problem's `inadmissible()`; with `stable_only`
+    (statics), a saddle of a volume-controlled problem (constrained_stability.py: the last tangent's inertia);
+    a residual above `rtol` x step_scale(record, load_scale) and above the round-off floor (no residual test
+    when rtol is None). The residual is re-assembled at the state, independently of SNES, or with `reassemble`
+    False taken as SNES's last one (the same number where the state is SNES's last iterate, one assembly less);
+    its value is left in record.checked_residual."""
     if not record.accepted:
         return f"SNES {record.reason}"
     if not finite_everywhere(driver.p.u.x.array, driver.comm):
         return NOT_FINITE
     if driver.p.inadmissible is not None and (bad := driver.p.inadmissible()):
+        return bad
+    if stable_only and (stability := stability_check(driver)) is not None and (bad := stability.instability()):
         return bad
     if rtol is None:
         return None
@@ -63,6 +66,11 @@ def why_rejected(driver: SNESDriver, record: StepRecord, rtol: float | None = AC
 
 
 NOT_FINITE = "NaN or Inf in the solution"
+
+
+def stability_check(driver: SNESDriver):
+    """The volume-controlled problem's stability check (solvers/constrained_stability.py), or None."""
+    return driver.bordered.stability if driver.bordered is not None else None
 
 
 def left_the_domain(record: StepRecord, why: str | None) -> bool:

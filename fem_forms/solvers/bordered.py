@@ -20,6 +20,8 @@ import numpy as np
 from petsc4py import PETSc
 
 from fem_forms.physics.scalars import GlobalScalar, coupling_forms
+from fem_forms.solvers.constrained_stability import ConstrainedStability
+from fem_forms.solvers.multiplier_merit import MultiplierMerit
 
 # the inner K solve's options prefix (under the driver's) and the option families it takes from the driver
 INNER = "K_"
@@ -56,6 +58,8 @@ class Bordered:
         self.ksp = None
         if driver.bounds is not None or driver.arrays.caps:
             raise ValueError("global scalars: bounds and capping array terms are not supported")
+        self.merit = MultiplierMerit.of(self, driver.p.energy)     # for a retry's line search, where it exists
+        self.stability = ConstrainedStability.of(self)                # volume control: only stable states
         if driver.p.state is not None:                   # committed and rolled back with the problem's fields
             for s in self.scalars:
                 driver.p.state.add_scalar(s.name, s.value)
@@ -138,6 +142,10 @@ class Bordered:
         for rp, b in zip(self.Rp_vecs, self.B):
             self._solve_K(rp, b)
         self.S = self.Cp - np.array([[cu.dot(b) for b in self.B] for cu in self.cu_vecs])
+        if self.stability is not None:
+            self.stability.tangent(self.S, self.ksp)
+            if self.merit is not None:
+                self.merit.tangent(self.stability.q)
         J.assemble()                                      # a new operator state: SNES/KSP see the change
 
     def _solve_K(self, r: PETSc.Vec, z: PETSc.Vec) -> None:
@@ -177,18 +185,24 @@ class Bordered:
         z.array[: self.n] = self._zf.array_r[: self.n]
         if self.root:
             z.array[self.n:] = dp
+        if self.merit is not None:
+            self.merit.direction(dp)
 
     # -- driver hooks --------------------------------------------------------------------------------
     def options(self, merged: dict) -> None:
         """Move the driver's linear options (ksp_, pc_, mat_, mg_) to the inner K solve's prefix, in place,
         tightening an iterative K solve; the outer KSP applies the bordered inverse once. A saddle point (p a
         Lagrange multiplier) has no energy to descend: the line search is `basic` (full Newton steps), the
-        one the driver uses for problems without an energy."""
+        one the driver uses for problems without an energy; a retry descends a merit where one exists."""
         for k in [k for k in merged if k.startswith(_LINEAR)]:
             merged[INNER + k] = merged.pop(k)
         if merged.get(INNER + "ksp_type", "preonly") != "preonly":
             merged[INNER + "ksp_rtol"] = min(float(merged.get(INNER + "ksp_rtol", 1e-12)), 1e-12)
         merged.update({"ksp_type": "preonly", "pc_type": "python", "snes_linesearch_type": "basic"})
+        if self.merit is not None:
+            self.merit.options(merged)
+        if self.stability is not None and merged.get(INNER + "pc_type") == "cholesky":   # K's negative pivots
+            merged.setdefault(INNER + "mat_mumps_icntl_13", 1)      # are counted: ScaLAPACK's root front's are not
         if any(k.startswith(("snes_lag_",)) for k in merged):
             raise ValueError("global scalars: factor reuse and lagged Jacobians are not supported")
 
@@ -196,6 +210,8 @@ class Bordered:
         """Hand SNES the augmented residual and Jacobian and the bordered inverse; (re)make the inner KSP."""
         snes.setFunction(self.residual, self.F)
         snes.setJacobian(self.jacobian, self.J)
+        if self.merit is not None:
+            self.merit.install(snes)
         pc = snes.getKSP().getPC()
         pc.setType("python")
         pc.setPythonContext(self)

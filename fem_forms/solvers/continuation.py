@@ -13,7 +13,7 @@ from petsc4py import PETSc
 from fem_forms import progress
 from fem_forms.solvers import acceptance, linear
 from fem_forms.solvers.limit import NEAR_LIMIT, PathStiffness
-from fem_forms.solvers.reports import SolveReport
+from fem_forms.solvers.reports import UNSTABLE, SolveReport
 from fem_forms.solvers.snes import NonlinearProblem, SNESDriver
 from fem_forms.state import State
 
@@ -43,11 +43,7 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
     assembly0 = drv.assembly_time
     u = problem.u
     set_load = problem.set_load or (lambda lam: None)
-    state = problem.state or State({"unknown": u})
-    for s in problem.scalars:                        # global scalars: committed and rolled back with u
-        state.add_scalar(s.name, s.value)
-    old = state.old[next(k for k, f in state.fields.items() if f is u)]
-    state.commit()                                   # the starting point is what a cut-back returns to
+    state, old = _starting_state(problem, drv)
     set_load(1.0)                                    # reference scale: the rest state's residual at full load
     r_full = drv.load_scale(refresh=True)            # a reused driver's loads or rest shape may have changed
     report = SolveReport(False, 0.0, 0, math.nan, linear_solver=drv.linear_kind, load_scale=r_full)
@@ -58,37 +54,38 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
     path = PathStiffness(u)
     while lam < 1.0 - 1e-12:
         trial = min([1.0, lam + dlam] + [s for s in stops if s > lam + 1e-12])
+        if trial <= lam:                             # accepted steps shrank below the load factor's round-off
+            report.message = _gave_up(report, lam, trial, cuts, False, path.stiffness)
+            break
         set_load(trial)
         corner = any(abs(lam - s) < 1e-12 for s in stops)     # the load path turns: no extrapolation across
-        if predictor and recent and not corner:
-            step = predicted_move(trial - lam, recent)
-            u.x.array[:] = old.x.array + drv.arrays.safe_share(old.vector, step) * step   # contact: no crossing
-            u.x.scatter_forward()
+        _start(drv, old, recent if predictor and not corner else [], trial - lam)
         drv.load_factor = trial
         progress.report("load_step", load=trial, step=len(report.steps) + 1)
         rec = drv.solve_step()
         rec.load = trial
-        why = acceptance.why_rejected(drv, rec, load_scale=r_full)   # SNES, finite, admissible, residual
-        same_step = False
-        if not rec.accepted:
-            same_step = _adjust_solver(drv, rec, linear_kind, report)
-        elif why is None:
+        why = acceptance.why_rejected(drv, rec, load_scale=r_full, stable_only=True)   # SNES, finite, admissible, ...
+        same_step = _adjust_solver(drv, rec, linear_kind, report) if not rec.accepted else _escape(drv, why, trial)
+        if rec.accepted and why is None:
             report.residual_norm = rec.checked_residual     # the independently re-assembled residual
         report.add_step(rec, why)
         if rec.accepted:
             moved = (u.x.array - old.x.array, trial - lam)
             recent = ([] if corner or drv.arrays.caps else recent[-1:]) + [moved]     # contact: the secant
             path.accepted(moved[1], moved[0], rec.iterations)
+            recent = [] if path.jumped else recent   # a snap: its move says nothing about the path beyond it
             drv.newton_cap = path.newton_cap()   # near a limit point no step is worth the full Newton limit
             state.commit()
             lam, cuts = trial, 0
             dlam, hold = next_increment(lam, dlam, hold, max_step), False
             report.load_reached = lam
             on_step(lam)
+            _descend_on_retry(drv, False)
         else:
             state.rollback()                         # back to the last accepted state, history included
             cuts, dlam = (cuts, dlam) if same_step else (cuts + 1, 0.5 * dlam)
             hold = hold or acceptance.left_the_domain(rec, why)
+            _descend_on_retry(drv, True)
             drv.rebuild()                        # fresh solver state after a failure
             drv.newton_cap = path.newton_cap()
             if cuts > max_cutbacks or dlam < min_step or (dlam < limit_step and path.near_limit()):
@@ -98,6 +95,19 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
     else:
         report.converged, report.message = True, "converged"
     return _finish(report, drv, assembly0, t0, own_driver=driver is None)
+
+
+def _starting_state(problem: NonlinearProblem, drv: SNESDriver) -> tuple[State, object]:
+    """The state a cut-back returns to (the problem's own, or one holding its unknown; global scalars committed
+    and rolled back with it), committed at the start, and the unknown's committed copy. The first tangent is
+    the starting state's: a bordered solve's stability check counts negative eigenvalues against it."""
+    if (stability := acceptance.stability_check(drv)) is not None:
+        stability.new_path()
+    state = problem.state or State({"unknown": problem.u})
+    for s in problem.scalars:
+        state.add_scalar(s.name, s.value)
+    state.commit()
+    return state, state.old[next(k for k, f in state.fields.items() if f is problem.u)]
 
 
 def next_increment(lam: float, dlam: float, hold: bool, max_step: float) -> float:
@@ -131,6 +141,45 @@ def predicted_move(t: float, recent: list) -> np.ndarray:
     step0, h0 = recent[-2]
     d1 = step1 / h1
     return t * d1 + t * (t + h1) * (d1 - step0 / h0) / (h1 + h0)
+
+
+def _merit(drv: SNESDriver):
+    return drv.bordered.merit if drv.bordered is not None else None
+
+
+def _start(drv: SNESDriver, old, recent: list, t: float) -> None:
+    """Where the attempt's Newton starts: off the saddle the last attempt converged to, along its unstable mode
+    (_escape); for another descent of the merit the last accepted state (from an extrapolation a descent can fall
+    into another branch's basin: the PneuNet's tip angle dropped 88 -> 78 deg); else that state moved by
+    predicted_move over the load increment t, when `recent` has accepted steps to extrapolate."""
+    u, merit, stability = drv.p.u, _merit(drv), acceptance.stability_check(drv)
+    if stability is None or not stability.take_start(u):
+        if (merit is not None and merit.active) or not recent:
+            return
+        step = predicted_move(t, recent)
+        u.x.array[:] = old.x.array + drv.arrays.safe_share(old.vector, step) * step   # contact: no crossing
+    u.x.scatter_forward()
+
+
+def _escape(drv: SNESDriver, why: str | None, trial: float) -> bool:
+    """After an attempt SNES converged but acceptance rejected: when it was a saddle of a volume-controlled
+    problem, retry the same load from a start pushed off it along its unstable mode (constrained_stability.py);
+    a symmetric state (two joined balloons inflated alike) never leaves its saddle otherwise. Once per load."""
+    stability = acceptance.stability_check(drv)
+    return (why or "").startswith(UNSTABLE) and stability is not None and stability.escape(trial)
+
+
+def _descend_on_retry(drv: SNESDriver, on: bool) -> None:
+    """Turn the merit line search of a volume-controlled (bordered multiplier) solve on for the retries after a
+    failed attempt, off after an accepted step (solvers/multiplier_merit.py). Measured on the PneuNet actuator
+    to 26.5 ml (2 ranks): full Newton steps alone stopped at the fold near 16.9 ml for h = 5, 4.5 and 4 mm and passed
+    it by luck at 6 and 3.5 mm; the retries pass it at every h. Turned off, the driver is rebuilt (a retry's
+    caller rebuilds it anyway)."""
+    merit = _merit(drv)
+    if merit is not None and merit.active != on:
+        merit.active = on
+        if not on:
+            drv.rebuild()
 
 
 def _adjust_solver(drv: SNESDriver, rec, linear_kind: str, report: SolveReport) -> bool:

@@ -15,6 +15,9 @@ NEAR_LIMIT = 0.1
 # (at least MIN_CAP): a neo-Hookean sphere inflated past its maximum spent 50 iterations on each failed step
 RETRY_FACTOR = 2
 MIN_CAP = 8
+# a step that moved this many times further per unit load than the step before has jumped to another branch of the
+# path (a snap under volume control): the next step's start is not extrapolated through it
+JUMP = 2.0
 
 
 class PathStiffness:
@@ -27,6 +30,7 @@ class PathStiffness:
         self.first: float | None = None
         self.last: float | None = None
         self.slowest = 0
+        self.jumped = False
 
     def _norm(self, step: np.ndarray) -> float:
         local = float(np.dot(step[: self.owned], step[: self.owned]))
@@ -42,6 +46,7 @@ class PathStiffness:
         ratio = dlam / norm
         if self.first is None:
             self.first = ratio
+        self.jumped = self.last is not None and ratio < self.last / JUMP
         self.last = ratio
 
     @property

@@ -8,6 +8,9 @@ import math
 from fem_forms import progress
 
 
+# how a rejected saddle's note begins (solvers/constrained_stability.py)
+UNSTABLE = "unstable equilibrium"
+
 @dataclass
 class StepRecord:
     load: float
@@ -42,6 +45,11 @@ class SolveReport:
         self.newton_iterations += rec.iterations
         progress.report("step_accepted" if rec.accepted else "step_rejected", load=rec.load,
                         iterations=rec.iterations, why=why or "")
+
+    @property
+    def unstable_rejected(self) -> list:
+        """The load factors whose converged state was rejected as a saddle (volume control: the path snaps)."""
+        return sorted({s.load for s in self.steps if s.note.startswith(UNSTABLE)})
 
     @property
     def load_steps(self) -> int:

@@ -9,8 +9,14 @@ import json
 
 import numpy as np
 import pytest
-from scipy.optimize import minimize_scalar
+from scipy.optimize import brentq, minimize_scalar
 
+import fem_forms as ff
+from fem_forms.equilibrium import load_path
+from fem_forms.model import build_model
+from fem_forms.physics.cavities import cavity_report
+from fem_forms.solvers import continuation
+from fem_forms.solvers.snes import SNESDriver
 from helpers import ROOT, mpirun, run_scene, toml_dumps
 
 E, NU = 3.0, 0.499
@@ -82,6 +88,81 @@ def test_volume_control_reaches_the_falling_branch(sphere_mesh, tmp_path, capsys
     assert inner_stretch(cav) == pytest.approx(stretch, rel=1e-8)
     assert cav["pressure"] / MU == pytest.approx(ogden_pressure(stretch), rel=0.02)
     assert cav["pressure"] / MU < P_MAX - 0.02                # on the falling branch
+
+
+@pytest.mark.parametrize("stretch, lost", [(1.5, 0), (2.3, 1)])
+def test_volume_control_accepts_the_stable_states_of_both_branches(sphere_mesh, stretch, lost):
+    """The solver accepts only stable states under volume control (solvers/constrained_stability.py): the tangent's
+    negative eigenvalues beyond the starting state's plus the positive ones of q = c_u.K^-1 c_u must number
+    one. On the rising branch K is positive definite and q > 0; past the maximum the pressure falls as the
+    volume grows (Ogden: from l_a = 1.83), so K has lost one eigenvalue and q, of the sign of dV/dp, is
+    negative: the constraint holds it. The inertia (MUMPS's LDL^T pivots) is checked against the path's own
+    slope dp/dV over the last accepted step. Displacement formulation: the check needs the LDL^T of an energy's
+    tangent."""
+    added = (stretch**3 - 1) * np.pi / 6               # the eighth sphere's inner volume is about pi/6
+    d = sphere_scene(sphere_mesh, volume=added)
+    d["discretization"]["formulation"], d["material"]["nu"] = "displacement", 0.45
+    model = build_model(ff.Scene.from_dict(d))
+    set_load, _ = load_path(model)
+    problem = model.problem(set_load)
+    drv = SNESDriver(problem, {}, "direct", "stable_test_", None, False)
+    path = []
+    record = lambda lam: path.append([cavity_report(model.terms)["inside"][k] for k in ("volume", "pressure")])  # noqa
+    assert continuation.solve(problem, {}, steps=8, driver=drv, on_step=record).converged
+    (v0, p0), (v1, p1) = path[-2:]
+    check = drv.bordered.stability
+    assert check.reference == 0 and check.negative == lost
+    assert (p1 - p0) / (v1 - v0) < 0 if lost else (p1 - p0) / (v1 - v0) > 0
+    assert (check.q[0, 0] > 0) == (lost == 0)
+    assert check.instability() is None
+    check.q = np.abs(check.q)                          # the constraint no longer holding the lost one: a saddle
+    assert (check.instability() is None) == (lost == 0)
+
+
+def two_balloons(tmp_path, stretch: float = 2.3) -> dict:
+    """Two thick spheres (b = 2a), their inner walls one cavity: air injected to inflate both to `stretch`."""
+    mesh = thick_sphere.build_pair(tmp_path / "pair.msh", 1.0, 2.0, h=0.3)
+    d = sphere_scene(mesh, steps=8, volume=2 * (stretch**3 - 1) * np.pi / 6)
+    d["discretization"]["formulation"], d["material"]["nu"] = "displacement", 0.45
+    d["output"]["probes"] = {"a": [1.0, 0.0, 0.0], "b": [-1.0, 0.0, 0.0]}
+    return d
+
+
+def test_two_joined_balloons_share_the_air_as_ogden_says(tmp_path, capsys):
+    """The two-balloon experiment: past the pressure maximum, both balloons inflated alike is a saddle (the
+    tangent lost two eigenvalues, the one volume holds one); the solver rejects it, leaves it along its unstable
+    mode (no Newton step leaves it on this mirror-symmetric mesh) and ends where one balloon took the air. Each
+    balloon is then Ogden's sphere at the one pressure: p(l_a) = p(l_b) with l_a^3 + l_b^3 = 2 x 2.3^3 gives
+    l_a = 2.793, l_b = 1.365, p = 0.6715 mu (incompressible; measured 0.1-0.3 % off at nu = 0.45)."""
+    d = two_balloons(tmp_path)
+    code, res, err, _ = run_scene(tmp_path, d, capsys)
+    assert code == 0, err
+    mu = E / (2 * (1 + d["material"]["nu"]))
+    total = 2 * 2.3**3
+    big = brentq(lambda s: ogden_pressure(s) - ogden_pressure((total - s**3) ** (1 / 3)), 2.6, 2.89)
+    small = (total - big**3) ** (1 / 3)
+    assert len(res["unstable_rejected"]) >= 1                 # the evenly inflated pair: a saddle
+    stretches = sorted(1 + abs(res["probes"][k]["displacement"][0]) for k in ("a", "b"))
+    assert stretches == pytest.approx([small, big], rel=0.01)
+    assert res["cavities"]["inside"]["pressure"] / mu == pytest.approx(ogden_pressure(big), rel=0.01)
+
+
+@pytest.mark.mpi
+def test_two_balloons_on_two_ranks_give_the_serial_answer(tmp_path, capsys):
+    """The escape from the saddle starts inverse iteration from a vector of the dof coordinates: every partition
+    finds the same mode with the same sign, so the same balloon takes the air."""
+    d = two_balloons(tmp_path)
+    code, serial, err, _ = run_scene(tmp_path, d, capsys)
+    assert code == 0, err
+    path = tmp_path / "two.toml"
+    path.write_text(toml_dumps(d))
+    p = mpirun(["-m", "fem_forms", "run", str(path), "--out", str(tmp_path / "two"), "-q"])
+    assert p.returncode == 0, p.stderr
+    two = json.loads((tmp_path / "two" / "results.json").read_text())
+    assert two["mpi_ranks"] == 2
+    for k in ("a", "b"):
+        assert two["probes"][k]["displacement"] == pytest.approx(serial["probes"][k]["displacement"], rel=1e-6)
+    assert two["cavities"]["inside"]["pressure"] == pytest.approx(serial["cavities"]["inside"]["pressure"], rel=1e-6)
 
 
 def test_walls_that_enclose_nothing_are_refused(sphere_mesh, tmp_path, capsys):
