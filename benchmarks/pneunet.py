@@ -1,6 +1,7 @@
 """Wall time of the PneuNet actuator (demos/pneunet_actuator.py) inflated to its scene's volume on 2 MPI ranks,
 at cell sizes giving about 12k and 30k P2 dofs; the median of `--repeat` runs, load averages before and after
-each run (the machine is shared). Writes benchmarks/pneunet.md.
+each run (the machine is shared). Writes its table into benchmarks/pneunet.md, between the BEGIN and END
+lines (the rest of that file is kept: the measurements of earlier versions).
 
     .venv/bin/python benchmarks/pneunet.py [--sizes 0.006 0.0035] [--repeat 3] [--ranks 2]
 """
@@ -15,6 +16,7 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+BEGIN, END = "<!-- BEGIN benchmarks/pneunet.py -->", "<!-- END benchmarks/pneunet.py -->"
 
 
 def run_once(h: float, ranks: int, out: Path) -> dict:
@@ -39,9 +41,9 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--ranks", type=int, default=2)
     args = ap.parse_args()
-    lines = ["# PneuNet actuator to its scene's injected volume (benchmarks/pneunet.py)", "",
-             f"{args.ranks} MPI ranks, `--bind-to none`, OPENBLAS_NUM_THREADS=1; P2 neo-Hookean, E 100 kPa, nu 0.49,"
-             " MUMPS; wall = the whole demo process (gmsh, JIT from cache, solve, outputs); solve = results.json"
+    lines = [BEGIN,
+             f"{args.ranks} MPI ranks, `--bind-to none`, OPENBLAS_NUM_THREADS=1; the demo's scene (P2, MUMPS LDL^T);"
+             " wall = the whole demo process (gmsh, JIT from cache, solve, outputs); solve = results.json"
              " wall_time_s; median of the runs; load = 1-minute load average before -> after each run.", "",
              "| h [mm] | dofs | exit | load steps | Newton | tip angle [deg] | pressure [kPa] | solve [s] | wall [s] | load |",
              "|---|---|---|---|---|---|---|---|---|---|"]
@@ -57,7 +59,10 @@ def main() -> None:
                      f"{r['newton']} | {r['angle']:.2f} | {r['pressure'] / 1e3:.3f} | "
                      f"{statistics.median(x['solve'] for x in runs):.1f} | "
                      f"{statistics.median(x['wall'] for x in runs):.1f} | {loads} |")
-    (ROOT / "benchmarks" / "pneunet.md").write_text("\n".join(lines) + "\n")
+    lines.append(END)
+    md = ROOT / "benchmarks" / "pneunet.md"
+    text = md.read_text()
+    md.write_text(text[: text.index(BEGIN)] + "\n".join(lines) + text[text.index(END) + len(END):])
     print("\n".join(lines))
 
 
