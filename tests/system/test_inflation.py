@@ -119,24 +119,32 @@ def test_volume_control_accepts_the_stable_states_of_both_branches(sphere_mesh, 
     assert (check.instability() is None) == (lost == 0)
 
 
-def two_balloons(tmp_path, stretch: float = 2.3) -> dict:
+def two_balloons(folder, stretch: float = 2.3) -> dict:
     """Two thick spheres (b = 2a), their inner walls one cavity: air injected to inflate both to `stretch`."""
-    mesh = thick_sphere.build_pair(tmp_path / "pair.msh", 1.0, 2.0, h=0.3)
+    mesh = thick_sphere.build_pair(folder / "pair.msh", 1.0, 2.0, h=0.3)
     d = sphere_scene(mesh, steps=8, volume=2 * (stretch**3 - 1) * np.pi / 6)
     d["discretization"]["formulation"], d["material"]["nu"] = "displacement", 0.45
     d["output"]["probes"] = {"a": [1.0, 0.0, 0.0], "b": [-1.0, 0.0, 0.0]}
     return d
 
 
-def test_two_joined_balloons_share_the_air_as_ogden_says(tmp_path, capsys):
+@pytest.fixture(scope="module")
+def balloons_run(tmp_path_factory):
+    """The two-balloon scene and its serial results (one run for the tests below)."""
+    folder = tmp_path_factory.mktemp("balloons")
+    d = two_balloons(folder)
+    code, res, err, _ = run_scene(folder, d)
+    assert code == 0, err
+    return folder, d, res
+
+
+def test_two_joined_balloons_share_the_air_as_ogden_says(balloons_run):
     """The two-balloon experiment: past the pressure maximum, both balloons inflated alike is a saddle (the
     tangent lost two eigenvalues, the one volume holds one); the solver rejects it, leaves it along its unstable
     mode (no Newton step leaves it on this mirror-symmetric mesh) and ends where one balloon took the air. Each
     balloon is then Ogden's sphere at the one pressure: p(l_a) = p(l_b) with l_a^3 + l_b^3 = 2 x 2.3^3 gives
     l_a = 2.793, l_b = 1.365, p = 0.6715 mu (incompressible; measured 0.1-0.3 % off at nu = 0.45)."""
-    d = two_balloons(tmp_path)
-    code, res, err, _ = run_scene(tmp_path, d, capsys)
-    assert code == 0, err
+    _, d, res = balloons_run
     mu = E / (2 * (1 + d["material"]["nu"]))
     total = 2 * 2.3**3
     big = brentq(lambda s: ogden_pressure(s) - ogden_pressure((total - s**3) ** (1 / 3)), 2.6, 2.89)
@@ -148,17 +156,15 @@ def test_two_joined_balloons_share_the_air_as_ogden_says(tmp_path, capsys):
 
 
 @pytest.mark.mpi
-def test_two_balloons_on_two_ranks_give_the_serial_answer(tmp_path, capsys):
+def test_two_balloons_on_two_ranks_give_the_serial_answer(balloons_run):
     """The escape from the saddle starts inverse iteration from a vector of the dof coordinates: every partition
     finds the same mode with the same sign, so the same balloon takes the air."""
-    d = two_balloons(tmp_path)
-    code, serial, err, _ = run_scene(tmp_path, d, capsys)
-    assert code == 0, err
-    path = tmp_path / "two.toml"
+    folder, d, serial = balloons_run
+    path = folder / "two.toml"
     path.write_text(toml_dumps(d))
-    p = mpirun(["-m", "fem_forms", "run", str(path), "--out", str(tmp_path / "two"), "-q"])
+    p = mpirun(["-m", "fem_forms", "run", str(path), "--out", str(folder / "two"), "-q"])
     assert p.returncode == 0, p.stderr
-    two = json.loads((tmp_path / "two" / "results.json").read_text())
+    two = json.loads((folder / "two" / "results.json").read_text())
     assert two["mpi_ranks"] == 2
     for k in ("a", "b"):
         assert two["probes"][k]["displacement"] == pytest.approx(serial["probes"][k]["displacement"], rel=1e-6)
