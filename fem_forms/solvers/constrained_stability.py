@@ -3,7 +3,7 @@ scalars are Lagrange multipliers of its energy (cavity pressures, physics/caviti
 [K C^T; C 0] has K's inertia plus that of -Q, Q = C K^-1 C^T (Haynsworth), and the constrained energy is at a
 minimum iff exactly m of its eigenvalues are negative: K's negative eigenvalues plus Q's positive ones. K's are
 counted by the LDL^T each Newton iteration factors anyway (Sylvester: MUMPS's negative pivots, INFOG(12)),
-beyond those of the path's starting state (a mixed formulation's pressure block). A saddle is what a real part
+beyond those of the path's starting state (its first tangent). A saddle is what a real part
 snaps away from: a chamber ballooning at the others' expense, one of two joined balloons taking the air. Its
 unstable mode, by inverse iteration with the bordered inverse, gives a retry a start off the saddle: Newton
 steps alone never leave a symmetric saddle, since no Newton direction there has a component along the mode."""
@@ -57,7 +57,8 @@ class ConstrainedStability:
 
     def instability(self) -> str | None:
         """Why the state of the last tangent is no stable equilibrium under the constraints, or None (stable, or
-        unknown without an LDL^T)."""
+        unknown without an LDL^T). The last tangent is the one SNES factored at the iterate before the converged
+        one: the same inertia in every case measured (two balloons, the PneuNet)."""
         if self.negative is None or self.reference is None or not np.all(np.isfinite(self.q)):
             return None
         lost = self.negative - self.reference
@@ -70,7 +71,9 @@ class ConstrainedStability:
     def unstable_mode(self) -> PETSc.Vec | None:
         """A field direction z with c_u.z = 0 and z.K z < 0 (a new Vec, ghosts updated), or None: inverse
         iteration with the bordered inverse from a start that depends only on the dof coordinates (every
-        partition finds the same mode, with the same sign)."""
+        partition finds the same mode, with the same sign). It finds the constrained eigenvalue smallest in size:
+        near the point where stability was lost, the unstable one; far past it possibly a stable one, and then
+        there is no escape (the step is halved instead)."""
         b, drv = self.b, self.b.drv
         V = drv.p.u.function_space
         bs = V.dofmap.index_map_bs

@@ -55,11 +55,11 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
     while lam < 1.0 - 1e-12:
         trial = min([1.0, lam + dlam] + [s for s in stops if s > lam + 1e-12])
         if trial <= lam:                             # accepted steps shrank below the load factor's round-off
-            report.message = _gave_up(report, lam, trial, cuts, False, path.stiffness)
+            report.message = f"limit point: load factor {lam:.6g} reached, the accepted steps shrank to round-off"
             break
         set_load(trial)
         corner = any(abs(lam - s) < 1e-12 for s in stops)     # the load path turns: no extrapolation across
-        _start(drv, old, recent if predictor and not corner else [], trial - lam)
+        escaped = _start(drv, old, recent if predictor and not corner else [], trial - lam)
         drv.load_factor = trial
         progress.report("load_step", load=trial, step=len(report.steps) + 1)
         rec = drv.solve_step()
@@ -72,7 +72,7 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
         if rec.accepted:
             moved = (u.x.array - old.x.array, trial - lam)
             recent = ([] if corner or drv.arrays.caps else recent[-1:]) + [moved]     # contact: the secant
-            path.accepted(moved[1], moved[0], rec.iterations)
+            path.accepted(moved[1], moved[0], rec.iterations, snapped=escaped)
             recent = [] if path.jumped else recent   # a snap: its move says nothing about the path beyond it
             drv.newton_cap = path.newton_cap()   # near a limit point no step is worth the full Newton limit
             state.commit()
@@ -103,6 +103,7 @@ def _starting_state(problem: NonlinearProblem, drv: SNESDriver) -> tuple[State, 
     the starting state's: a bordered solve's stability check counts negative eigenvalues against it."""
     if (stability := acceptance.stability_check(drv)) is not None:
         stability.new_path()
+    _descend_on_retry(drv, False)                    # a reused driver starts with full Newton steps again
     state = problem.state or State({"unknown": problem.u})
     for s in problem.scalars:
         state.add_scalar(s.name, s.value)
@@ -147,18 +148,21 @@ def _merit(drv: SNESDriver):
     return drv.bordered.merit if drv.bordered is not None else None
 
 
-def _start(drv: SNESDriver, old, recent: list, t: float) -> None:
+def _start(drv: SNESDriver, old, recent: list, t: float) -> bool:
     """Where the attempt's Newton starts: off the saddle the last attempt converged to, along its unstable mode
     (_escape); for another descent of the merit the last accepted state (from an extrapolation a descent can fall
     into another branch's basin: the PneuNet's tip angle dropped 88 -> 78 deg); else that state moved by
-    predicted_move over the load increment t, when `recent` has accepted steps to extrapolate."""
+    predicted_move over the load increment t, when `recent` has accepted steps to extrapolate. Returns whether
+    it starts off a saddle (accepted, that step is a snap)."""
     u, merit, stability = drv.p.u, _merit(drv), acceptance.stability_check(drv)
-    if stability is None or not stability.take_start(u):
+    escaped = stability is not None and stability.take_start(u)
+    if not escaped:
         if (merit is not None and merit.active) or not recent:
-            return
+            return False
         step = predicted_move(t, recent)
         u.x.array[:] = old.x.array + drv.arrays.safe_share(old.vector, step) * step   # contact: no crossing
     u.x.scatter_forward()
+    return escaped
 
 
 def _escape(drv: SNESDriver, why: str | None, trial: float) -> bool:

@@ -36,11 +36,15 @@ class PathStiffness:
         local = float(np.dot(step[: self.owned], step[: self.owned]))
         return float(np.sqrt(self.u.function_space.mesh.comm.allreduce(local, op=MPI.SUM)))
 
-    def accepted(self, dlam: float, step: np.ndarray, iterations: int) -> None:
+    def accepted(self, dlam: float, step: np.ndarray, iterations: int, snapped: bool = False) -> None:
         """Record an accepted step: load increment dlam, displacement increment `step` (the unknown's local
-        array, ghosts included; only owned entries count), Newton iterations it took."""
-        norm = self._norm(step)
+        array, ghosts included; only owned entries count), Newton iterations it took. A step known to have
+        `snapped` (it started off a rejected saddle) is a jump and says nothing of the path's stiffness."""
+        self.jumped = snapped
         self.slowest = max(self.slowest, iterations)
+        if snapped:
+            return
+        norm = self._norm(step)
         if norm == 0.0 or dlam <= 0.0:
             return
         ratio = dlam / norm

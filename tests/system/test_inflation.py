@@ -115,8 +115,6 @@ def test_volume_control_accepts_the_stable_states_of_both_branches(sphere_mesh, 
     assert (p1 - p0) / (v1 - v0) < 0 if lost else (p1 - p0) / (v1 - v0) > 0
     assert (check.q[0, 0] > 0) == (lost == 0)
     assert check.instability() is None
-    check.q = np.abs(check.q)                          # the constraint no longer holding the lost one: a saddle
-    assert (check.instability() is None) == (lost == 0)
 
 
 def two_balloons(folder, stretch: float = 2.3) -> dict:
@@ -166,6 +164,7 @@ def test_two_balloons_on_two_ranks_give_the_serial_answer(balloons_run):
     assert p.returncode == 0, p.stderr
     two = json.loads((folder / "two" / "results.json").read_text())
     assert two["mpi_ranks"] == 2
+    assert two["unstable_rejected"] == serial["unstable_rejected"] and two["load_steps"] == serial["load_steps"]
     for k in ("a", "b"):
         assert two["probes"][k]["displacement"] == pytest.approx(serial["probes"][k]["displacement"], rel=1e-6)
     assert two["cavities"]["inside"]["pressure"] == pytest.approx(serial["cavities"]["inside"]["pressure"], rel=1e-6)
