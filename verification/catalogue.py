@@ -60,6 +60,16 @@ def cavity_stretch(res: dict) -> float:
     return (cav["volume"] / (cav["volume"] - cav["volume_change"])) ** (1 / 3)
 
 
+def pair_stretches(res: dict) -> list:
+    """The two balloons' inner hoop stretches, 1 + |u_x| at their inner poles (probes a, b)."""
+    return [1 + abs(probe(k, "displacement", 0)(res, {})) for k in "ab"]
+
+
+def pair_total(res: dict) -> float:
+    """l_a^3 + l_b^3: what the two balloons hold together, in units of one's rest volume."""
+    return sum(s**3 for s in pair_stretches(res))
+
+
 def probe(name: str, key: str, *index):
     """results.json probes[name][key][index...]; NotAvailable if the key is missing."""
     def get(res: dict, ref: dict):
@@ -235,6 +245,21 @@ CASES = [
               lambda r, ref: float(r["cavities"]["inside"]["pressure"]), 0.02, "Pa")],
          fast=False, mesh=("thick_sphere", {"h": 0.3}),
          notes="volume = 5.7 m^3 added: the pressure is a Lagrange multiplier solved with the displacement."),
+    Case("two_balloons", "Two joined thick spheres past their maximum: one takes the air (volume control)",
+         OGDEN + ", each sphere at the one pressure with l_a^3 + l_b^3 fixed", "two_balloons.toml",
+         [Row("stretch of the balloon that took the air", lambda r: targets.ogden_balloon_pair(pair_total(r))[0],
+              lambda r, ref: max(pair_stretches(r)), 0.01),
+          Row("stretch of the other", lambda r: targets.ogden_balloon_pair(pair_total(r))[1],
+              lambda r, ref: min(pair_stretches(r)), 0.01),
+          Row("the one pressure", lambda r: ogden_sphere_pressure(targets.ogden_balloon_pair(pair_total(r))[0],
+                                                                  3.0 / (2 * 1.45)),
+              lambda r, ref: float(r["cavities"]["inside"]["pressure"]), 0.01, "Pa")],
+         fast=False, mesh=("thick_sphere", {"h": 0.3, "pair": True}),
+         notes="Inflated alike, the pair is a saddle (the tangent lost two eigenvalues, the volume holds one): the "
+               "solver rejects it (results.json unstable_rejected), leaves it along its unstable mode and ends "
+               "where one balloon took the air. The stretches are 1 + the inner poles' radial displacement; "
+               "their cubes' sum, what the two hold together, gives Ogden's split. nu = 0.45 (displacement "
+               "formulation) for incompressibility."),
     Case("thick_sphere_yield", "Thick sphere b/a = 2, perfectly plastic, P = 250 MPa (front c = 1.33 a)", HILL,
          "thick_sphere_yield.toml",
          [Row("outer displacement u(b)", thick_sphere_outer_displacement(250e6),

@@ -132,3 +132,15 @@ def centre_crack_stress(a: float, W: float, E: float, Gc: float, h: float, ell: 
     stress with nu = 0): sigma sqrt(pi a sec(pi a / W)) = sqrt(E Gc_eff), Gc_eff = Gc (1 + 3 h / (8 ell)) the
     AT1 phase field's toughness on a mesh of size h (Bourdin, Francfort & Marigo 2008)."""
     return math.sqrt(E * Gc * (1 + 3 * h / (8 * ell)) / (math.pi * a / math.cos(math.pi * a / W)))
+
+
+def ogden_balloon_pair(total: float, ratio: float = 2.0) -> tuple[float, float]:
+    """Two joined thick spheres past their maximum, one pressure, l_a^3 + l_b^3 = `total` (their mean stretch
+    cubed, times two, past l = 1.83): the stable state has one on the falling branch and one on the rising
+    branch at the same Ogden pressure. Returns (l_large, l_small)."""
+    from scipy.optimize import brentq
+    other = lambda s: (total - s**3) ** (1 / 3)                      # noqa: E731
+    g = lambda s: ogden_sphere_pressure(s, 1.0, ratio) - ogden_sphere_pressure(other(s), 1.0, ratio)  # noqa: E731
+    top = total ** (1 / 3)
+    large = brentq(g, 0.9 * top, top * (1 - 1e-3))
+    return large, other(large)

@@ -16,8 +16,10 @@ import meshio
 import numpy as np
 
 
-def build(out: Path, a: float = 1.0, b: float = 2.0, h: float = 0.25) -> Path:
-    """Write the eighth shell's tetrahedral mesh (cell size h) to `out`."""
+def build(out: Path, a: float = 1.0, b: float = 2.0, h: float = 0.25, pair: bool = False) -> Path:
+    """Write the eighth shell's tetrahedral mesh (cell size h) to `out` (with `pair`, build_pair's)."""
+    if pair:
+        return build_pair(out, a, b, h)
     gmsh.initialize()
     try:
         gmsh.option.setNumber("General.Terminal", 0)
