@@ -42,6 +42,7 @@ def test_pneunet_actuator_demo(demo):
     assert np.all(np.diff(v) > 0) and v[-1] == pytest.approx(added, rel=1e-8)
     assert np.all(p[1:] > 0) and cav["pressure"] == pytest.approx(p[-1], rel=1e-12)
     assert np.all(np.diff(angle) > 0), angle                  # the actuator curls on with every step
+    assert np.all(np.diff(p) > 0), p                          # ... as the pressure rises (no balloon's maximum)
     assert "unstable_rejected" not in res                     # a stable stroke: no state was a saddle
     assert angle[-1] >= 90.0
     assert grab(rf"tip angle ({NUMBER}) deg", text)[0] == pytest.approx(angle[-1], abs=0.01)
