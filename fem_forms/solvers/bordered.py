@@ -58,8 +58,8 @@ class Bordered:
         self.ksp = None
         if driver.bounds is not None or driver.arrays.caps:
             raise ValueError("global scalars: bounds and capping array terms are not supported")
-        self.merit = MultiplierMerit.of(self, driver.p.energy)     # for a retry's line search, where it exists
-        self.stability = ConstrainedStability.of(self)                # volume control: only stable states
+        self.stability = ConstrainedStability.of(self)     # volume control: only stable states, and a merit to
+        self.merit = MultiplierMerit(self, driver.p.energy) if self.stability is not None else None   # descend
         if driver.p.state is not None:                   # committed and rolled back with the problem's fields
             for s in self.scalars:
                 driver.p.state.add_scalar(s.name, s.value)

@@ -33,13 +33,6 @@ class MultiplierMerit:
         self.active = False                      # set by the continuation for a retry
         self.flips = 0                           # field steps turned down a negative curvature
 
-    @staticmethod
-    def of(bordered, energy) -> MultiplierMerit | None:
-        """The merit when the problem has an energy and every scalar is a Lagrange multiplier of it, else None."""
-        if energy is None or any(s.multiplier is None for s in bordered.scalars):
-            return None
-        return MultiplierMerit(bordered, energy)
-
     def tangent(self, q: np.ndarray) -> None:
         """New tangent: rho_i = PENALTY / |q_ii|, q = C K^-1 C^T (constrained_stability.py)."""
         q = np.abs(np.diag(q))

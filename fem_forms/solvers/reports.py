@@ -11,6 +11,7 @@ from fem_forms import progress
 # how a rejected saddle's note begins (solvers/constrained_stability.py)
 UNSTABLE = "unstable equilibrium"
 
+
 @dataclass
 class StepRecord:
     load: float
