@@ -10,8 +10,15 @@ import os
 import sys
 from pathlib import Path
 
-import pytest
-from mpi4py import MPI
+# One BLAS thread in this process too (OpenBLAS reads it when numpy loads it, below): the runs made here in-process
+# then sum in the same order as the `mpirun` ones they are compared with (threaded BLAS sums in varying order, and a
+# frictional contact path amplified that to 0.5 %).
+os.environ.setdefault("OMPI_ALLOW_RUN_AS_ROOT", "1")
+os.environ.setdefault("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import pytest  # noqa: E402
+from mpi4py import MPI  # noqa: E402
 
 # A pytest-xdist worker inherits the environment of the pytest process that started it, and that process has
 # initialised MPI as a singleton (OMPI_MCA_ess, PMIX_* naming its PMIx server): a worker's mpirun then failed at
@@ -30,9 +37,6 @@ import fem_forms  # noqa: E402
 from helpers import beam_scene  # noqa: E402,F401  (kept importable as conftest.beam_scene)
 
 fem_forms.quiet_jit()
-os.environ.setdefault("OMPI_ALLOW_RUN_AS_ROOT", "1")
-os.environ.setdefault("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 
 @pytest.fixture(autouse=True)
