@@ -10,8 +10,8 @@ which this script computes with scipy, independently of the finite elements. The
 strip at once and the force falls to nothing.
 
 What it prints: the stretch at the peak force against Rivlin-Thomas's, the peak force, the force at the end,
-where the crack runs (its centre's height) and its area against the strip's section (notch included: the
-phase field's surface energy / Gc, with the mesh correction). Run:
+where the crack runs (its centre's distance from the notch's line) and its area against the strip's section
+(notch included: the phase field's surface energy / Gc, with the mesh correction). Run:
 `.venv/bin/python demos/torn_silicone_strip.py [OUT_DIR]`; writes crack.png, force_displacement.csv and .png,
 fields.xdmf (displacement, von Mises and the damage at every step), results.json.
 """
@@ -59,6 +59,8 @@ if MPI.COMM_WORLD.rank == 0:
           f"{1 + pull[k + 1] / h0:.4g}); Rivlin-Thomas: {rivlin_thomas:.4g} (W h0 = Gc (1 + 3 h / (8 l)))")
     print(f"  peak force {force[k]:.4g} N; at the end {force[-1]:.3g} N")
     centre = s["crack_center"] or [float("nan")] * 3
-    print(f"  the crack's centre at y = {centre[1] * 1e3:.4g} mm (the notch's line: {h0 / 2 * 1e3:.4g} mm)")
+    off = abs(centre[1] - h0 / 2) * 1e3
+    print(f"  the crack's centre {off:.4g} mm off the notch's line (y = {h0 / 2 * 1e3:.4g} mm; the strip is symmetric "
+          "about it: which side is round-off)")
     print(f"  crack area {s['crack_area'] * 1e6:.4g} mm^2 against the strip's section {width * thick * 1e6:.4g} mm^2 "
           f"({section * 1e6:.4g} mm^2 with the mesh correction); damage_max {s['damage_max']:.3g}")

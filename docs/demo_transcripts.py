@@ -15,6 +15,10 @@ round-trip mismatch) and equal. Timings (seconds printed with at most two decima
 path whose last iterations sit at round-off moves by one when the last bits move (the README's first scene, direct
 solver: 18 iterations, 17 with element tables that FFCx generated under two BLAS threads, fem_forms/threads.py; another
 machine's BLAS kernels do the same), so these counts are not pinned.
+
+A demo whose motion amplifies round-off prints other numbers on another CPU, as an experiment repeated does: its
+values are compared within a fraction of their size instead (ROUNDOFF_AMPLIFIED). The demo's own test checks its
+physics against the reference on every machine.
 """
 from __future__ import annotations
 
@@ -28,6 +32,10 @@ ROUNDOFF = 1e-8                                     # a residual force, a round-
 TIMING = re.compile(r"^\d+(?:\.\d\d?)? s\b")      # a wall time: "36.2 s", "2.72 s" (not "0.866 s", a period)
 EFFORT = re.compile(r"^\d+ (?:(?:Newton|Krylov|linear) iterations|staggered sweeps)\b")
 TIME, COUNT, VALUE = "timing", "effort", "value"
+# the rocking toy rolls on a frictional floor where stick and slip switch on the last bits: two CPUs (AVX2 and
+# AVX-512 BLAS kernels) gave a second crossing at 0.468 / 0.438 s, a period of 0.882 / 0.854 s, a sideways drift of
+# 4.46 / 4.93 mm (10 %) and the same 203 steps; 20 % leaves room for a third machine and still fails a changed demo
+ROUNDOFF_AMPLIFIED = {"rocking_toy": 0.2}
 
 
 def normalise(stdout: str, out: Path | str, name: str) -> str:
@@ -68,8 +76,14 @@ def _close(a: str, b: str) -> bool:
     return abs(x - y) <= 1.0001 * unit
 
 
-def differences(committed: str, fresh: str) -> list[str]:
-    """What differs between a committed transcript and a fresh run's (both normalised); [] if current."""
+def _within(a: str, b: str, rtol: float) -> bool:
+    x, y = float(a.replace(",", "")), float(b.replace(",", ""))
+    return abs(x - y) <= rtol * max(abs(x), abs(y))
+
+
+def differences(committed: str, fresh: str, rtol: float = 0.0) -> list[str]:
+    """What differs between a committed transcript and a fresh run's (both normalised); [] if current. `rtol`: values
+    (whole numbers too) within that fraction of the larger one also pass (ROUNDOFF_AMPLIFIED)."""
     cw, cn = _tokens(committed)
     fw, fn = _tokens(fresh)
     if [" ".join(w.split()) for w in cw] != [" ".join(w.split()) for w in fw]:
@@ -81,7 +95,7 @@ def differences(committed: str, fresh: str) -> list[str]:
             x, y = float(a.replace(",", "")), float(b.replace(",", ""))
             if abs(x - y) > max(1.0, 0.25 * x):
                 out.append(f"{a} is now {b} (a solver effort, beyond a quarter)")
-        elif kind == VALUE and not _close(a, b):
+        elif kind == VALUE and not _close(a, b) and not _within(a, b, rtol):
             out.append(f"{a} is now {b}")
     return out
 
@@ -90,6 +104,6 @@ def check(name: str, stdout: str, out: Path | str) -> None:
     """AssertionError naming what changed if demo `name` no longer prints what its tutorial page shows."""
     path = transcript_path(name)
     assert path.is_file(), f"{path} is missing: run `python docs/refresh_demos.py {name}`"
-    diff = differences(path.read_text(), normalise(stdout, out, name))
+    diff = differences(path.read_text(), normalise(stdout, out, name), ROUNDOFF_AMPLIFIED.get(name, 0.0))
     assert not diff, (f"the manual's page for demos/{name}.py is stale ({'; '.join(diff[:5])}): "
                       f"run `python docs/refresh_demos.py {name}` and commit docs/demos/")

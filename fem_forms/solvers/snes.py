@@ -66,8 +66,7 @@ class SNESDriver:
                  reuse_factor: bool | str = False, keep_preconditioner: bool = False):
         self.p = problem
         self.reuse_factor = reuse_factor
-        # the multigrid hierarchy may outlive a solve (time steps: the next step's tangent is close)
-        self.keep_preconditioner = keep_preconditioner
+        self.keep_preconditioner = keep_preconditioner  # multigrid kept across solves (time steps: tangents close)
         self.comm = problem.u.function_space.mesh.comm
         V = problem.u.function_space
         self.dofs = V.dofmap.index_map.size_global * V.dofmap.index_map_bs
@@ -85,7 +84,7 @@ class SNESDriver:
         self.bordered = Bordered(self, problem.scalars) if problem.scalars else None
         self.assembly_time = 0.0
         self.load_factor = 1.0           # for progress reports; set by the continuation
-        # polish also after a failed line search near the answer (staggered sub-solves; contact); off for plain
+        # accept a failed line search near the answer unpolished (staggered sub-solves; contact); off for plain
         # continuation: at a limit load it would accept a state just past the limit (measured: 1.0e-5 over StVK's)
         self.polish_stuck = False
         self.newton_cap: int | None = None   # fewer Newton iterations than the options allow (near a limit point)
@@ -137,8 +136,7 @@ class SNESDriver:
         if self.bordered is not None:
             self.bordered.install(snes, self.prefix)    # augmented residual, bordered Jacobian and inverse
         self.arrays.install(snes)                # the array terms' step cap, if any
-        # kept in the database (under this driver's own prefix) until the driver is gone: the factor's
-        # and the multigrid levels' options (mat_mumps_icntl_*, mg_levels_*) are read at the first solve
+        # kept in the database (own prefix) until the driver is gone: factor and mg_levels options are read at solve
         self.options = merged
         # multigrid set-up costs ~30 CG iterations: keep it across Newton steps while that is cheaper
         self.pc_reuse = (PreconditionerReuse(snes, self.comm)
@@ -213,9 +211,8 @@ class SNESDriver:
         return value if math.isfinite(value) else 1e300   # NaN (e.g. ln J, J<0): reject the step
 
     def _monitor(self, snes, it, fnorm) -> None:
-        """Record the residual; from the first Newton step on, converge also at the round-off floor
-        (PETSc tests convergence right after this call). Asking for less than round-off allows makes
-        the energy line search fail on noise and costs cut-backs (measured: 8 Newton steps for 4)."""
+        """Record the residual; from the first Newton step on, converge also at the round-off floor (PETSc tests
+        right after this call): less makes the energy line search fail on noise (measured: 8 Newton steps for 4)."""
         self._history.append(float(fnorm))
         progress.report("newton", load=self.load_factor, iteration=int(it), residual=float(fnorm))
         if it > 0:
@@ -339,12 +336,12 @@ class SNESDriver:
         so the energy line search sees no decrease and takes a tiny step while the residual is still
         above what round-off allows (measured: 4.8e-5 left where 1e-9 was reachable). Full Newton steps
         (no line search) converge quadratically from there: take up to 3, kept if SNES converged and the residual fell;
-        also after a line search failed at an equilibrium (_stuck_at_equilibrium; measured: 1e-9 from a sub-solve's
+        also after a line search failed near an equilibrium (_near_equilibrium; measured: 1e-9 from a sub-solve's
         answer; contact 2e-9). Returns (reason, Newton iterations, Krylov iterations) added."""
         if self.bounds is not None:       # a VI solve: setFromOptions resets its reduced KSP (PETSc error 60)
             return reason, 0, 0
         last = self._history[-1] if self._history else math.inf
-        if not (self._stuck_at_equilibrium(reason) or reason == PETSc.SNES.ConvergedReason.CONVERGED_SNORM_RELATIVE) \
+        if not (self._near_equilibrium(reason) or reason == PETSc.SNES.ConvergedReason.CONVERGED_SNORM_RELATIVE) \
                 or last <= max(self.base_atol(), self.roundoff_floor(1.0)):
             return reason, 0, 0
         saved, history = self.x.copy(), list(self._history)
@@ -369,13 +366,16 @@ class SNESDriver:
         saved.destroy()
         return reason, its, kits
 
-    def _stuck_at_equilibrium(self, reason: int) -> bool:
-        """Whether the energy line search failed on round-off below 1e-6 of the load scale (acceptance.ACCEPTED's bar)
-        in a solve _polish serves (`polish_stuck` or a step-capping term, no bounds): an equilibrium, accepted when the
-        polish did not converge (rejected, it sent 2 ranks down another frictional path than 1)."""
+    def _near_equilibrium(self, reason: int) -> bool:
+        """The energy line search failed on round-off below 1e-6 of the load scale, no bounds: _polish finishes it."""
         last = self._history[-1] if self._history else math.inf
-        near = (self.polish_stuck or self.arrays.caps) and last < 1e-6 * (getattr(self, "_load_scale", None) or 0.0)
-        return near and self.bounds is None and reason == PETSc.SNES.ConvergedReason.DIVERGED_LINE_SEARCH
+        return (self.bounds is None and reason == PETSc.SNES.ConvergedReason.DIVERGED_LINE_SEARCH
+                and last < 1e-6 * (getattr(self, "_load_scale", None) or 0.0))
+
+    def _stuck_at_equilibrium(self, reason: int) -> bool:
+        """_near_equilibrium, accepted unpolished in a `polish_stuck` or step-capping solve (elsewhere not: it sent
+        2 ranks down another frictional path than 1)."""
+        return (self.polish_stuck or bool(self.arrays.caps)) and self._near_equilibrium(reason)
 
     def _set_line_search(self, kind: str) -> None:
         """petsc4py 3.18 has no SNESGetLineSearch: set the type through the options database, with every
