@@ -2,14 +2,13 @@
 margin; a lopsided top whose spin axis becomes principal with the CoM on it; a box that floats upright at
 its waterline (mass = displaced water, GM against the box formula); no design -> exit 3 with the reason;
 the same design on 2 MPI ranks."""
-import json
 import math
 
 import numpy as np
 import pytest
 
 import balance_shapes
-from helpers import mpirun, run_scene
+from helpers import run_scene, serial_and_two_ranks
 
 
 def run(path, d):
@@ -134,13 +133,7 @@ def test_small_designs_solve_their_lps_whole(tmp_path, leaning):
 
 @pytest.mark.mpi
 def test_two_ranks_same_design(tmp_path, leaning):
-    from helpers import toml_dumps
     d = scene({"generator": "file", "file": str(leaning)}, goal="stand", margin_angle=2.0, shell=0.003)
-    (tmp_path / "s.toml").write_text(toml_dumps(d))
-    for n in (1, 2):
-        p = mpirun(["-m", "fem_forms", "run", str(tmp_path / "s.toml"), "--out", str(tmp_path / f"o{n}")], n=n)
-        assert p.returncode == 0, p.stderr
-    r1, r2 = (json.loads((tmp_path / f"o{n}" / "results.json").read_text()) for n in (1, 2))
-    assert r2["mpi_ranks"] == 2
+    r1, r2 = serial_and_two_ranks(tmp_path, d)
     assert r1["carved_fraction"] == pytest.approx(r2["carved_fraction"], rel=1e-12)
     assert np.allclose(r1["center_of_mass"], r2["center_of_mass"], rtol=1e-10)

@@ -67,16 +67,8 @@ def test_two_material_cantilever_sinks_as_its_transformed_section(tmp_path):
 
 @pytest.mark.mpi
 def test_cantilever_two_ranks(tmp_path):
-    import json
-    from helpers import mpirun, toml_dumps
-    (tmp_path / "s.toml").write_text(toml_dumps(cantilever()))
-    got = []
-    for n in (1, 2):
-        p = mpirun(["-m", "fem_forms", "run", str(tmp_path / "s.toml"), "--out", str(tmp_path / f"o{n}")], n=n)
-        assert p.returncode == 0, p.stderr
-        got.append(json.loads((tmp_path / f"o{n}" / "results.json").read_text()))
-    assert got[1]["mpi_ranks"] == 2
-    assert np.allclose(got[0]["deformed"]["center_of_mass"], got[1]["deformed"]["center_of_mass"], rtol=1e-9)
+    one, two = helpers.serial_and_two_ranks(tmp_path, cantilever())
+    assert np.allclose(one["deformed"]["center_of_mass"], two["deformed"]["center_of_mass"], rtol=1e-9)
 
 
 # --- the soft figure ----------------------------------------------------------------------------
@@ -144,18 +136,10 @@ def test_too_soft_to_stand_exits_3(tmp_path, figure):
 def test_soft_figure_two_ranks_same_design(tmp_path, figure):
     """The elastic stand design (P1, E 0.1 MPa: the rigid design misses the margin once sagged, the
     redesign meets it) on 1 and 2 ranks: the same carving and sagged numbers."""
-    import json
-    from helpers import mpirun, toml_dumps
     d = soft(figure, goal="stand")
     d["material"]["E"], d["discretization"]["degree"] = 1e5, 1
-    (tmp_path / "s.toml").write_text(toml_dumps(d))
-    got = []
-    for n in (1, 2):
-        p = mpirun(["-m", "fem_forms", "run", str(tmp_path / "s.toml"), "--out", str(tmp_path / f"o{n}")], n=n)
-        assert p.returncode == 0, p.stderr
-        got.append(json.loads((tmp_path / f"o{n}" / "results.json").read_text()))
-    one, two = got
-    assert two["mpi_ranks"] == 2 and one["static_solves"] == two["static_solves"]
+    one, two = helpers.serial_and_two_ranks(tmp_path, d)
+    assert one["static_solves"] == two["static_solves"]
     assert one["elastic_iterations"][0]["toppling_angle_deg"] < MARGIN <= one["deformed"]["toppling_angle_deg"]
     assert one["carved_fraction"] == pytest.approx(two["carved_fraction"], rel=1e-12)
     assert np.allclose(one["deformed"]["center_of_mass"], two["deformed"]["center_of_mass"], rtol=1e-9)

@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from helpers import mpirun, run_scene, to_toml
+from helpers import mpirun, run_scene, serial_and_two_ranks, to_toml
 import fem_forms as ff
 from fem_forms.analyses.dynamic import solve_dynamic
 from fem_forms.equilibrium import solve_static
@@ -276,15 +276,7 @@ def test_history_and_keys():
 
 @pytest.mark.mpi
 def test_two_ranks_agree(tmp_path):
-    d = beam({"duration": 0.01, "dt": 1e-3})
-    path = tmp_path / "scene.toml"
-    path.write_text(to_toml(d))
-    outs = []
-    for n in (1, 2):
-        out = tmp_path / f"r{n}"
-        p = mpirun(["-m", "fem_forms", "run", str(path), "--out", str(out), "-q"], n=n)
-        assert p.returncode == 0, p.stderr
-        outs.append(json.loads((out / "results.json").read_text()))
+    outs = serial_and_two_ranks(tmp_path, beam({"duration": 0.01, "dt": 1e-3}))
     a, b = (o["probes"]["tip"]["displacement"] for o in outs)
     assert np.allclose(a, b, rtol=1e-8, atol=1e-12)
     assert outs[1]["energy_balance_error"] < 1e-8

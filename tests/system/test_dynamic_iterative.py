@@ -1,12 +1,11 @@
 """The implicit step with [solver] linear = "iterative" (CG + GAMG, GMRES when damping leaves no energy):
 the same motion as MUMPS (another linear solver, the reference), the multigrid hierarchy kept across
 Newton iterations and time steps (built fewer times than there are Newton iterations), and 1 vs 2 ranks."""
-import json
 
 import numpy as np
 import pytest
 
-from helpers import mpirun, run_scene, to_toml
+from helpers import run_scene, serial_and_two_ranks
 
 L, H = 1.0, 0.1
 
@@ -55,16 +54,8 @@ def test_iterative_gives_the_direct_motion_with_a_kept_hierarchy(tmp_path, capsy
 def test_iterative_two_ranks_agree_with_one(tmp_path):
     d = cantilever("iterative", "generalized-alpha")
     d["dynamic"]["duration"] = 0.01
-    path = tmp_path / "scene.toml"
-    path.write_text(to_toml(d))
-    outs, probes = [], []
-    for n in (1, 2):
-        out = tmp_path / f"r{n}"
-        p = mpirun(["-m", "fem_forms", "run", str(path), "--out", str(out), "-q"], n=n)
-        assert p.returncode == 0, p.stderr
-        outs.append(json.loads((out / "results.json").read_text()))
-        probes.append(np.loadtxt(out / "probes.csv", delimiter=",", skiprows=1))
-    assert [o["mpi_ranks"] for o in outs] == [1, 2]
+    outs = serial_and_two_ranks(tmp_path, d)
+    probes = [np.loadtxt(tmp_path / folder / "probes.csv", delimiter=",", skiprows=1) for folder in ("out", "two")]
     assert all(o["linear_solver"] == "iterative" and o["preconditioner_builds"] < o["newton_iterations"]
                for o in outs)
     scale = np.abs(probes[0][:, 1:]).max(axis=0)

@@ -18,7 +18,7 @@ import pytest
 
 import fem_forms as ff
 from fem_forms.errors import InputError
-from helpers import mpirun, run_scene, toml_dumps
+from helpers import run_scene, serial_and_two_ranks
 from system.demo_runs import DEMOS, demo  # noqa: F401,F811 (demo: fixture)
 
 E, GC, ELL, K, A = 1.0, 1.0, 0.1, 1.0e-6, 0.01
@@ -160,14 +160,10 @@ def test_the_spectral_split_damages_at_the_tensile_principal_strains_energy(tmp_
     assert np.all(rows["damage_max"][above] > 1e-3)
 
 
+@pytest.mark.mpi
 def test_two_ranks_give_the_serial_curve(tmp_path):
-    (tmp_path / "s.toml").write_text(toml_dumps(bar("AT1", notch=True, steps=10)))
-    curves = []
-    for n in (1, 2):
-        r = mpirun(["-m", "fem_forms", "run", str(tmp_path / "s.toml"), "--out", str(tmp_path / f"o{n}")], n=n)
-        assert r.returncode == 0, r.stderr[-2000:]
-        curves.append(curve(tmp_path / f"o{n}"))
-        assert json.loads((tmp_path / f"o{n}" / "results.json").read_text())["mpi_ranks"] == n
+    serial_and_two_ranks(tmp_path, bar("AT1", notch=True, steps=10))
+    curves = [curve(tmp_path / folder) for folder in ("out", "two")]
     assert curves[1]["pull_Fx"] == pytest.approx(curves[0]["pull_Fx"], rel=1e-6)
     assert curves[1]["crack_area"] == pytest.approx(curves[0]["crack_area"], rel=1e-6)
 

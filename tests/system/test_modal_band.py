@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from helpers import MODAL_E, MODAL_L, MODAL_RHO, MODAL_T, modal_beam, mpirun, to_toml
+from helpers import MODAL_E, MODAL_L, MODAL_RHO, MODAL_T, modal_beam, mpirun, serial_and_two_ranks, to_toml
 from fem_forms import Scene
 from fem_forms.cli import main
 from fem_forms.model import build_model
@@ -71,20 +71,13 @@ def test_up_to_on_a_cantilever_gives_the_euler_bernoulli_list():
     assert res.frequencies_hz == pytest.approx(np.repeat(eb, 2), rel=0.015)
 
 
+@pytest.mark.mpi
 def test_two_ranks_find_the_same_band_and_hear_the_same_sound(tmp_path):
     d = bar(40_000.0, output={"picture": False, "fields": False},
             sound={"strike": {"point": [0.01, 0.01, 0.008], "direction": [0.0, 0.3, -1.0]}, "duration": 0.2,
                    "sample_rate": 96000, "listener": [0.03, 0.006, 0.3],
                    "modal_damping": [[5000.0, 0.002], [50000.0, 0.004]]})
-    (tmp_path / "scene.toml").write_text(to_toml(d))
-    runs = {}
-    for n in (1, 2):
-        out = tmp_path / f"np{n}"
-        args = ["-m", "fem_forms", "run", str(tmp_path / "scene.toml"), "--out", str(out), "-q"]
-        p = mpirun(args, n=n)
-        assert p.returncode == 0, p.stderr[-2000:]
-        runs[n] = json.loads((out / "results.json").read_text())
-    assert runs[2]["mpi_ranks"] == 2
+    runs = dict(zip((1, 2), serial_and_two_ranks(tmp_path, d)))
     assert runs[2]["modes_below_limit"] == runs[1]["modes_below_limit"] >= 4
     assert runs[2]["band"]["eigenvalues_below_limit"] == runs[1]["band"]["eigenvalues_below_limit"]
     assert runs[2]["frequencies_hz"] == pytest.approx(runs[1]["frequencies_hz"], rel=1e-8)
