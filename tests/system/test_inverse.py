@@ -1,7 +1,6 @@
 """Inverse rest-shape design against independent references: a forward solve from the designed rest
 shape (and a static run of its file) must land on the target; methods agree; Taylor test of the adjoint
 gradient; continuation for soft materials; MPI parity; unusable designs refused (bad settings: unit/test_inverse_input.py)."""
-import json
 
 import numpy as np
 import pytest
@@ -12,7 +11,7 @@ import fem_forms as ff
 from fem_forms.analyses import inverse
 from fem_forms.design.adjoint import AdjointDesign
 from fem_forms.design.forward_on_rest import ForwardOnRest
-from helpers import inverse_beam, mpirun, run_scene, toml_dumps
+from helpers import inverse_beam, run_scene, serial_and_two_ranks
 
 comm = MPI.COMM_WORLD
 
@@ -164,17 +163,6 @@ def test_unusable_rest_shape_is_refused(tmp_path, capsys):
     assert any("support plane x = 0.0" in p or "forward solve" in p or "did not reach" in p
                for p in data["problems"]), data["problems"]
     assert "no usable rest shape" in err
-
-
-def serial_and_two_ranks(tmp_path, d: dict) -> tuple[dict, dict]:
-    """results.json of the scene run in this process and under mpirun -n 2 (both must succeed)."""
-    path = tmp_path / "scene.toml"
-    path.write_text(toml_dumps(d))
-    code, serial, _, _ = run_scene(tmp_path, d)
-    assert code == 0
-    p = mpirun(["-m", "fem_forms", "run", str(path), "--out", str(tmp_path / "par")])
-    assert p.returncode == 0, p.stderr
-    return serial, json.loads((tmp_path / "par" / "results.json").read_text())
 
 
 @pytest.mark.mpi

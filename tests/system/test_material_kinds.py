@@ -105,6 +105,7 @@ def test_side_by_side_halves_relax_as_the_sum_of_their_forces(tmp_path):
     assert [m["name"] for m in s["materials"]] == ["damper", "spring"]
 
 
+@pytest.mark.mpi
 def test_two_ranks_relax_side_by_side_as_one(tmp_path):
     scene = tmp_path / "scene.toml"
     scene.write_text(toml_dumps(side_by_side()))

@@ -118,6 +118,7 @@ if MPI.COMM_WORLD.rank == 0:
 """
 
 
+@pytest.mark.mpi
 def test_spectrum_slicing_on_two_ranks_finds_the_dense_modes(tmp_path):
     limit = 60_000.0
     ref = dense_frequencies(Scene.from_dict(bar(limit)))

@@ -76,6 +76,7 @@ def test_of_two_materials_in_series_the_weaker_is_named(tmp_path):
         assert 'Name="utilization"' in f.read()
 
 
+@pytest.mark.mpi
 def test_two_ranks_find_the_serial_safety_factor(tmp_path):
     (tmp_path / "s.toml").write_text(toml_dumps(two_in_series()))
     r = mpirun(["-m", "fem_forms", "run", str(tmp_path / "s.toml"), "--out", str(tmp_path / "o")])
