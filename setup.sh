@@ -4,10 +4,11 @@
 # Idempotent: a second run installs nothing and takes a second.
 set -euo pipefail
 cd "$(dirname "$0")"
+# clang: FFCx's large forms compile 4.6x faster with it than with gcc (fem_forms/logs.py, FAST_CC)
 pkgs="python3-dolfinx python3-dolfinx-real python3-ufl python3-petsc4py python3-slepc4py python3-gmsh
 python3-meshio python3-pytest python3-mpi4py openmpi-bin libopenblas0-pthread python3-matplotlib
 python3-scipy python3-pil python3-jsonschema python3-venv python3-setuptools python3-pip python3-pytest-xdist
-python3-sphinx python3-myst-parser furo"
+python3-sphinx python3-myst-parser furo clang"
 missing=""
 for p in $pkgs; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing="$missing $p"

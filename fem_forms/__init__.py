@@ -18,7 +18,7 @@ from fem_forms.analyses.modal import write_modal_outputs
 from fem_forms.analyses.static import write_static_outputs
 from fem_forms.equilibrium import StaticResult, solve_static
 from fem_forms.errors import InputError, SolveError
-from fem_forms.logs import patient_jit, quiet_jit, release_interrupted_compiles
+from fem_forms.logs import patient_jit, quiet_jit, wrap_form_compiles
 from fem_forms.materials import (Corotated, LinearElastic, MooneyRivlin, NeoHookean, StVenantKirchhoff,
                                  UserMaterial)
 from fem_forms.materials.hyperelastic import make_material
@@ -36,4 +36,4 @@ __version__ = "0.1.0"
 threads.pin_loaded_blas()
 quiet_jit()
 patient_jit()
-release_interrupted_compiles()
+wrap_form_compiles()
