@@ -4,7 +4,7 @@ is interrupted.
 
 What prints the compile log in this stack (measured with an empty XDG_CACHE_HOME, dolfinx 0.5.2, ffcx 0.5.0,
 setuptools 66): ffcx builds each new form with cffi, cffi runs setuptools' bundled distutils, and distutils
-logs "running build_ext", "building 'libffcx_forms_...' extension" and the gcc command lines at INFO on the
+logs "running build_ext", "building 'libffcx_forms_...' extension" and the compiler command lines at INFO on the
 *root* logger (it even lowers the root level to INFO for the build); ffcx's ``logging.basicConfig()`` at
 import gave the root logger a stderr handler, so every line reaches the terminal. The "ffcx" and "UFL"
 loggers print nothing below WARNING here. So the one thing to silence is distutils' records below WARNING
@@ -43,8 +43,8 @@ def quiet_jit(verbose: bool = False) -> None:
 
 
 # How long FFCx waits for a form another process is compiling into the same cache before it gives up with
-# TimeoutError. dolfinx's default, 10 s, is shorter than the largest forms take to compile here (25-35 s cold
-# for a Q2 hexahedron at quadrature degree 8 on 2 shared cores): two runs sharing a cold cache (two scenes
+# TimeoutError. dolfinx's default, 10 s, is shorter than the largest forms took to compile here with gcc (25-35 s
+# cold for a Q2 hexahedron at quadrature degree 8 on 2 shared cores): two runs sharing a cold cache (two scenes
 # started together, the test suite on two workers) would fail on the first such form.
 JIT_WAIT_S = 900
 

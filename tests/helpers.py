@@ -215,8 +215,8 @@ def run_scene(tmp_path, d, capsys=None):
 def serial_and_two_ranks(tmp_path, d) -> tuple[dict, dict]:
     """results.json of scene dict d run in this process (out/) and under `mpirun -n 2` (two/, same scene file):
     the 2-rank check without a 1-rank mpirun (this process sums as one does: one BLAS thread, tests/conftest.py)."""
-    code, one, err, _ = run_scene(tmp_path, d)
-    assert code == 0, err
+    code, one, _, _ = run_scene(tmp_path, d)
+    assert code == 0, f"the in-process run exited {code}"
     p = mpirun(["-m", "fem_forms", "run", str(tmp_path / "scene.toml"), "--out", str(tmp_path / "two"), "-q"])
     assert p.returncode == 0, p.stderr[-2000:]
     two = json.loads((tmp_path / "two" / "results.json").read_text())

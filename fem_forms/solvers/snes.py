@@ -18,7 +18,7 @@ from petsc4py import PETSc
 import ufl
 
 from fem_forms import progress
-from fem_forms.solvers import bounds as vi, linear, pc_matrix, pmultigrid
+from fem_forms.solvers import bounds as vi, linear, pc_matrix, pmultigrid, polish
 from fem_forms.solvers.linear import roundoff_floor  # noqa: F401 (snes.roundoff_floor, used by the inverse check)
 from fem_forms.solvers.array_terms import ArrayTerms
 from fem_forms.solvers.bordered import Bordered
@@ -66,7 +66,8 @@ class SNESDriver:
                  reuse_factor: bool | str = False, keep_preconditioner: bool = False):
         self.p = problem
         self.reuse_factor = reuse_factor
-        self.keep_preconditioner = keep_preconditioner  # multigrid kept across solves (time steps: tangents close)
+        # the multigrid hierarchy may outlive a solve (time steps: the next step's tangent is close)
+        self.keep_preconditioner = keep_preconditioner
         self.comm = problem.u.function_space.mesh.comm
         V = problem.u.function_space
         self.dofs = V.dofmap.index_map.size_global * V.dofmap.index_map_bs
@@ -84,8 +85,8 @@ class SNESDriver:
         self.bordered = Bordered(self, problem.scalars) if problem.scalars else None
         self.assembly_time = 0.0
         self.load_factor = 1.0           # for progress reports; set by the continuation
-        # accept a failed line search near the answer unpolished (staggered sub-solves; contact); off for plain
-        # continuation: at a limit load it would accept a state just past the limit (measured: 1.0e-5 over StVK's)
+        # accept a failed line search near the answer even unpolished, and its polish wherever it moves u
+        # (staggered sub-solves; contact): polish.py
         self.polish_stuck = False
         self.newton_cap: int | None = None   # fewer Newton iterations than the options allow (near a limit point)
         self.rebuild()
@@ -136,7 +137,8 @@ class SNESDriver:
         if self.bordered is not None:
             self.bordered.install(snes, self.prefix)    # augmented residual, bordered Jacobian and inverse
         self.arrays.install(snes)                # the array terms' step cap, if any
-        # kept in the database (own prefix) until the driver is gone: factor and mg_levels options are read at solve
+        # kept in the database (under this driver's own prefix) until the driver is gone: the factor's
+        # and the multigrid levels' options (mat_mumps_icntl_*, mg_levels_*) are read at the first solve
         self.options = merged
         # multigrid set-up costs ~30 CG iterations: keep it across Newton steps while that is cheaper
         self.pc_reuse = (PreconditionerReuse(snes, self.comm)
@@ -211,8 +213,9 @@ class SNESDriver:
         return value if math.isfinite(value) else 1e300   # NaN (e.g. ln J, J<0): reject the step
 
     def _monitor(self, snes, it, fnorm) -> None:
-        """Record the residual; from the first Newton step on, converge also at the round-off floor (PETSc tests
-        right after this call): less makes the energy line search fail on noise (measured: 8 Newton steps for 4)."""
+        """Record the residual; from the first Newton step on, converge also at the round-off floor
+        (PETSc tests convergence right after this call). Asking for less than round-off allows makes
+        the energy line search fail on noise and costs cut-backs (measured: 8 Newton steps for 4)."""
         self._history.append(float(fnorm))
         progress.report("newton", load=self.load_factor, iteration=int(it), residual=float(fnorm))
         if it > 0:
@@ -323,59 +326,13 @@ class SNESDriver:
         reason = self.snes.getConvergedReason()
         iterations, krylov = self.snes.getIterationNumber(), self.snes.getLinearSolveIterations()
         if self.E is not None:
-            reason, its, kits = self._polish(reason)
+            reason, its, kits = polish.polish(self, reason)
             iterations, krylov = iterations + its, krylov + kits
         self._set_state(self.x)
         return StepRecord(0.0, iterations, self._history,
-                          _REASONS.get(reason, str(reason)), reason > 0 or self._stuck_at_equilibrium(reason),
+                          _REASONS.get(reason, str(reason)), reason > 0 or polish.stuck_at_equilibrium(self, reason),
                           krylov_iterations=krylov,
                           preconditioner_builds=self.pc_reuse.rebuilds - builds0 if self.pc_reuse else 0)
-
-    def _polish(self, reason: int) -> tuple[int, int, int]:
-        """SNES stopped on step length: near the answer the energy's change falls below its round-off,
-        so the energy line search sees no decrease and takes a tiny step while the residual is still
-        above what round-off allows (measured: 4.8e-5 left where 1e-9 was reachable). Full Newton steps
-        (no line search) converge quadratically from there: take up to 3, kept if SNES converged and the residual fell;
-        also after a line search failed near an equilibrium (_near_equilibrium; measured: 1e-9 from a sub-solve's
-        answer; contact 2e-9). Returns (reason, Newton iterations, Krylov iterations) added."""
-        if self.bounds is not None:       # a VI solve: setFromOptions resets its reduced KSP (PETSc error 60)
-            return reason, 0, 0
-        last = self._history[-1] if self._history else math.inf
-        if not (self._near_equilibrium(reason) or reason == PETSc.SNES.ConvergedReason.CONVERGED_SNORM_RELATIVE) \
-                or last <= max(self.base_atol(), self.roundoff_floor(1.0)):
-            return reason, 0, 0
-        saved, history = self.x.copy(), list(self._history)
-        max_it = self.snes.getTolerances()[3]
-        self._set_line_search("basic")
-        self.snes.setTolerances(max_it=3)
-        self._history = []
-        if self.pc_reuse is not None and not self.keep_preconditioner:
-            self.pc_reuse.start_solve()
-        self.snes.solve(None, self.x)
-        polished = self.snes.getConvergedReason()
-        its, kits = self.snes.getIterationNumber(), self.snes.getLinearSolveIterations()
-        self._set_line_search(self.options["snes_linesearch_type"])
-        self.snes.setTolerances(max_it=max_it)
-        if polished > 0 and self._history and self._history[-1] < last:
-            self._history = history + self._history[1:]
-            saved.destroy()
-            return polished, its, kits
-        saved.copy(self.x)                       # no better: keep the line search's answer
-        self.x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-        self._history = history
-        saved.destroy()
-        return reason, its, kits
-
-    def _near_equilibrium(self, reason: int) -> bool:
-        """The energy line search failed on round-off below 1e-6 of the load scale, no bounds: _polish finishes it."""
-        last = self._history[-1] if self._history else math.inf
-        return (self.bounds is None and reason == PETSc.SNES.ConvergedReason.DIVERGED_LINE_SEARCH
-                and last < 1e-6 * (getattr(self, "_load_scale", None) or 0.0))
-
-    def _stuck_at_equilibrium(self, reason: int) -> bool:
-        """_near_equilibrium, accepted unpolished in a `polish_stuck` or step-capping solve (elsewhere not: it sent
-        2 ranks down another frictional path than 1)."""
-        return (self.polish_stuck or bool(self.arrays.caps)) and self._near_equilibrium(reason)
 
     def _set_line_search(self, kind: str) -> None:
         """petsc4py 3.18 has no SNESGetLineSearch: set the type through the options database, with every

@@ -1,15 +1,18 @@
 """The one step acceptance (solvers/acceptance.py): a step SNES converged is still rejected for NaN or Inf in
 the state, an inadmissible state (with its reason) and a residual above its threshold; a residual at the
-round-off floor passes whatever its relative size."""
+round-off floor passes whatever its relative size. A line search that fails on the energy's round-off near
+the answer is finished by full Newton steps (solvers/polish.py) unless they move the answer; far from it, it
+fails."""
 import math
 
 from dolfinx import fem, mesh as dmesh
 from mpi4py import MPI
 import numpy as np
+from petsc4py import PETSc
 import pytest
 import ufl
 
-from fem_forms.solvers import acceptance, snes
+from fem_forms.solvers import acceptance, polish, snes
 
 
 @pytest.fixture(scope="module")
@@ -126,18 +129,40 @@ def slow_newton_driver(noisy_below: float) -> NoisyEnergyDriver:
     return driver
 
 
-def test_a_line_search_that_fails_on_round_off_near_the_answer_is_finished_by_full_newton_steps():
+def polished_after(monkeypatch) -> list:
+    """The reasons SNES stopped with before each polish (fem_forms/solvers/polish.py) from now on."""
+    seen, original = [], polish.polish
+
+    def recording(driver, reason):
+        seen.append(reason)
+        return original(driver, reason)
+    monkeypatch.setattr(polish, "polish", recording)
+    return seen
+
+
+def test_a_line_search_that_fails_on_round_off_near_the_answer_is_finished_by_full_newton_steps(monkeypatch):
+    seen = polished_after(monkeypatch)
     driver = slow_newton_driver(1e-6)
     record = driver.solve_step()
-    assert driver.noise_seen                     # the line search met the noise (at 2.5e-7 of the scale) ...
+    assert driver.noise_seen and seen == [PETSc.SNES.ConvergedReason.DIVERGED_LINE_SEARCH]   # failed at 2.5e-7 ...
     assert record.reason.startswith("CONVERGED") and record.accepted      # ... and the polish converged
     assert record.residuals[-1] <= 1e-9 * driver.load_scale()
     assert acceptance.why_rejected(driver, record, load_scale=driver.load_scale()) is None
     driver.destroy()
 
 
+def test_a_polish_that_moves_the_answer_is_not_kept(monkeypatch):
+    """The same solve with polish.FINISH_MOVE = 0: the polish's move counts as a jump to another equilibrium (past a
+    limit load), so the failed line search stands and the step is rejected."""
+    monkeypatch.setattr(polish, "FINISH_MOVE", 0.0)
+    driver = slow_newton_driver(1e-6)
+    record = driver.solve_step()
+    assert driver.noise_seen and record.reason == "DIVERGED_LINE_SEARCH" and not record.accepted
+    driver.destroy()
+
+
 def test_a_line_search_that_fails_far_from_the_answer_is_a_failed_step():
-    driver = slow_newton_driver(1e-2)            # noise from 4.8e-2 of the scale on: no equilibrium near
+    driver = slow_newton_driver(1e-2)            # noise from the first residual below 1e-2 of the scale on
     record = driver.solve_step()
     assert driver.noise_seen and record.reason == "DIVERGED_LINE_SEARCH" and not record.accepted
     assert record.residuals[-1] > 1e-6 * driver.load_scale()
