@@ -85,8 +85,8 @@ class SNESDriver:
         self.bordered = Bordered(self, problem.scalars) if problem.scalars else None
         self.assembly_time = 0.0
         self.load_factor = 1.0           # for progress reports; set by the continuation
-        # accept a failed line search near the answer even unpolished, and its polish wherever it moves u
-        # (staggered sub-solves; contact): polish.py
+        # staggered sub-solves, contact: a failed line search near the answer is accepted even unpolished, and its
+        # polish is kept however far it moves u (polish.py)
         self.polish_stuck = False
         self.newton_cap: int | None = None   # fewer Newton iterations than the options allow (near a limit point)
         self.rebuild()
