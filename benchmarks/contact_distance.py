@@ -57,10 +57,10 @@ def main() -> None:
             t0 = time.perf_counter()
             result = ff.solve_static(scene(mesh, share * D))
             times.append(time.perf_counter() - t0)
-        c = result.contact["contact"]["plane"]
+        c = result.term_reports["contact"]["plane"]
         force = 4 * c["force"][2]
         radius = math.sqrt(4 * c["area"] / math.pi)
-        gap = result.contact["min_distance"] / (share * D)
+        gap = result.term_reports["min_distance"] / (share * D)
         lines.append(f"| 1/{round(1 / share)} | {share * D:.1e} | {force / force_ref - 1:+.2%} | "
                      f"{radius / radius_ref - 1:+.2%} | {gap:.3f} | {result.report.newton_iterations} | "
                      f"{statistics.median(times[-3:]):.2f} s |")

@@ -1,7 +1,8 @@
 """Do two versions of fem_forms give the same answers? Runs every demo and benchmark scene (made small
 with --set where they are large) through `python -m fem_forms run`, every demo script and every case of the
 verification manual, in a checkout of REF and in this tree, and compares the numbers users read from each
-results.json (probe displacements and rest positions, frequencies, max |u|, energy) to a relative
+results.json (probe displacements and rest positions, frequencies, max |u|, energy, Newton iterations and
+steps, reactions, contact forces and gaps, the crack's numbers, a dynamic run's final energies) to a relative
 tolerance (numbers below 1e-6 of a run's largest against that floor).
 
     .venv/bin/python benchmarks/same_answers.py cb0ef34 [--tol 1e-10] [--out benchmarks/same_answers.md]
@@ -44,6 +45,18 @@ def key_numbers(summary: dict) -> dict[str, float]:
         for key in ("displacement", "rest_position"):
             for c, v in enumerate(p.get(key) or []):
                 out[f"{name}.{key}[{c}]"] = float(v)
+    for k in ("newton_iterations", "load_steps", "steps", "time_reached", "min_distance", "damage_max",
+              "crack_area", "cracked_volume", "surface_energy", "peak_load_factor", "staggered_sweeps"):
+        if isinstance(summary.get(k), (int, float)) and not isinstance(summary.get(k), bool):
+            out[k] = float(summary[k])
+    for k, v in (summary.get("energy_final") or {}).items():     # a dynamic run's energy account at the end
+        out[f"energy_final.{k}"] = float(v)
+    for name, c in (summary.get("contact") or {}).items():       # each obstacle's force on the part
+        for i, f in enumerate(c.get("force") or []):
+            out[f"contact.{name}.force[{i}]"] = float(f)
+    for name, r in (summary.get("reactions") or {}).items():
+        for i, f in enumerate(r):
+            out[f"reactions.{name}[{i}]"] = float(f)
     if summary.get("analysis") == "balance":        # its numbers are the design's mass properties
         for k, v in summary.items():
             if k in BALANCE_KEYS:

@@ -17,7 +17,7 @@ from fem_forms.physics.thermal import HeatForms
 from fem_forms.physics.thermoelastic import young_modulus
 from fem_forms.solvers.thermal_step import HeatSolver, max_value, min_value
 from fem_forms.state import State
-from fem_forms.output.fracture import FractureHistory
+from fem_forms.output.histories import step_histories
 from fem_forms.output.quantities import Quantities
 from fem_forms.output.guard import attempt
 from fem_forms.output.reactions import reaction_report
@@ -25,7 +25,7 @@ from fem_forms.physics import rigid_motion
 from fem_forms.physics.histories import piecewise_linear
 from fem_forms.scene import Scene
 from fem_forms.physics.path_constraint import ArcLength
-from fem_forms.solvers import arc_length, continuation, snes, staggered
+from fem_forms.solvers import arc_length, continuation, snes
 from fem_forms.solvers.linear import rigid_body_modes
 
 
@@ -41,9 +41,10 @@ class StaticResult:
     reactions: dict = field(default_factory=dict)        # reactions, applied_load, equilibrium_error
     quantities: Quantities | None = None                 # recovered stresses and strains
     cavities: dict = field(default_factory=dict)         # name -> pressure, volume, volume_change
-    contact: dict = field(default_factory=dict)          # contact, min_distance, intersection_free, ...
+    term_reports: dict = field(default_factory=dict)     # each term's report (contact, min_distance, crack ...)
     strength: dict | None = None                         # safety factor against [material.strength]
-    fracture: FractureHistory | None = None              # [fracture]: forces and crack per accepted step
+    histories: list = field(default_factory=list)        # per accepted step (a crack's force-displacement curve)
+    sweeps: list | None = None                           # staggered sweeps per solved step (terms' sub-problems)
     wall_time_s: float = 0.0
 
     @property
@@ -87,9 +88,10 @@ class StaticResult:
             **self.reactions,
             **({"cavities": self.cavities} if self.cavities else {}),
             **({"unstable_rejected": r.unstable_rejected} if r.unstable_rejected else {}),
-            **self.contact,
+            **self.term_reports,
             **({"strength": self.strength} if self.strength else {}),
-            **(self.fracture.summary() if self.fracture is not None else {}),
+            **{k: v for h in self.histories for k, v in h.summary().items()},
+            **({"staggered_sweeps": int(sum(self.sweeps))} if self.sweeps else {}),
             "message": r.message,
         }
 
@@ -146,14 +148,12 @@ def load_path(model: Model) -> tuple:
     for t in model.loads:                     # every load's own factor at 1, as a new model has it (the rest-
         t.factor.value = 1.0                  # state checks see the full loads): none is left where an earlier
     if not timed and not held:                # run of this model put it; set_load moves them along the histories
-        contact = model.terms.with_role("contact")
-        if not contact:
+        if not model.terms.lagged:
             return model.load.set, ()
 
-        def set_factor(lam: float) -> None:   # contact: obstacles move and friction lags with pseudo-time lambda
+        def set_factor(lam: float) -> None:   # lagged terms (contact) move and lag with pseudo-time lambda
             model.load.set(lam)
-            for term in contact:
-                term.update(lam)
+            model.terms.lag(lam)
         return set_factor, ()
     histories = [t.history for t in timed] + [f.history for _, f in held]
     t_end = max(h[-1][0] for h in histories)
@@ -215,20 +215,6 @@ def chain(first: Callable[[float], None], then: Callable[[float], None] | None) 
     return both
 
 
-def fracture_driver(model: Model, problem, linear_kind: str) -> staggered.AlternateMinimization | None:
-    """With [fracture]: the displacement's driver whose steps alternate with the damage's (None without), the
-    damage started again from the scene's notches (a new solve of this model)."""
-    damage = model.damage_problem()
-    if damage is None:
-        return None
-    for term in model.terms.with_role("fracture"):
-        term.restart(model.state)
-    fr = model.scene.fracture
-    return staggered.AlternateMinimization(problem, [damage], fr.tolerance, fr.max_iterations,
-                                           model.scene.solver.petsc, linear_kind=linear_kind,
-                                           near_nullspace=lambda: rigid_body_modes(model.V))
-
-
 def load_span(model: Model) -> float:
     """The pseudo-time at load factor 1: the span of the [[load]] histories (time = lambda x span, as
     `load_path` moves the loads), 1 without any history (time = the load factor)."""
@@ -244,11 +230,10 @@ def solve_static(scene: Scene, material=None, model: Model | None = None,
     writes its load path there. Raises InputError for bad input; a failed solve is returned with
     report.converged False and no answer numbers (see `post_process` for the last accepted state)."""
     t0 = time.perf_counter()
-    fracture = None
+    histories, sweeps = [], None
     model = model or build_model(scene, material)
     model.probes                                           # located now: a probe outside the mesh is bad input
-    if hasattr(model.solid, "restart"):       # a solid with time (viscoelastic) starts again at t = 0, at rest
-        model.solid.restart(model.state)
+    model.terms.start(model.state)     # a new solve: each term's start (a solid with time at rest, the notches)
     if model.temperature is not None:
         solve_temperature(model)
     set_load, stops = load_path(model)
@@ -264,10 +249,10 @@ def solve_static(scene: Scene, material=None, model: Model | None = None,
         if scene.solver.control == "arc-length":
             report = follow_path(model, r0.norm(), linear_kind, on_step or (lambda lam: None))
         else:
-            driver = fracture_driver(model, problem, linear_kind)
-            if driver is not None:
-                fracture = FractureHistory(model, load_span(model))
-                on_step = chain(fracture, on_step)
+            driver = model.staggered_driver(problem, scene.solver.petsc, linear_kind)
+            histories = step_histories(model, load_span(model))
+            for h in histories:
+                on_step = chain(h, on_step)
             try:
                 report = continuation.solve(problem, scene.solver.petsc, steps=scene.solver.steps,
                                             max_cutbacks=scene.solver.max_cutbacks, linear_kind=linear_kind,
@@ -277,18 +262,14 @@ def solve_static(scene: Scene, material=None, model: Model | None = None,
                                             max_step=scene.solver.max_step, driver=driver)
             finally:
                 if driver is not None:
-                    fracture.sweeps = driver.sweeps
+                    sweeps = driver.sweeps
                     driver.destroy()
     r0.destroy()
-    result = StaticResult(model, report, fracture=fracture)
+    result = StaticResult(model, report, histories=histories, sweeps=sweeps)
     if report.converged:
         post_process(result)
     result.wall_time_s = time.perf_counter() - t0
     return result
-
-
-VISCO_ENERGY = ("energy: not reported for a viscoelastic solid (its free energy holds the Prony branches' "
-                "share, which the step energy the solver minimises is not)")
 
 
 def post_process(result: StaticResult) -> None:
@@ -297,16 +278,15 @@ def post_process(result: StaticResult) -> None:
     calls it for a continuation stopped at a limit point, its loads set back to the last accepted factor."""
     model, report = result.model, result.report
     model.sync_displacement()
-    if getattr(model.solid, "prony_terms", 0):        # its step energy is no stored energy: not reported
-        if VISCO_ENERGY not in model.warnings:
-            model.warnings.append(VISCO_ENERGY)
+    if caveat := model.solid.energy_caveat:           # its step energy is no stored energy: not reported
+        if caveat not in model.warnings:
+            model.warnings.append(caveat)
     elif model.energy is not None and model.solid.energy(model.context) is not None:   # von Mises: none
         result.energy = model.mesh.comm.allreduce(fem.assemble_scalar(model.compiled("energy")), op=MPI.SUM) \
             + sum(t.energy_value(model.unknown.vector) for t in model.terms.arrays)
     result.max_displacement = max_norm(model.u)
     result.cavities = cavity_report(model.terms)
-    for term in model.terms.with_role("contact"):
-        result.contact.update(term.report(model.unknown.vector))
+    result.term_reports = model.terms.report(model.unknown.vector)
     result.probes = model.probes.evaluate(model.u)
     result.quantities = Quantities(model)
     result.probe_stresses = attempt(model.warnings, "stress recovery at the probes",

@@ -14,11 +14,12 @@ from fem_forms.meshes import LoadedMesh, load_mesh
 from fem_forms.output.probes import ProbeSet
 from fem_forms.physics.admissibility import SmallestValue
 from fem_forms.physics.assemble import equilibrium_forms, scene_physics
-from fem_forms.physics.fracture import notch_dofs, resolution_warning
 from fem_forms.physics.parameters import Parameters
 from fem_forms.physics.supports import LoadFactor
-from fem_forms.physics.terms import Context, Load, Solid, TermList
+from fem_forms.physics.terms import Context, Load, Solid, SubProblem, TermList
+from fem_forms.solvers.linear import rigid_body_modes
 from fem_forms.solvers.snes import NonlinearProblem
+from fem_forms.solvers.staggered import AlternateMinimization
 from fem_forms.physics.thermoelastic import couple_temperature
 from fem_forms.scene import Scene
 from fem_forms.state import State
@@ -59,6 +60,7 @@ class Model:
         self._compiled: dict = {}
         self._probes: ProbeSet | None = None
         self._scalars: list | None = None
+        self._sub_problems: list | None = None
 
     @property
     def probes(self) -> ProbeSet:
@@ -71,7 +73,7 @@ class Model:
         """The compiled "residual", "jacobian" or "energy" (None if the model has none), compiled once and
         shared by the solver and the checks and outputs (each fem.form call re-hashes the UFL form: ~5 ms)."""
         if which not in self._compiled:
-            expr = getattr(self, which)
+            expr = {"residual": self.residual, "jacobian": self.jacobian, "energy": self.energy}[which]
             self._compiled[which] = fem.form(expr) if expr is not None else None
         return self._compiled[which]
 
@@ -119,9 +121,8 @@ class Model:
         large strains), or None."""
         if why := self.solid.outside_theory(self.context):
             return why
-        for term in self.terms.with_role("contact"):     # checked apart from the step filter that prevents it
-            if why := term.intersection(self.unknown.vector):
-                return why
+        if why := self.terms.inadmissible(self.unknown.vector):  # checked apart from a step filter (contact)
+            return why
         if self.scene.small_strain and self.scene.analysis == "static":
             return None                                  # small-strain theory: J has no meaning
         jmin = self.min_jacobian()
@@ -138,20 +139,34 @@ class Model:
                                 inadmissible=self.inadmissible, state=state or self.state,
                                 array_terms=self.terms.arrays, scalars=self.global_scalars())
 
-    def damage_problem(self) -> NonlinearProblem | None:
-        """The phase field's problem with u frozen (None without [fracture]): the energy's derivative in d,
-        bounded by the last accepted damage and 1; built once per model."""
-        term = next(iter(self.terms.with_role("fracture")), None)
-        if term is None:
+    def sub_problems(self) -> list[tuple[NonlinearProblem, SubProblem]]:
+        """The problems the terms own in fields of their own (the damage), with the displacement frozen; built
+        once per model: each the energy's derivative in its field, bounded by its committed values (if
+        irreversible) and its upper bound."""
+        if self._sub_problems is None:
+            self._sub_problems = []
+            for term in self.terms:
+                sub = term.sub_problem(self.solid, self.context)
+                if sub is None:
+                    continue
+                V, name = sub.field.function_space, sub.field.name
+                R = ufl.derivative(sub.energy, sub.field, ufl.TestFunction(V))
+                J = ufl.derivative(R, sub.field, ufl.TrialFunction(V))
+                lower = self.state.old[name] if sub.irreversible else None
+                problem = NonlinearProblem(sub.field, fem.form(R), fem.form(J), [], energy=fem.form(sub.energy),
+                                           state=self.state, bounds=(lower, sub.upper))
+                self._sub_problems.append((problem, sub))
+        return self._sub_problems
+
+    def staggered_driver(self, problem: NonlinearProblem, options: dict, linear_kind: str,
+                         **kwargs) -> AlternateMinimization | None:
+        """The displacement's driver whose steps alternate with the terms' sub-problems (None without any)."""
+        subs = self.sub_problems()
+        if not subs:
             return None
-        if getattr(self, "_damage_problem", None) is None:
-            E = term.damage_energy(self.solid, self.context)
-            V = term.d.function_space
-            R = ufl.derivative(E, term.d, ufl.TestFunction(V))
-            J = ufl.derivative(R, term.d, ufl.TrialFunction(V))
-            self._damage_problem = NonlinearProblem(term.d, fem.form(R), fem.form(J), [], energy=fem.form(E),
-                                                    state=self.state, bounds=(self.state.old["damage"], 1.0))
-        return self._damage_problem
+        return AlternateMinimization(problem, [p for p, _ in subs], min(s.tolerance for _, s in subs),
+                                     max(s.max_iterations for _, s in subs), options, linear_kind=linear_kind,
+                                     near_nullspace=lambda: rigid_body_modes(self.V), **kwargs)
 
     def global_scalars(self) -> list:
         """The scalar unknowns the terms add to the Newton solve (a volume-controlled cavity's pressure), made
@@ -229,20 +244,16 @@ def build_model(scene: Scene, material=None, comm: MPI.Comm = MPI.COMM_WORLD,
     physics = scene_physics(scene, loaded, u_form, bc_space, material, pressure=pressure, extra=extra)
     context, terms = physics.context, physics.terms
     fields = {"unknown": unknown}
-    if getattr(scene, "thermal", None) is not None:
+    if scene.thermal is not None:
         fields["temperature"] = couple_temperature(scene, context, terms.solid.material, disc.degree)
-    for term in terms.with_role("fracture"):            # the damage: a second field, committed with u
-        term.notch = notch_dofs(loaded, term.d.function_space, scene.fracture.notch)
-        fields["damage"] = term.d
-        if why := resolution_warning(mesh, scene.fracture.length):
-            warnings.append(why)
+    fields.update(terms.state_fields())                 # a term's own fields (the damage), committed with u
+    warnings += [w for t in terms for w in t.warnings()]
     forms = equilibrium_forms(terms, context, unknown, v)
     # the mixed energy is a saddle in (u, p): no line-search objective there
     conservative = forms.conservative and disc.formulation != "mixed"
     state = State(fields)
     terms.solid.attach(state, context)               # history variables (plasticity)
-    for term in terms.with_role("fracture"):
-        term.restart(state)                          # the notches' damage, committed
+    terms.start(state)                               # every term's start values, committed (the notches' damage)
     return Model(scene, loaded, V, u, terms.solid.material, context.dx, physics.load, physics.bcs, forms.energy,
                  forms.residual, forms.jacobian, conservative, unknown, u_form, context, terms,
                  context.parameters, state, warnings, physics.support_owners, fields.get("temperature"))

@@ -77,10 +77,11 @@ def write_static_outputs(result: StaticResult, out: "Path", path: LoadPath | Non
             files["picture"] = "deformed.png"
         if attempt(warnings, "deformed.stl", lambda: write_deformed_surface(result.model, out / "deformed.stl")):
             files["surface"] = "deformed.stl"
-    if result.fracture is not None and result.fracture.rows:
-        files.update(attempt(summary["warnings"], "force_displacement.csv and crack.png",
-                             lambda: result.fracture.write(out, result.model.scene.title,
-                                                           result.model.scene.output.picture), {}))
+    for h in result.histories:
+        if h.rows:
+            files.update(attempt(summary["warnings"], h.label,
+                                 lambda: h.write(out, result.model.scene.title, result.model.scene.output.picture),
+                                 {}))
     if stepped:
         files.update(path.finish(summary))
     results.write_newton_history(out / "newton_history.csv", result.report.steps, comm)

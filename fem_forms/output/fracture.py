@@ -9,6 +9,7 @@ import numpy as np
 
 from fem_forms.output import fields, pictures, probes
 from fem_forms.output.reactions import support_forces
+from fem_forms.physics.fracture import PhaseField
 from fem_forms.physics.histories import piecewise_linear
 from fem_forms.scene.spec import fix_names
 
@@ -16,13 +17,17 @@ from fem_forms.scene.spec import fix_names
 class FractureHistory:
     """The static run's `on_step(lam)` for [fracture] (chained with the load path's): one row per step."""
 
-    def __init__(self, model, span: float):
-        self.model, self.span = model, span
-        self.term = next(iter(model.terms.with_role("fracture")))
+    def __init__(self, model, span: float, term: PhaseField):
+        self.model, self.span, self.term = model, span, term
         self.names = fix_names(model.scene.fix)
         self.rows: list[list[float]] = []
         self.records: list[dict] = []
-        self.sweeps: list[int] = []            # the alternate minimization's sweeps per solved step
+
+    @classmethod
+    def of(cls, model, span: float) -> "FractureHistory | None":
+        """The history of a model with a phase field (None without one)."""
+        term = next((t for t in model.terms if isinstance(t, PhaseField)), None)
+        return cls(model, span, term) if term is not None else None
 
     def prescribed(self, lam: float) -> np.ndarray:
         """(fixes, 3): each support's prescribed displacement at load factor lam (0 where it holds still)."""
@@ -71,8 +76,11 @@ class FractureHistory:
         else:
             k = len(lams) - 1
         out["peak_load_factor"] = float(lams[k])
-        out["staggered_sweeps"] = int(sum(self.sweeps))
         return out
+
+    @property
+    def label(self) -> str:
+        return "force_displacement.csv and crack.png"
 
     def write(self, out: Path, title: str, picture: bool) -> dict:
         """force_displacement.csv, and with `picture` crack.png and force_displacement.png; the files' names."""

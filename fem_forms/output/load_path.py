@@ -30,7 +30,7 @@ def field_functions(model, quantities: Quantities, names: list[str]) -> list:
     written = output_fields(quantities, names) + plastic_fields(model)
     if model.temperature is not None:
         written.append(fields.p1_interpolant(model.temperature, "temperature"))
-    written += [t.d for t in model.terms.with_role("fracture")]          # the damage (P1), a time series
+    written += model.terms.output_fields()          # the terms' own (the damage, P1), a time series
     return written
 
 
@@ -38,9 +38,7 @@ def records(model) -> dict[str, float]:
     """Every term's `record()` (optional: Term's default gives {}), merged in term order."""
     out: dict[str, float] = {}
     for term in model.terms:
-        record = getattr(term, "record", None)
-        if record is not None:
-            out.update({str(k): float(v) for k, v in record().items()})
+        out.update({str(k): float(v) for k, v in term.record().items()})
     return out
 
 

@@ -12,7 +12,6 @@ at those nodes.
 from __future__ import annotations
 
 from dolfinx import fem
-from mpi4py import MPI
 import numpy as np
 import ufl
 
@@ -107,33 +106,20 @@ class Quantities:
             return from_nodes(self._nodal("cauchy_stress"), measures.principal_values, (3,), name)
         if name in measures.STRAINS_OF_F:
             return from_nodes(self._nodal("deformation_gradient"), measures.STRAINS_OF_F[name], (3, 3), name)
-        if name == "contact_pressure":
-            return contact_pressure(self.model)
         if name == "utilization":
             return self.strength_check().field()
         if name == "material":
             regions = self.model.context.materials
             return regions.field(list(range(len(regions.materials))), "material")
-        raise KeyError(name)                   # the scene reader refuses unknown names before this
+        return term_field(self.model, name)    # a term's own (contact_pressure); the reader refuses unknown names
 
 
-def contact_pressure(model) -> fem.Function:
-    """The contacts' pressure (Pa) at the mesh's vertices, zero off the contact, as a P1 Function: the barriers'
-    pushes per touching area, gathered onto the corner nodes (physics/contact/pressure.py)."""
-    from scipy.spatial import cKDTree
-    from fem_forms.physics.contact.pressure import vertex_pressure
-    V1 = fem.FunctionSpace(model.mesh, ("Lagrange", 1))
-    f = fem.Function(V1, name="contact_pressure")
-    xyz = V1.tabulate_dof_coordinates()
-    for term in model.terms.with_role("contact"):
-        s = term.surface
-        dist, node = cKDTree(s.rest).query(xyz)
-        mine = dist <= 1e-9 * term.diagonal                  # this rank's vertices on the surface
-        corner = np.zeros(s.size, np.int32)
-        corner[node[mine]] = 1
-        model.mesh.comm.Allreduce(MPI.IN_PLACE, corner, op=MPI.MAX)      # a vertex of any rank
-        push = term.nodal_pressure(model.unknown.vector) * s.area
-        f.x.array[mine] += vertex_pressure(s, push, corner.astype(bool))[node[mine]]
+def term_field(model, name: str) -> fem.Function:
+    """A field the terms compute (contact_pressure) at the mesh's vertices as a P1 Function: each term adds its
+    share, zero where none has any."""
+    f = fem.Function(fem.FunctionSpace(model.mesh, ("Lagrange", 1)), name=name)
+    for term in model.terms:
+        term.add_output_field(name, f)
     return f
 
 

@@ -30,12 +30,12 @@ def write_stl(path: Path, points: np.ndarray, triangles: np.ndarray, name: str, 
 
 def write_deformed_surface(model, path: Path) -> bool:
     """deformed.stl: the part's outer surface at its current displacement (on the displacement's nodes: degree 2
-    facets in 4 or 8 triangles), written by rank 0 from the gathered surface (the contact term's, if any).
+    facets in 4 or 8 triangles), written by rank 0 from the gathered surface.
     False (no file) on prisms."""
     from fem_forms.meshes.boundary_surface import boundary_surface
     if model.mesh.topology.cell_name() not in ("tetrahedron", "hexahedron"):
         return False                               # prisms: no deformed.stl (yet)
-    surface = next((t.surface for t in model.terms.with_role("contact")), None) or boundary_surface(model.V)
+    surface = boundary_surface(model.V)
     points = surface.positions(model.u.vector)
     if model.mesh.comm.rank == 0:
         write_stl(path, points, surface.faces, "deformed surface")

@@ -37,7 +37,7 @@ class StrengthCheck:
         corners = basix.geometry(basix.cell.string_to_type(mesh.topology.cell_name()))
         # a stress with quadrature-space history (plastic strain, Prony stresses) exists at the dx rule's points
         # only (FFCx refuses other points for it): there the corners are left out
-        history = getattr(model.solid, "is_plastic", False) or getattr(model.solid, "prony_terms", 0)
+        history = model.solid.quadrature_history
         points = gauss if history else np.vstack([gauss, corners])
         self.sigma = fem.Expression(sigma, points)
         X = ufl.SpatialCoordinate(mesh)

@@ -70,7 +70,7 @@ def scene_physics(scene: Scene, loaded: LoadedMesh, u, bc_space: fem.FunctionSpa
     owners: list = []
     bcs = supports(bc_space, loaded, scene.fix, load, sign=bc_sign, owners=owners)
     ctx = make_context(loaded, scene, u, dx, parameters, load, rest_map, pressure)
-    ctx.rest_offset, ctx.materials = rest_offset, regions
+    ctx.rest_offset, ctx.materials, ctx.loaded = rest_offset, regions, loaded
     ctx.extra.update(extra or {})
     name = scene.material.model if material is None else getattr(as_material(material), "name",
                                                                    type(material).__name__)

@@ -21,7 +21,7 @@ import ufl
 
 from fem_forms.errors import InputError
 from fem_forms.physics.principal import tensile_energy
-from fem_forms.physics.terms import Context, Term, register_terms
+from fem_forms.physics.terms import Context, SubProblem, Term, register_terms
 
 C_W = {"AT1": 8.0 / 3.0, "AT2": 2.0}
 CRACKED = 0.95                 # cracked_volume: the volume where d is at least this
@@ -33,6 +33,7 @@ class PhaseField(Term):
     role = "fracture"
     keys = ("fracture",)
     fields = ("damage",)
+    energy_columns = ("fracture",)
 
     def __init__(self, spec, mesh):
         self.spec = spec
@@ -56,6 +57,37 @@ class PhaseField(Term):
     def prepare(self, ctx: Context) -> None:
         ctx.extra["damage"] = self
         self.ctx = ctx
+        self.notch = notch_dofs(ctx.loaded, self.d.function_space, self.spec.notch)
+        self._warnings = [w for w in [resolution_warning(ctx.mesh, self.spec.length)] if w is not None]
+
+    def warnings(self) -> list[str]:
+        return self._warnings
+
+    def state_fields(self) -> dict:
+        return {"damage": self.d}
+
+    def sub_problem(self, solid, ctx: Context) -> SubProblem:
+        """The damage with u frozen: E(u, d) minimised over d_old <= d <= 1 (irreversibility)."""
+        return SubProblem(self.d, self.damage_energy(solid, ctx), 1.0, True, self.spec.tolerance,
+                          self.spec.max_iterations)
+
+    def start(self, state) -> None:
+        """Intact but for the notches (d = 1 there), committed: a new solve starts from the scene's cracks."""
+        for f in (self.d, state.old["damage"]):
+            f.x.array[:] = 0.0
+            f.x.array[self.notch] = 1.0
+            f.x.scatter_forward()
+        self.surface0 = self._scalar("surface", self.crack_density())   # the notches' own surface energy
+
+    def report(self, x) -> dict:
+        return {**self.record(), "crack_center": self.crack_center()}
+
+    def stored_energies(self, x) -> dict[str, float]:
+        """The crack's surface energy beyond the notches' (what cracking dissipated)."""
+        return {"fracture": self._scalar("surface", self.crack_density()) - self.surface0}
+
+    def output_fields(self) -> list:
+        return [self.d]
 
     # -- the energy ---------------------------------------------------------------------------------
     def degradation(self):
@@ -127,13 +159,6 @@ class PhaseField(Term):
         count = comm.allreduce(int(cracked.sum()), op=MPI.SUM)
         total = comm.allreduce(x.sum(axis=0) if len(x) else np.zeros(3), op=MPI.SUM)
         return (total / count).tolist() if count else None
-
-    def restart(self, state) -> None:
-        """Intact but for the notches (d = 1 there), committed: a new solve starts from the scene's cracks."""
-        for f in (self.d, state.old["damage"]):
-            f.x.array[:] = 0.0
-            f.x.array[self.notch] = 1.0
-            f.x.scatter_forward()
 
 
 def notch_dofs(loaded, V: fem.FunctionSpace, selectors: list) -> np.ndarray:

@@ -12,7 +12,7 @@ volume(...) and area(...).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Callable
 
 from dolfinx import fem, mesh as dmesh
@@ -21,75 +21,8 @@ from petsc4py import PETSc
 import ufl
 
 from fem_forms.errors import InputError
-from fem_forms.physics.parameters import Parameters
-from fem_forms.physics.supports import LoadFactor
+from fem_forms.physics.context import Context  # noqa: F401 (the terms are written on it)
 from fem_forms.physics.histories import piecewise_linear
-
-
-@dataclass
-class Context:
-    """Kinematics, measures and parameters the terms are written with."""
-    mesh: dmesh.Mesh
-    u: object                              # displacement as it appears in the forms (UFL expression)
-    dx: ufl.Measure
-    ds: ufl.Measure                        # boundary measure tagged with the surface loads' regions
-    regions: dict                          # load index -> the ds ids of its facets
-    parameters: Parameters
-    load: LoadFactor
-    rest_map: object = None                # G = dX/dx (None: the mesh is the rest shape)
-    pressure: object = None                # the mixed formulation's pressure field, else None
-    deformation: object = None             # F written directly (the inverse problem), else from u
-    extra: dict = field(default_factory=dict)   # what later terms need (time, old values, history)
-    dx_regions: ufl.Measure | None = None  # dx tagged with the body loads' volume groups
-    body_regions: dict = field(default_factory=dict)   # load index -> the dx ids of its cells
-    thermal_strain: object = None          # alpha (T - T_ref), a UFL scalar, when temperature is coupled in
-    rest_offset: object = None             # rest shape minus mesh (None: the mesh is the rest shape)
-    materials: object = None               # MaterialRegions: which material each cell is made of
-
-    @property
-    def F(self):
-        """Deformation gradient dx/dX."""
-        if self.deformation is not None:
-            return self.deformation
-        grad_u = ufl.grad(self.u)
-        if self.rest_map is not None:
-            grad_u = grad_u * ufl.inv(self.rest_map)
-        return ufl.Identity(len(self.u)) + grad_u
-
-    @property
-    def rest_position(self):
-        """X, the rest position of each mesh point (UFL vector)."""
-        x = ufl.SpatialCoordinate(self.mesh)
-        return x if self.rest_offset is None else x + self.rest_offset
-
-    @property
-    def position(self):
-        """x = X + u, the deformed position of each mesh point (UFL vector)."""
-        return self.rest_position + self.u
-
-    def volume(self, density, region: int | None = None, dx: ufl.Measure | None = None) -> ufl.Form:
-        """int density dX over the rest shape (or over the cells of one body-load region; or with the
-        measure `dx`, e.g. a mass matrix's own rule)."""
-        if dx is None:
-            dx = self.dx if region is None else self.dx_regions(region)
-        if self.rest_map is None:
-            return density * dx
-        return density * ufl.det(self.rest_map) * dx
-
-    def area(self, density, region: int) -> ufl.Form:
-        """int density dA over the rest shape's facets of one ds region."""
-        if self.rest_map is None:
-            return density * self.ds(region)
-        n = ufl.FacetNormal(self.mesh)
-        m = ufl.inv(self.rest_map).T * n
-        return density * ufl.det(self.rest_map) * ufl.sqrt(ufl.dot(m, m)) * self.ds(region)
-
-    def rest_area_vector(self):
-        """N dA / da: the rest shape's outward area vector per mesh facet area."""
-        n = ufl.FacetNormal(self.mesh)
-        if self.rest_map is None:
-            return n
-        return ufl.det(self.rest_map) * ufl.inv(self.rest_map).T * n
 
 
 class Term:
@@ -110,6 +43,7 @@ class Term:
     # the residual takes `first_variation` instead of ufl.derivative of `energy`: for an energy that is exact
     # only where the supports hold (a cavity closed by symmetry planes), so that reactions see the true load
     residual_by_hand: bool = False
+    is_array: bool = False             # an ArrayTerm (physics/array_term.py): energy as arrays, not UFL
     keys: tuple = ()
     fields: tuple = ("displacement",)
 
@@ -146,6 +80,75 @@ class Term:
     def conservative(self) -> bool:
         return type(self).virtual_work is Term.virtual_work
 
+    # --- the life cycle every analysis calls without knowing the term (PolyFEM's forms have the same shape) ---
+    # lagged quantities (friction's normal forces, moving obstacles): `update(t)` at every step's start, also
+    # in a static run without histories, where t is the load factor
+    lagging: bool = False
+    energy_columns: tuple = ()         # the dynamic energy account's columns this term fills (stored_energies)
+
+    def state_fields(self) -> dict:
+        """The fields this term adds to the State beside the unknown (committed and rolled back with it)."""
+        return {}
+
+    def warnings(self) -> list[str]:
+        """What the run should warn about this term on this mesh (found in `prepare`)."""
+        return []
+
+    def start(self, state) -> None:
+        """A new solve begins: history and time back to their start values, committed in `state`."""
+
+    def resume(self, t: float) -> None:
+        """Continue at time t from a restored checkpoint (its fields restored with the State)."""
+
+    def inadmissible(self, x: PETSc.Vec) -> str | None:
+        """Why the state x cannot be accepted (an intersection), or None: checked on every accepted step."""
+        return None
+
+    def sub_problem(self, solid: "Solid", ctx: Context) -> "SubProblem | None":
+        """A problem in a field of its own that alternates with the displacement's (the damage), or None."""
+        return None
+
+    def report(self, x: PETSc.Vec) -> dict:
+        """results.json entries of this term at the state x (the end of a run)."""
+        return {}
+
+    def stored_energies(self, x: PETSc.Vec) -> dict[str, float]:
+        """Energies this term stores at x, by the energy account's column (`energy_columns`)."""
+        return {}
+
+    def step_dissipation(self, x: PETSc.Vec) -> float:
+        """Energy this term dissipated over the current step up to x (J), for the energy account."""
+        return 0.0
+
+    def support_forces(self, x: PETSc.Vec) -> np.ndarray:
+        """(k, 3) forces this term's supports exert on the body at x (they hold it as [[fix]] does)."""
+        return np.zeros((0, 3))
+
+    def surface_forces(self, body: str, x: PETSc.Vec) -> tuple | None:
+        """(nodes, (n, 3) forces, BoundarySurface): the force the named body exerts on each node of the surface
+        (the same on every rank), or None if this term has no such body."""
+        return None
+
+    def output_fields(self) -> list:
+        """Fields of its own written with the run's fields (the damage), as they are."""
+        return []
+
+    def add_output_field(self, name: str, f) -> None:
+        """Add this term's share of the [output] field `name` (e.g. contact_pressure) into the P1 Function f."""
+
+
+@dataclass
+class SubProblem:
+    """A term's own field and its energy with u frozen, minimised between `lower` (the committed field,
+    with `irreversible`) and `upper`; alternated with the displacement until both change less than
+    `tolerance` (at most `max_iterations` sweeps)."""
+    field: fem.Function
+    energy: ufl.Form
+    upper: float
+    irreversible: bool
+    tolerance: float
+    max_iterations: int
+
 
 class Solid(Term):
     """The solid's own stored energy (elastic or plastic): the one term every model has exactly once.
@@ -178,6 +181,18 @@ class Solid(Term):
     def counts_plastic_work(self, thermal: bool) -> bool:
         """Whether the energy account books this solid's plastic work (`plastic_dissipation`)."""
         return False
+
+    def viscous_work(self, start: Context, end: Context) -> ufl.Form | None:
+        """The work of a viscous history over a step from start's u to end's (None: no viscous history)."""
+        return None
+
+    # why results.json reports no stored energy for this solid (None: it does)
+    energy_caveat: str | None = None
+
+    @property
+    def quadrature_history(self) -> bool:
+        """Whether its stress depends on history stored at the quadrature points (plastic, Prony)."""
+        return self.is_plastic
 
 
 class Load(Term):
@@ -242,7 +257,7 @@ class TermList:
     @property
     def arrays(self) -> list:
         """The terms whose energy is computed as arrays (ArrayTerm), for the solver's callbacks."""
-        return [t for t in self.all if isinstance(t, ArrayTerm)]
+        return [t for t in self.all if t.is_array]
 
     def only_ufl(self, analysis: str) -> None:
         """InputError naming the array terms (energies computed outside UFL) that `analysis` cannot take yet:
@@ -259,54 +274,51 @@ class TermList:
         for term in self.all:
             term.update(t)
 
+    # --- the life cycle, over every term ----------------------------------------------------------
+    @property
+    def lagged(self) -> list[Term]:
+        return [t for t in self.all if t.lagging]
 
-class ArrayTerm(Term):
-    """A piece of the energy computed outside UFL (a lumped mass, a contact barrier) as arrays, at the
-    solver's state x (a PETSc Vec in the unknown's dof layout, owned entries). It sits in the model's
-    TermList like any term (role, keys, fields, set_values, update) but gives no UFL form: it joins the UFL
-    terms in the same Newton solve, energy line search and step cap (fem_forms.solvers.array_terms)."""
-    name: str = "array term"
+    def lag(self, t: float) -> None:
+        """Lagged terms to time (or load factor) t, lagged from the current state."""
+        for term in self.lagged:
+            term.update(t)
 
-    def energy_value(self, x: PETSc.Vec) -> float:
-        """The term's energy at x, summed over ranks (the same value on every rank)."""
-        raise NotImplementedError
+    def state_fields(self) -> dict:
+        return {k: f for t in self.all for k, f in t.state_fields().items()}
 
-    def add_gradient(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
-        """Add dE/dx into the residual b: into b.array (owned entries), or by b.setValues(ADD_VALUES) (the
-        caller assembles b after every term). Rows of Dirichlet dofs may get anything: set_bc follows."""
-        raise NotImplementedError
+    def start(self, state) -> None:
+        for t in self.all:
+            t.start(state)
 
-    def add_hessian(self, x: PETSc.Vec, A: PETSc.Mat, constrained: np.ndarray) -> None:
-        """Add d2E/dx2 into the assembled tangent A (BAIJ or AIJ; the caller assembles it afterwards),
-        leaving out the rows and columns in `constrained` (global indices of the Dirichlet dofs, all ranks,
-        sorted): those stay the identity rows the UFL assembly made. `add_entries` does both."""
-        raise NotImplementedError
+    def resume(self, t: float) -> None:
+        for term in self.all:
+            term.resume(t)
 
-    def max_step(self, x: PETSc.Vec, dx: PETSc.Vec) -> float:
-        """The largest safe fraction (0, 1] of the step x -> x + dx (the same on every rank)."""
-        return 1.0
+    def inadmissible(self, x: PETSc.Vec) -> str | None:
+        return next((why for t in self.all if (why := t.inadmissible(x)) is not None), None)
+
+    def report(self, x: PETSc.Vec) -> dict:
+        return {k: v for t in self.all for k, v in t.report(x).items()}
+
+    def stored_energies(self, x: PETSc.Vec) -> dict[str, float]:
+        return {k: v for t in self.all for k, v in t.stored_energies(x).items()}
+
+    def step_dissipation(self, x: PETSc.Vec) -> float:
+        return sum(t.step_dissipation(x) for t in self.all)
+
+    def support_forces(self, x: PETSc.Vec) -> np.ndarray:
+        return np.vstack([np.zeros((0, 3))] + [t.support_forces(x) for t in self.all])
+
+    def surface_forces(self, body: str, x: PETSc.Vec) -> tuple | None:
+        return next((f for t in self.all if (f := t.surface_forces(body, x)) is not None), None)
+
+    def output_fields(self) -> list:
+        return [f for t in self.all for f in t.output_fields()]
 
     @property
-    def caps(self) -> bool:
-        """Whether the term can cap a step (it overrides max_step)."""
-        return type(self).max_step is not ArrayTerm.max_step
-
-
-def add_entries(A: PETSc.Mat, rows: np.ndarray, cols: np.ndarray, values: np.ndarray,
-                constrained: np.ndarray) -> None:
-    """Add the (row, col, value) triplets (global indices, any rank's rows) into A, except those in a
-    constrained row or column. Entries outside A's pattern are allocated: a MatAXPY that widened A (triangle
-    contact) resets A's options, and an obstacle's friction block added after it stopped with PETSc error 63
-    (a ring on a floor, squeezed until its inner walls met)."""
-    A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
-    keep = ~(np.isin(rows, constrained) | np.isin(cols, constrained))
-    rows, cols, values = rows[keep], cols[keep], values[keep]
-    order = np.argsort(rows, kind="stable")
-    rows, cols, values = rows[order], cols[order], values[order]
-    starts = np.flatnonzero(np.r_[True, rows[1:] != rows[:-1]]) if len(rows) else []
-    for i, j in zip(starts, list(starts[1:]) + [len(rows)]):
-        A.setValues(int(rows[i]), cols[i:j].astype(PETSc.IntType), values[i:j],
-                    addv=PETSc.InsertMode.ADD_VALUES)
+    def energy_columns(self) -> set:
+        return {c for t in self.all for c in t.energy_columns}
 
 
 # load type (the [[load]] type key) -> builder(spec, index in scene.load, mesh) -> Term

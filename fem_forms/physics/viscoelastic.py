@@ -58,6 +58,15 @@ class ViscoelasticSolid(ElasticEnergy):
     def prony_terms(self) -> int:
         return len(self.g)
 
+    @property
+    def quadrature_history(self) -> bool:
+        return self.prony_terms > 0
+
+    @property
+    def energy_caveat(self) -> str | None:
+        return ("energy: not reported for a viscoelastic solid (its free energy holds the Prony branches' share, "
+                "which the step energy the solver minimises is not)") if self.prony_terms else None
+
     def set_values(self, scene) -> None:
         layout = [len(m.prony or []) for m in scene.materials]
         if layout != self.layout:

@@ -8,7 +8,7 @@ from mpi4py import MPI
 import numpy as np
 from petsc4py import PETSc
 
-from fem_forms.physics.terms import ArrayTerm
+from fem_forms.physics.array_term import ArrayTerm
 
 
 def constrained_dofs(V: fem.FunctionSpace, bcs: list) -> np.ndarray:

@@ -17,7 +17,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
-from fem_forms.physics.terms import ArrayTerm, add_entries  # noqa: E402
+from fem_forms.physics.array_term import ArrayTerm, add_entries  # noqa: E402
 from fem_forms.solvers.snes import NonlinearProblem, SNESDriver  # noqa: E402
 
 E, NU, RHO, G, K = 3e4, 0.3, 1000.0, 9.81, 1e4

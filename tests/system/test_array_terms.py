@@ -11,7 +11,7 @@ from dolfinx import fem, mesh
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from fem_forms.physics.terms import ArrayTerm
+from fem_forms.physics.array_term import ArrayTerm
 from fem_forms.solvers import acceptance
 from fem_forms.solvers.snes import NonlinearProblem, SNESDriver
 from helpers import ROOT, mpirun

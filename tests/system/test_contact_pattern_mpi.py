@@ -20,7 +20,7 @@ import numpy as np
 import scipy.sparse as sp
 from petsc4py import PETSc
 from fem_forms.physics.contact.term import ContactTerm
-from fem_forms.physics.terms import add_entries
+from fem_forms.physics.array_term import add_entries
 comm = PETSc.COMM_WORLD
 A = PETSc.Mat().createAIJ(((6, None), (6, None)), nnz=(3, 0), comm=comm)      # 4 nodes x 3 dofs, 2 per rank
 lo, hi = A.getOwnershipRange()

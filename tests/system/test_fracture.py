@@ -103,7 +103,7 @@ def test_a_notch_takes_the_optimal_damage_profile(model, profile):
     scene = ff.Scene.from_dict(bar(model, u_end=1e-3, steps=1, cells=200, notch=True))
     result = ff.solve_static(scene)
     assert result.report.converged
-    d = result.fracture.term.d
+    d = result.histories[0].term.d
     x = d.function_space.tabulate_dof_coordinates()[:, 0]
     r = np.abs(x - 0.5)
     assert np.abs(d.x.array - profile(r)).max() < 0.03

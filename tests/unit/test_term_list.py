@@ -83,7 +83,7 @@ def test_paths_that_assemble_ufl_alone_refuse_array_terms():
     """An energy computed as arrays must never be silently left out: the analyses that do not take array
     terms yet say so by name (InputError: exit 2), the static solve hands them to the driver."""
     from fem_forms.errors import InputError
-    from fem_forms.physics.terms import ArrayTerm
+    from fem_forms.physics.array_term import ArrayTerm
 
     class Floor(ArrayTerm):
         name, role = "floor", "contact"

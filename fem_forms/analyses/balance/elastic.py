@@ -68,9 +68,7 @@ class SagModel:
 
 
     def _sag(self) -> StaticResult:
-        """One static sag, the contact term (if any) restarted at pseudo-time 0."""
-        for term in self.model.terms.with_role("contact"):
-            term.resume(0.0)                         # each sag's pseudo-time starts at 0 (friction's slip eps)
+        """One static sag (each term starts again: contact's pseudo-time at 0, for friction's slip eps)."""
         return solve_static(self.scene, model=self.model)
 
 
@@ -96,7 +94,7 @@ def sag_design(scene: Scene, gravity: np.ndarray, setting: Callable[[object], Se
         bent = rest.deformed(sag.model.u)
         numbers = evaluate(bent, st, solid, rest)
         numbers["max_displacement"] = result.max_displacement
-        numbers.update(result.contact or {})              # resting on a [contact] floor: its force, the gap
+        numbers.update(result.term_reports or {})              # resting on a [contact] floor: its force, the gap
         entry = {"static_solve": k + 1, "max_displacement": result.max_displacement,
                  "newton_iterations": result.report.newton_iterations,
                  "carved_fraction": numbers["carved_fraction"], "stability_margin": numbers["stability_margin"],

@@ -63,10 +63,7 @@ def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> d
         for name, value in result.system.model.probes.evaluate(T).items():
             summary["probes"][name]["temperature"] = value[0]
     summary.update(plastic_summary(result.system.model))
-    for term in model.terms.with_role("fracture"):              # the crack at the end
-        summary.update(term.record())
-    for term in model.terms.with_role("contact"):
-        summary.update(term.report(model.u.vector))
+    summary.update(model.terms.report(model.u.vector))         # each term's numbers at the end (contact, crack)
     if "max_plastic_strain" in summary and not result.energy.plastic_accounted:
         warnings.append("plasticity: the plastic work is not in the energy account; energy_balance_error "
                         "includes it")

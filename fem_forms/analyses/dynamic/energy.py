@@ -53,6 +53,10 @@ class Energies:
     viscous_work: float = 0.0         # the work on a viscoelastic solid's Prony branches (stored there or lost)
     fracture: float = 0.0             # the crack's surface energy beyond the notches' (what cracking dissipated)
 
+    def value(self, name: str) -> float:
+        """The energy of column `name`."""
+        return dict(zip(COLUMNS, self.row()))[name]
+
     def row(self) -> list:
         """The values in the order of COLUMNS."""
         return [self.kinetic, self.elastic, self.external_work, self.dissipated, self.thermal_work,
@@ -120,14 +124,11 @@ class EnergyAccount:
             start = at_temperature(start, m.temperature, s.state.old["temperature"])
         self.plastic = fem.form(term.plastic_dissipation(start, ctx)) if plastic else None
         self.plastic_thermal = fem.form(term.thermal_work(start, ctx)) if plastic and self.thermal else None
-        viscous = hasattr(term, "viscous_work")
-        if viscous and self.u0 is None:
-            self.u0 = fem.Function(V)
-        self.viscous = fem.form(term.viscous_work(replace(m.context, u=self.u0), ctx)) if viscous else None
-        crack = next(iter(m.terms.with_role("fracture")), None)
-        self.crack = fem.form(ctx.volume(crack.crack_density())) if crack is not None else None
-        self.crack0 = 0.0
-        self.crack0 = self._crack()               # the notches' own: the column is what cracking added since
+        u0 = self.u0 if self.u0 is not None else fem.Function(V)
+        viscous = term.viscous_work(replace(m.context, u=u0), ctx)     # None: no viscous history
+        if viscous is not None:
+            self.u0 = u0
+        self.viscous = fem.form(viscous) if viscous is not None else None
         if s.lumped is None:
             self.M = fpetsc.assemble_matrix(s.mass)
             self.M.assemble()
@@ -202,8 +203,7 @@ class EnergyAccount:
 
     def start(self, t: float) -> Energies:
         self._set(self.ue, self.system.u.x.array)
-        self.now = Energies(self.kinetic(), self._scalar(self.elastic), contact=self._contact(),
-                            fracture=self._crack())
+        self.now = Energies(self.kinetic(), self._scalar(self.elastic), **self._stored())
         self.history.append((t, self.now))
         return self.now
 
@@ -228,7 +228,7 @@ class EnergyAccount:
                 y.pointwiseMult(y, self.vm.vector)
                 dis += self.lumped_alpha * y.dot(self.w.vector)
                 y.destroy()
-        dis += sum(t.friction_work(s.u.vector) for t in s.model.terms.with_role("contact"))   # lagged friction
+        dis += s.model.terms.step_dissipation(s.u.vector)      # the terms' own (lagged friction)
         thermal = plastic = 0.0
         if self.thermal and self.plastic_thermal is None:
             thermal = self._thermal_work(0.5 * (u0 + u1))
@@ -244,26 +244,22 @@ class EnergyAccount:
             viscous = self._scalar(self.viscous)
         self.now = Energies(self.kinetic(), self._scalar(self.elastic), prev.external_work + work,
                             prev.dissipated + dis, prev.thermal_work + thermal, prev.plastic_work + plastic,
-                            self._contact(), prev.viscous_work + viscous, self._crack())
+                            viscous_work=prev.viscous_work + viscous, **self._stored())
         self.history.append((t_new, self.now))
         return self.now
 
-    def _contact(self) -> float:
-        """The contact barrier's energy at the current state (0 without [contact])."""
-        return sum(t.barrier_energy(self.system.u.vector) for t in self.system.model.terms.with_role("contact"))
-
-    def _crack(self) -> float:
-        """The crack's surface energy at the current damage beyond the notches' (0 without [fracture])."""
-        return self._scalar(self.crack) - self.crack0 if self.crack is not None else 0.0
+    def _stored(self) -> dict[str, float]:
+        """The energies the terms store at the current state, by column (a contact barrier's; the crack's
+        surface energy beyond the notches')."""
+        return self.system.model.terms.stored_energies(self.system.u.vector)
 
     def columns(self) -> tuple:
         """The energies this run records (thermal_work with a temperature field, plastic_work with an
         accounted plastic solid, contact with [contact])."""
-        return COLUMNS[:4] + (("thermal_work",) if self.thermal else ()) + \
-            (("plastic_work",) if self.plastic_accounted else ()) + \
-            (("contact",) if self.system.model.terms.with_role("contact") else ()) + \
-            (("viscous_work",) if self.viscous is not None else ()) + \
-            (("fracture",) if self.crack is not None else ())
+        recorded = set(COLUMNS[:4]) | self.system.model.terms.energy_columns | \
+            ({"thermal_work"} if self.thermal else set()) | ({"plastic_work"} if self.plastic_accounted else set()) | \
+            ({"viscous_work"} if self.viscous is not None else set())
+        return tuple(c for c in COLUMNS if c in recorded)
 
     def imbalance(self) -> float:
         """max over time of |E_kin + E_el - W_ext - W_th + D + W_p - (its start value)| in J."""

@@ -65,6 +65,11 @@ class ExplicitStepper:
         self.inv = inverse_mass(system)
         self.n = self.inv.local_size
 
+    @property
+    def motion(self) -> "ExplicitStepper":
+        """The stepper of the motion itself (a staggered heat step wraps one)."""
+        return self
+
     def acceleration(self) -> None:
         """a = -M^-1 R(u) with R = f_int - f_ext + C v_h (zero at supported dofs)."""
         b = self.b

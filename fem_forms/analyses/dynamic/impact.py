@@ -34,16 +34,16 @@ class ImpactRecorder:
 
     def __init__(self, spec):
         self.spec = spec
-        self.term = None
+        self.surface = None
         self.times, self.nodes, self.forces = [], [], []
 
     def __call__(self, system, t: float) -> None:
-        if self.term is None:
-            self.term = next(iter(system.model.terms.with_role("contact")))
-            self.index = [ob.name for ob in self.term.obstacles].index(self.spec.obstacle)
-            if self.spec.listener is not None:
-                check_listener(system.model.u, self.spec.listener)
-        act, force = self.term.nodal_forces(system.u.vector)[self.index]   # the same on every rank
+        got = system.model.terms.surface_forces(self.spec.obstacle, system.u.vector)   # the same on every rank
+        if got is None:
+            raise InputError(f"sound.impact.obstacle = {self.spec.obstacle!r}: no such obstacle in [contact]")
+        act, force, self.surface = got
+        if len(self.times) == 0 and self.spec.listener is not None:
+            check_listener(system.model.u, self.spec.listener)
         self.times.append(float(t))
         self.nodes.append(np.asarray(act).copy())
         self.forces.append(np.asarray(force).reshape(-1, 3).copy())
@@ -54,7 +54,7 @@ class ImpactRecorder:
 
     def impulses(self) -> np.ndarray:
         """(surface nodes, 3) each node's impulse, by the trapezoidal rule over the recorded steps."""
-        J = np.zeros((self.term.surface.size, 3))
+        J = np.zeros((self.surface.size, 3))
         t = np.asarray(self.times)
         w = np.zeros(len(t))
         if len(t) > 1:
@@ -90,7 +90,7 @@ def impact_entry(result, recorder: ImpactRecorder, spec, out: Path) -> dict:
     omega = 2 * math.pi * np.maximum(f_hz, 0.0)
     zeta = sound.damping_ratios(f_hz, spec)
     keep = np.flatnonzero((f_hz >= HEARING_FLOOR_HZ) & (f_hz < spec.sample_rate / 2) & (zeta < 1.0))
-    surface = recorder.term.surface
+    surface = recorder.surface
     pos = np.full(surface.size, -1)
     pos[surface.owned] = np.arange(len(surface.owned))
     modes = [modal.modes[i] for i in keep]

@@ -10,8 +10,8 @@ import numpy as np
 from petsc4py import PETSc
 
 from fem_forms.analyses.dynamic.system import DynamicSystem
-from fem_forms.physics.terms import ArrayTerm
-from fem_forms.solvers import acceptance, linear, snes, staggered
+from fem_forms.physics.array_term import ArrayTerm
+from fem_forms.solvers import acceptance, linear, snes
 from fem_forms.solvers.time_stepping import StepOutcome
 
 
@@ -86,25 +86,25 @@ class ImplicitStepper:
         # slipping, touching or not): a kept tangent lacks them, and full Newton steps cycle between stick and
         # slip (a block sticking on a slope: 49 iterations a step, most in failed 50-iteration attempts; 11
         # with the energy line search first, full Newton as the retry where round-off stalls the line search)
-        self.contact = bool(m.terms.with_role("contact"))
-        self.fracture = bool(m.terms.with_role("fracture"))
-        self.searches = ("bt", "basic") if self.contact and system.energy is not None else ("basic", "bt")
-        damage = m.damage_problem()                # [fracture]: each step an alternate minimization with d
-        self.fracture = damage is not None
-        kwargs = dict(near_nullspace=lambda: linear.rigid_body_modes(m.V), reuse_factor=not self.iterative,
-                      keep_preconditioner=True)
-        if damage is None:
-            self.driver = snes.SNESDriver(self.problem, self._options(), linear_kind, **kwargs)
-        else:
-            fr = system.scene.fracture
-            self.driver = staggered.AlternateMinimization(self.problem, [damage], fr.tolerance, fr.max_iterations,
-                                                          self._options(), linear_kind=linear_kind, **kwargs)
+        self.lagged = bool(m.terms.lagged)
+        self.searches = ("bt", "basic") if self.lagged and system.energy is not None else ("basic", "bt")
+        self.staggered = bool(m.sub_problems())    # each step an alternate minimization with the terms' fields
+        kwargs = dict(reuse_factor=not self.iterative, keep_preconditioner=True)
+        self.driver = m.staggered_driver(self.problem, self._options(), linear_kind, **kwargs) or \
+            snes.SNESDriver(self.problem, self._options(), linear_kind,
+                            near_nullspace=lambda: linear.rigid_body_modes(m.V), **kwargs)
         self.line_search_retry = self.driver.E is not None and "snes_linesearch_type" not in self.user_options
         self.may_unlag = "snes_lag_jacobian" not in self.user_options
         self.fresh = True                          # the next step starts from a freshly built tangent
         self.dt_factored = None
         self.last_why = ""
         self.krylov_iterations = self.preconditioner_builds = 0
+        self.u_scale = 0.0                         # the largest displacement seen (the error estimate's scale)
+
+    @property
+    def motion(self) -> "ImplicitStepper":
+        """The stepper of the motion itself (a staggered heat step wraps one)."""
+        return self
 
     def _options(self) -> dict:
         """Direct: the tangent is kept with its factor (modified Newton: the residual is fresh, so the
@@ -113,7 +113,7 @@ class ImplicitStepper:
         Iterative (CG + GAMG; GMRES where damping leaves no energy): a fresh tangent at every Newton
         iteration, the multigrid hierarchy kept across iterations and steps by the driver's cost rule."""
         opts = {"snes_linesearch_type": self.searches[0]}
-        if not self.iterative and not self.contact and not self.fracture:   # damage changes the tangent
+        if not self.iterative and not self.lagged and not self.staggered:   # their tangents change
             opts.update({"snes_lag_preconditioner": 100, "snes_lag_preconditioner_persists": True,
                          "snes_lag_jacobian": 100, "snes_lag_jacobian_persists": True})
         opts.update(self.user_options)
@@ -134,8 +134,7 @@ class ImplicitStepper:
         s.td.dt.value = dt
         s.td.time.value = t + dt
         s.set_load_time(t + dt, t, self.released)
-        for term in s.model.terms.with_role("contact"):
-            term.update(t + dt)                    # obstacles where they are at the step's end
+        s.model.terms.lag(t + dt)                  # lagged terms (obstacles) where they are at the step's end
         s.model.solid.update(t + dt)               # a solid with time (viscoelastic): the step's dt
         rec, why = self._solve(dt)
         if why is not None and self._fall_back(rec):        # CG failed on a fresh hierarchy: MUMPS, same dt
@@ -242,7 +241,7 @@ class ImplicitStepper:
         e = comm.allreduce(float(np.abs(s.a.x.array - s.state.old["acceleration"].x.array).max(initial=0)),
                            op=MPI.MAX)
         scale = comm.allreduce(float(np.abs(s.u.x.array).max(initial=0)), op=MPI.MAX)
-        self.u_scale = max(getattr(self, "u_scale", 0.0), scale)
+        self.u_scale = max(self.u_scale, scale)
         return dt * dt * abs(beta - 1 / 6) * e / max(self.u_scale, 1e-300) if self.u_scale > 0 else 0.0
 
     def undo(self) -> None:

@@ -23,7 +23,7 @@ def write_csvs(out: Path, result, comm) -> None:
     probes.write_table(out / "probes.csv", head, result.probe_rows, comm)
     cols = result.energy.columns()
     probes.write_table(out / "energy.csv", ["time", *cols],
-                       [[t] + [getattr(e, c) for c in cols] for t, e in result.energy.history], comm)
+                       [[t] + [e.value(c) for c in cols] for t, e in result.energy.history], comm)
     comm.barrier()
 
 
@@ -52,8 +52,8 @@ class MotionWriter:
                 self.xdmf.write_function(g, t)
             for g in plastic_fields(system.model):       # committed plastic strain (cell averages), if plastic
                 self.xdmf.write_function(g, t)
-            for term in system.model.terms.with_role("fracture"):      # the damage (P1), if [fracture]
-                self.xdmf.write_function(term.d, t)
+            for f in system.model.terms.output_fields():    # the terms' own (the damage, P1)
+                self.xdmf.write_function(f, t)
         if self.with_picture:
             surf = fields.boundary_surface(system.u)
             if surf is not None:
@@ -112,7 +112,7 @@ def write_history_png(path: Path, result) -> None:
         a1.legend(fontsize=8)
     t = np.array([h[0] for h in result.energy.history])
     for name in result.energy.columns():
-        a2.plot(t, [getattr(h[1], name) for h in result.energy.history], label=name.replace("_", " "))
+        a2.plot(t, [h[1].value(name) for h in result.energy.history], label=name.replace("_", " "))
     a2.plot(t, [h[1].balance() for h in result.energy.history], "k--",
             label="balance (kin + el - W + D ...)")
     a2.set_xlabel("time [s]")

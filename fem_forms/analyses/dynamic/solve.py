@@ -53,7 +53,7 @@ class DynamicResult:
             "rejected_steps": r.rejected, "newton_iterations": r.newton_iterations,
             "energy_balance_error": self.energy.balance_error(self.energy.round_off_floor()),
             "energy_imbalance": self.energy.imbalance(),
-            "energy_final": {c: getattr(self.energy.now, c) for c in self.energy.columns()},
+            "energy_final": {c: self.energy.now.value(c) for c in self.energy.columns()},
             "dt_stable": self.dt_stable, **self.solver,
             "physics": s.model.physics + ["inertia"] + _damping_names(s.scene) + _heat_names(s.scene),
             "mpi_ranks": s.model.mesh.comm.size, "wall_time_s": self.wall_time_s,
@@ -92,8 +92,7 @@ def initial_static(system: DynamicSystem) -> None:
     for term in system.loads:
         term.factor.value = 1.0 if term.index in held else term.factor_at(0.0)
     m = system.model
-    for term in m.terms.with_role("contact"):      # obstacles at t = 0, friction lagged from the start state
-        term.update(0.0)
+    m.terms.lag(0.0)                               # lagged terms at t = 0, lagged from the start state
     problem = m.problem(m.load.set, state=system.state)
     rep = continuation.solve(problem, system.scene.solver.petsc, steps=system.scene.solver.steps,
                              max_cutbacks=system.scene.solver.max_cutbacks, linear_kind="direct")
@@ -110,10 +109,10 @@ def initial_acceleration(system: DynamicSystem, released: set) -> None:
     b = fpetsc.assemble_vector(L)
     b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
     b.scale(-1.0)
-    for term in system.model.terms.with_role("contact"):     # a barrier already pushing at the start
+    system.model.terms.lag(0.0)
+    for term in system.model.terms.arrays:             # an array term's force at the start (a barrier pushing)
         push = b.duplicate()
         push.set(0.0)
-        term.update(0.0)
         term.add_gradient(system.u.vector, push)
         push.assemble()
         b.axpy(-1.0, push)
@@ -163,8 +162,7 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
         if m.rho <= 0:
             raise InputError(f"{m.key}.rho: dynamic analysis needs a positive density")
     system = build_system(scene)
-    if hasattr(system.model.solid, "restart"):          # a solid with time (viscoelastic) starts at t = 0, at rest
-        system.model.solid.restart(system.state)
+    system.model.terms.start(system.state)   # each term's start: a solid with time at rest, the notches, t = 0
     if system.model.temperature is not None:
         system.model.temperature.x.array[:] = scene.thermal.initial_temperature
     released = set(dyn.initial_loads) if dyn.initial == "static" else set()
@@ -189,10 +187,7 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
     t_start, step0, dt = 0.0, 0, dyn.dt
     if restart is not None:
         t_start, step0, dt = checkpoint.load(restart, result)
-        for term in system.model.terms.with_role("contact"):
-            term.resume(t_start)                   # the next step starts at the checkpoint's time
-        if hasattr(system.model.solid, "resume"):  # a viscoelastic solid: its history is the checkpoint's
-            system.model.solid.resume(t_start)
+        system.model.terms.resume(t_start)         # the next step starts at the checkpoint's time
     else:
         account.start(0.0)
         result.probe_rows.append(probe_row(points, system, 0.0))
@@ -226,9 +221,8 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
               dt_max=10 * dyn.dt if dyn.adaptive else dyn.dt, stops=history_corners(*_histories(scene)))
     except SolveError as e:                  # gave up: the steps so far are still written (exit 3 after)
         result.failure = str(e)
-    motion = getattr(stepper, "motion", stepper)              # the staggered heat step wraps the motion
-    if isinstance(motion, ImplicitStepper):
-        result.solver = motion.summary()
+    if isinstance(stepper.motion, ImplicitStepper):           # the staggered heat step wraps the motion
+        result.solver = stepper.motion.summary()
     result.wall_time_s = time.perf_counter() - t0
     result.strength = watch.lowest if watch is not None else None
     return result
@@ -236,5 +230,5 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
 
 def _histories(scene: Scene) -> list:
     """Every time history of the scene: loads' and prescribed temperatures'."""
-    thermal = getattr(scene, "thermal", None)
+    thermal = scene.thermal
     return [ld.history for ld in scene.load] + ([b.history for b in thermal.boundary] if thermal else [])

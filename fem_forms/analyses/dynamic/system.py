@@ -97,13 +97,10 @@ def build_system(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> DynamicSystem
     fields = {"unknown": u, "velocity": v, "acceleration": a}
     if model.temperature is not None:              # [thermal]: committed and rolled back with the motion
         fields["temperature"] = model.temperature
-    for term in model.terms.with_role("fracture"):   # [fracture]: the damage, committed with the motion
-        fields["damage"] = term.d
+    fields.update(model.terms.state_fields())        # the terms' own (the damage), committed with the motion
     state = State(fields)
     state.adopt_history(model.state)                 # plastic history committed with each accepted step
     model.state = state
-    for term in model.terms.with_role("fracture"):
-        term.restart(state)                          # the notches' damage, committed
     old = state.old
     td = TimeDiscrete(model.mesh, old["unknown"], old["velocity"], old["acceleration"],
                       scheme_params(scene), scene.dynamic.dt)

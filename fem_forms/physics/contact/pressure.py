@@ -5,6 +5,7 @@ touching area are handed to its corner neighbours (half to each end of an edge, 
 a quadrilateral: the P1 hat functions' values there) before the division."""
 from __future__ import annotations
 
+from mpi4py import MPI
 import numpy as np
 
 from fem_forms.meshes.boundary_surface import BoundarySurface
@@ -33,3 +34,18 @@ def vertex_pressure(surface: BoundarySurface, push: np.ndarray, corner: np.ndarr
     ok = corner & (held > 0.0)
     out[ok] = force[ok] / held[ok]
     return out
+
+
+def add_pressure_field(term, f) -> None:
+    """Add the contact term's pressure (Pa) at the mesh's vertices into the P1 Function f, zero off the contact:
+    the barriers' pushes per touching area, gathered onto the corner nodes."""
+    from scipy.spatial import cKDTree
+    s = term.surface
+    xyz = f.function_space.tabulate_dof_coordinates()
+    dist, node = cKDTree(s.rest).query(xyz)
+    mine = dist <= 1e-9 * term.diagonal                  # this rank's vertices on the surface
+    corner = np.zeros(s.size, np.int32)
+    corner[node[mine]] = 1
+    f.function_space.mesh.comm.Allreduce(MPI.IN_PLACE, corner, op=MPI.MAX)      # a vertex of any rank
+    push = term.nodal_pressure(term.state) * s.area
+    f.x.array[mine] += vertex_pressure(s, push, corner.astype(bool))[node[mine]]

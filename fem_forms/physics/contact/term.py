@@ -17,7 +17,9 @@ from fem_forms.physics.contact.friction import LaggedFriction, tangent_basis
 from fem_forms.physics.contact.ipc_surfaces import IpcSurfaces
 from fem_forms.physics.contact.mesh_obstacle import FileObstacle
 from fem_forms.physics.contact.obstacles import make_obstacle
-from fem_forms.physics.terms import ArrayTerm, Context, add_entries
+from fem_forms.physics.contact.pressure import add_pressure_field
+from fem_forms.physics.array_term import ArrayTerm, add_entries
+from fem_forms.physics.terms import Context
 
 DEFAULT_DISTANCE = 1e-3      # dhat as a share of the part's bounding-box diagonal, as in IPC
 SLIP_RATE = 1e-3             # friction's slip eps: this share of the bounding-box diagonal per unit of time
@@ -29,6 +31,8 @@ class ContactTerm(ArrayTerm):
     """kappa sum_obstacles sum_v A_v b(d_v): the part's surface nodes against the scene's analytic obstacles;
     the part's triangles against themselves and against obstacle files through the IPC Toolkit (`ipc`)."""
     name, role, keys = "contact (IPC barrier)", "contact", ("contact",)
+    lagging = True                 # friction's normal forces and tangent planes, the obstacles' positions
+    energy_columns = ("contact",)
 
     def __init__(self, spec, modulus: float):
         self.modulus = modulus
@@ -134,6 +138,10 @@ class ContactTerm(ArrayTerm):
             ob.move_to(t)
             self.friction.append(LaggedFriction(act, lam, tangent_basis(g[act]), p[act], ob.friction, eps,
                                                 ob.offset - start_offset) if ob.friction > 0 and len(act) else None)
+
+    def start(self, state) -> None:
+        """A new solve's pseudo-time (or time) starts at 0."""
+        self.resume(0.0)
 
     def resume(self, t: float) -> None:
         """Continue from a restored state at time t (a dynamic --restart): the next step starts there; kappa
@@ -276,11 +284,32 @@ class ContactTerm(ArrayTerm):
         mean = 0.5 * (self.friction_at_start + self._friction_forces(p))
         return float(-np.sum(mean * (p - start)))
 
+    def stored_energies(self, x: PETSc.Vec) -> dict[str, float]:
+        return {"contact": self.barrier_energy(x)}
+
+    def step_dissipation(self, x: PETSc.Vec) -> float:
+        return self.friction_work(x)
+
+    def support_forces(self, x: PETSc.Vec) -> np.ndarray:
+        """(obstacles, 3): the force each obstacle exerts on the body."""
+        return np.array([r["force"] for r in self.report(x).get("contact", {}).values()]).reshape(-1, 3)
+
+    def surface_forces(self, body: str, x: PETSc.Vec) -> tuple | None:
+        names = [ob.name for ob in self.obstacles]
+        if body not in names:
+            return None
+        act, force = self.nodal_forces(x)[names.index(body)]
+        return act, force, self.surface
+
+    def add_output_field(self, name: str, f) -> None:
+        if name == "contact_pressure":
+            add_pressure_field(self, f)
+
     def min_distance(self, x: PETSc.Vec) -> float:
         p = self.surface.positions(x)
         return min([c.min_distance(p) for c in self.ipc] + [float(ob.distance(p).min()) for ob in self.obstacles])
 
-    def intersection(self, x: PETSc.Vec) -> str | None:
+    def inadmissible(self, x: PETSc.Vec) -> str | None:
         """Why the state at x is not intersection-free (a surface node on or inside an obstacle), or None."""
         p = self.surface.positions(x)
         for ob in self.obstacles:
