@@ -90,9 +90,10 @@ def free_modes(model, r0: PETSc.Vec) -> tuple[list[str], list[str]]:
     finally:
         model.load.set(lam)
     gram = np.array([[a.dot(b) for b in held] for a in held])
-    for term in model.terms.with_role("contact"):      # what the obstacles hold (their normal push)
-        rows = np.array([term.held_motion(term.surface.displacement(m)) for m in modes])
-        gram += rows @ rows.T
+    for term in model.terms:                           # what the terms' supports hold (an obstacle's push)
+        rows = term.holds(model, modes)
+        if rows is not None:
+            gram += rows.T @ rows
     values, vectors = np.linalg.eigh(gram)
     rnorm = r0.norm()
     free, pushed = [], []
@@ -117,8 +118,7 @@ def check_supports_hold_loads(model, r0: PETSc.Vec) -> None:
     """One-line InputError when the supports leave a rigid motion free: with the loads pushing it no
     equilibrium exists; without, the answer would be defined only up to that motion (a singular tangent)."""
     free, pushed = free_modes(model, r0)
-    hint = (" (an obstacle holds what lies within contact.distance at the start; without friction only along its "
-            "normal)") if model.terms.with_role("contact") else ""
+    hint = "".join(f" ({t.support_hint})" for t in model.terms if t.support_hint)
     if free and not pushed:
         raise InputError(f"fix: the supports leave the body free ({', '.join(free)}); the loads do not push it "
                          "that way, but a static answer would then be defined only up to that motion; hold it "

@@ -133,6 +133,14 @@ class Term:
         """Fields of its own written with the run's fields (the damage), as they are."""
         return []
 
+    def holds(self, model, modes: list) -> np.ndarray | None:
+        """(k, len(modes)): what of each rigid mode (a Vec of the unknown) this term's supports resist at rest,
+        rows of the Gram matrix of held motion (the rigid-motion check); None: it holds nothing."""
+        return None
+
+    # what to tell a user whose body this term's supports leave free (appended to the rigid-motion error)
+    support_hint: str | None = None
+
     def add_output_field(self, name: str, f) -> None:
         """Add this term's share of the [output] field `name` (e.g. contact_pressure) into the P1 Function f."""
 
@@ -302,7 +310,11 @@ class TermList:
         return {k: v for t in self.all for k, v in t.report(x).items()}
 
     def stored_energies(self, x: PETSc.Vec) -> dict[str, float]:
-        return {k: v for t in self.all for k, v in t.stored_energies(x).items()}
+        out: dict[str, float] = {}
+        for t in self.all:
+            for k, v in t.stored_energies(x).items():
+                out[k] = out.get(k, 0.0) + v
+        return out
 
     def step_dissipation(self, x: PETSc.Vec) -> float:
         return sum(t.step_dissipation(x) for t in self.all)

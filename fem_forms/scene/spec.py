@@ -12,6 +12,7 @@ from fem_forms.elements import MAX_DEGREE as MAX_QUADRATURE_DEGREE, check_degree
 from fem_forms.scene.materials import MATERIAL
 from fem_forms.scene.reader import Key, Section, Table, Variants
 from fem_forms.scene.selectors import AREA_SELECTORS, Selector, where
+from fem_forms.scene.term_sections import TERM_SECTIONS
 
 # --- mesh -----------------------------------------------------------------------------------
 SURFACE_SUFFIXES = (".stl", ".obj", ".ply", ".off")    # closed surfaces the loader fills with tetrahedra
@@ -330,4 +331,4 @@ CORE_SECTIONS = (
             variants=LOAD_VARIANTS, rules=_load_rules, array=True),
     Section("solver", "Newton, load stepping and the linear solver", SolverSpec, keys=SOLVER_KEYS),
     Section("output", "what is written besides results.json", OutputSpec, keys=OUTPUT_KEYS),
-)
+) + TERM_SECTIONS

@@ -52,6 +52,7 @@ class Energies:
     contact: float = 0.0              # the contact barrier's stored energy
     viscous_work: float = 0.0         # the work on a viscoelastic solid's Prony branches (stored there or lost)
     fracture: float = 0.0             # the crack's surface energy beyond the notches' (what cracking dissipated)
+    support: float = 0.0              # the energy stored in elastic supports (springs, foundations)
 
     def value(self, name: str) -> float:
         """The energy of column `name`."""
@@ -60,11 +61,12 @@ class Energies:
     def row(self) -> list:
         """The values in the order of COLUMNS."""
         return [self.kinetic, self.elastic, self.external_work, self.dissipated, self.thermal_work,
-                self.plastic_work, self.contact, self.viscous_work, self.fracture]
+                self.plastic_work, self.contact, self.viscous_work, self.fracture, self.support]
 
     def balance(self) -> float:
-        """E_kin + E_el + E_contact - W_ext - W_th + D + W_p + W_v + E_crack (constant in an exact account)."""
-        return (self.kinetic + self.elastic + self.contact - self.external_work - self.thermal_work
+        """E_kin + E_el + E_contact + E_support - W_ext - W_th + D + W_p + W_v + E_crack (constant in an exact
+        account)."""
+        return (self.kinetic + self.elastic + self.contact + self.support - self.external_work - self.thermal_work
                 + self.dissipated + self.plastic_work + self.viscous_work + self.fracture)
 
 
@@ -72,7 +74,7 @@ class Energies:
 # a ratio of two noises (strains of 1e-8 are sqrt(machine epsilon), far below any motion a run is asked for)
 ENERGY_FLOOR_STRAIN = 1e-8
 COLUMNS = ("kinetic", "elastic", "external_work", "dissipated", "thermal_work", "plastic_work", "contact",
-           "viscous_work", "fracture")
+           "viscous_work", "fracture", "support")
 
 
 def at_temperature(ctx: Context, T: fem.Function, T_then: fem.Function) -> Context:

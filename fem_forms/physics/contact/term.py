@@ -5,6 +5,8 @@ PSD-projected Hessian beside the UFL terms in the same Newton solve, and a step 
 step intersection-free. The surface is gathered on every rank; each rank adds the rows it owns."""
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from dolfinx import fem
 from mpi4py import MPI
 import numpy as np
@@ -14,12 +16,14 @@ from fem_forms.errors import InputError
 from fem_forms.meshes.boundary_surface import BoundarySurface, boundary_surface
 from fem_forms.physics.contact.barrier import barrier, barrier_first, barrier_second, pressure_at_half, psd_blocks
 from fem_forms.physics.contact.friction import LaggedFriction, tangent_basis
-from fem_forms.physics.contact.ipc_surfaces import IpcSurfaces
 from fem_forms.physics.contact.mesh_obstacle import FileObstacle
 from fem_forms.physics.contact.obstacles import make_obstacle
 from fem_forms.physics.contact.pressure import add_pressure_field
 from fem_forms.physics.array_term import ArrayTerm, add_entries
 from fem_forms.physics.terms import Context
+
+if TYPE_CHECKING:
+    from fem_forms.physics.contact.ipc_surfaces import IpcSurfaces
 
 DEFAULT_DISTANCE = 1e-3      # dhat as a share of the part's bounding-box diagonal, as in IPC
 SLIP_RATE = 1e-3             # friction's slip eps: this share of the bounding-box diagonal per unit of time
@@ -100,6 +104,8 @@ class ContactTerm(ArrayTerm):
         e = self.surface.edges()
         h = float(np.mean(np.linalg.norm(rest[e[:, 0]] - rest[e[:, 1]], axis=1)))
         self.kappa = self.kappa0 = self.modulus / (h * pressure_at_half(self.dhat))
+        if self.spec.self or self.files:
+            from fem_forms.physics.contact.ipc_surfaces import IpcSurfaces   # the IPC Toolkit, when it is used
         self.selfc = IpcSurfaces(self.surface, self.dhat) if self.spec.self else None
         for ob, i in zip(self.files, self.file_index):
             ob.refine(h, f"contact.obstacle[{i}]")
@@ -362,6 +368,12 @@ class ContactTerm(ArrayTerm):
         out = {f"{n}_F{c}": f for n, r in rep["contact"].items() for c, f in zip("xyz", r["force"])}
         out["min_distance"] = rep["min_distance"]
         return out
+
+    support_hint = "an obstacle holds what lies within contact.distance at the start; without friction only along its normal"
+
+    def holds(self, model, modes: list) -> np.ndarray:
+        """What the obstacles hold of each rigid mode (their push at rest), as columns."""
+        return np.array([self.held_motion(self.surface.displacement(m)) for m in modes]).T
 
     def held_motion(self, values: np.ndarray) -> np.ndarray:
         """The parts of a motion (its values at the surface nodes, (n, 3)) the obstacles resist at rest, at the
