@@ -28,6 +28,7 @@ from fem_forms.modes.band import Band, solve_band
 from fem_forms.output import probes
 from fem_forms.output.radiation import check_listener
 from fem_forms.physics.inertia import Inertia
+from fem_forms.physics.rigid_motion import free_modes
 from fem_forms.scene import Scene
 from fem_forms.solvers import eigen, linear
 
@@ -204,13 +205,24 @@ def _sign_reference(V: fem.FunctionSpace) -> fem.Function:
     return w
 
 
+def _leaves_free(model: Model) -> bool:
+    """Whether the supports (and the terms' own, a foundation's) leave some rigid motion free."""
+    zero = model.unknown.vector.duplicate()
+    zero.set(0.0)
+    try:
+        return bool(free_modes(model, zero)[0])
+    finally:
+        zero.destroy()
+
+
 def _lowest(ops: Operators, scene: Scene, kind: str, symmetric: bool, nns, free_target: float,
             rigid_below: float):
     """`count`: the lowest elastic modes, about 0 for a supported part, else about free_target."""
     count = scene.modal.count
     # supported: target 0. If the supports leave rigid-body motion, K is singular: the solve then
     # fails or finds too few elastic modes, and is repeated as for an unsupported part.
-    attempts = ([(0.0, count)] if scene.fix else []) + [(free_target, count + RIGID_EXTRA)]
+    held = bool(scene.fix) or rigid_below == 0.0          # held by [[fix]] or the terms' supports
+    attempts = ([(0.0, count)] if held else []) + [(free_target, count + RIGID_EXTRA)]
     for i, (target, nev) in enumerate(attempts):
         last = i == len(attempts) - 1
         try:
@@ -259,7 +271,9 @@ def solve_modal(scene: Scene, material=None, model: Model | None = None) -> Moda
     nns = linear.rigid_body_modes(model.V) if kind == "iterative" else None
 
     free_target = -SHIFT_FRACTION * ops.omega2_scale
-    rigid_below = RIGID_FRACTION * abs(free_target)
+    # supports that hold every rigid motion ([[fix]], or springs and foundations however soft) leave no rigid-body
+    # mode: then a mode far below the body's elastic scale (a stiff plate bouncing on a soft bed) is a mode
+    rigid_below = RIGID_FRACTION * abs(free_target) if _leaves_free(model) else 0.0
     band = None
     try:
         if spec.up_to is not None:

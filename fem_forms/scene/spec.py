@@ -227,6 +227,10 @@ LOAD_TYPES = {
                   Key("pressure", "number", "cavity pressure (pressure control)", unit="Pa"),
                   Key("volume", "number", "volume added to the cavity (volume control: its pressure is solved "
                       "with the displacement)", unit="m^3")),
+    # an elastic (Winkler) foundation: a support under the selected facets (physics/foundation.py)
+    "foundation": (where("the facets resting on the foundation", kinds=AREA_SELECTORS),
+                   Key("stiffness", "number", "the foundation's push per area per unit of normal displacement "
+                       "(Winkler modulus)", unit="Pa/m", required=True, exclusive_minimum=0)),
 }
 # one key every load type shares: the load's factor over time (dynamic analysis), piecewise linear
 LOAD_HISTORY = Key("history", "points", "[time, factor] pairs, piecewise linear in time, held after the last "
@@ -245,6 +249,7 @@ class Load:
     pressure: float | None = None  # follower pressure; an inflated cavity's pressure
     volume: float | None = None    # volume added to an inflated cavity (volume control)
     name: str | None = None        # an inflated cavity's name
+    stiffness: float | None = None # a foundation's Winkler modulus (Pa/m)
     history: list | None = None    # [[t, factor], ...] piecewise linear; None: constant 1
 
 
