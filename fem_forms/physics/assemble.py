@@ -20,6 +20,7 @@ import fem_forms.physics.cavities  # noqa: F401 (registers the inflation load)
 import fem_forms.physics.contact  # noqa: F401 (registers the [contact] terms)
 import fem_forms.physics.fracture  # noqa: F401 (registers the [fracture] phase field)
 import fem_forms.physics.foundation  # noqa: F401 (registers the foundation load type)
+import fem_forms.physics.springs  # noqa: F401 (registers the [[spring]] terms)
 from fem_forms.physics.material_fields import MaterialBinding, with_fibers
 from fem_forms.physics.parameters import Parameters
 from fem_forms.physics.regions import MaterialRegions

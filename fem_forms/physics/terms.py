@@ -307,7 +307,12 @@ class TermList:
         return next((why for t in self.all if (why := t.inadmissible(x)) is not None), None)
 
     def report(self, x: PETSc.Vec) -> dict:
-        return {k: v for t in self.all for k, v in t.report(x).items()}
+        """Every term's report, merged (tables of the same name, such as two springs', joined)."""
+        out: dict = {}
+        for t in self.all:
+            for k, v in t.report(x).items():
+                out[k] = {**out[k], **v} if isinstance(v, dict) and isinstance(out.get(k), dict) else v
+        return out
 
     def stored_energies(self, x: PETSc.Vec) -> dict[str, float]:
         out: dict[str, float] = {}

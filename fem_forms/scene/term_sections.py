@@ -4,4 +4,6 @@ A new term's section is its declaration module (dolfinx-free, beside this one) a
 registers in physics/ (`register_terms("name")`)."""
 from __future__ import annotations
 
-TERM_SECTIONS: tuple = ()
+from fem_forms.scene.spring_section import SPRING
+
+TERM_SECTIONS: tuple = (SPRING,)
