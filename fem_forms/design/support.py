@@ -8,14 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
-
-def ground_frame(gravity: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(up, e1, e2): up against gravity and two unit vectors spanning the ground plane (right-handed)."""
-    up = -np.asarray(gravity, dtype=float) / np.linalg.norm(gravity)
-    helper = np.eye(3)[np.argmin(np.abs(up))]
-    e1 = np.cross(helper, up)
-    e1 /= np.linalg.norm(e1)
-    return up, e1, np.cross(up, e1)
+from fem_forms.frames import ground_frame
 
 
 @dataclass

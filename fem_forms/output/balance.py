@@ -8,7 +8,7 @@ from pathlib import Path
 from mpi4py import MPI
 import numpy as np
 
-from fem_forms.design.support import ground_frame
+from fem_forms.frames import ground_frame
 from fem_forms.output.fields import cell_function, gather_mesh, write_fields
 from fem_forms.output.stl import write_stl
 

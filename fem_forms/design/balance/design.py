@@ -12,7 +12,8 @@ from fem_forms.design.balance import goals
 from fem_forms.design.balance.body import Body
 from fem_forms.design.floating import flotation, tetrahedra
 from fem_forms.design.mass_properties import total_moments
-from fem_forms.design.support import SupportPolygon, fit_sphere, ground_frame
+from fem_forms.design.support import SupportPolygon, fit_sphere
+from fem_forms.frames import ground_frame
 from fem_forms.errors import SolveError
 
 
