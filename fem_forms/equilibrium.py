@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-import resource
 import time
 from typing import Callable
 
@@ -21,6 +20,7 @@ from fem_forms.output.histories import step_histories
 from fem_forms.output.quantities import Quantities
 from fem_forms.output.guard import attempt
 from fem_forms.output.reactions import reaction_report
+from fem_forms.output.summary import header
 from fem_forms.physics import rigid_motion
 from fem_forms.physics.histories import piecewise_linear
 from fem_forms.scene import Scene
@@ -55,10 +55,8 @@ class StaticResult:
         r = self.report
         heat = {} if self.model.temperature is None else {"max_temperature": max_value(self.model.temperature)}
         inside = self.model.probe_materials() if self.probes else {}
-        return {**heat,
-            "analysis": "static",
-            "title": self.model.scene.title,
-            "dofs": self.model.dofs,
+        return {**header("static", self.model.scene, self.model.mesh.comm, self.model.dofs, self.wall_time_s),
+            **heat,
             "mesh": self.model.loaded.info,
             "converged": r.converged,
             "newton_iterations": r.newton_iterations,
@@ -68,7 +66,6 @@ class StaticResult:
             "residual_norm": r.residual_norm,
             "energy": self.energy,
             "max_displacement": self.max_displacement,
-            "wall_time_s": self.wall_time_s,
             "assembly_time_s": r.assembly_time,
             "linear_solver": r.linear_solver,
             "krylov_iterations": r.krylov_iterations,
@@ -76,10 +73,8 @@ class StaticResult:
             "element": ("P2-P1 (Taylor-Hood) " if self.model.scene.discretization.formulation == "mixed" else
                         f"P{self.model.scene.discretization.degree} ") + self.model.mesh.topology.cell_name(),
             "quadrature_degree": self.model.scene.discretization.quadrature,
-            "mpi_ranks": self.model.mesh.comm.size,
             "formulation": self.model.scene.discretization.formulation,
             "physics": self.model.physics,
-            "peak_memory_mb": peak_memory_mb(self.model.mesh.comm),
             "warnings": self.model.warnings,
             "materials": self.model.materials_report(),
             "probes": {n: {"point": self.model.scene.output.probes[n], "displacement": v,
@@ -94,11 +89,6 @@ class StaticResult:
             **({"staggered_sweeps": int(sum(self.sweeps))} if self.sweeps else {}),
             "message": r.message,
         }
-
-
-def peak_memory_mb(comm) -> float:
-    """Peak resident memory of this process so far, summed over ranks (MB)."""
-    return comm.allreduce(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0, op=MPI.SUM)
 
 
 def max_norm(f: fem.Function) -> float:

@@ -20,13 +20,14 @@ import numpy as np
 from petsc4py import PETSc
 import ufl
 
-from fem_forms.equilibrium import StaticResult, peak_memory_mb, solve_static
+from fem_forms.equilibrium import StaticResult, solve_static
 from fem_forms.errors import InputError, SolveError
 from fem_forms.meshes import bounding_box
 from fem_forms.model import Model, build_model
 from fem_forms.modes.band import Band, solve_band
 from fem_forms.output import probes
 from fem_forms.output.radiation import check_listener
+from fem_forms.output.summary import header
 from fem_forms.physics.inertia import Inertia
 from fem_forms.physics.rigid_motion import free_modes
 from fem_forms.scene import Scene
@@ -81,12 +82,9 @@ class ModalResult:
         scene, m = self.model.scene, self.model
         emf = self.effective_mass_fraction
         out = {
-            "analysis": "modal",
-            "title": scene.title,
-            "dofs": m.dofs,
+            **header("modal", scene, m.mesh.comm, m.dofs, self.wall_time_s),
             "element": f"P{scene.discretization.degree} {m.mesh.topology.cell_name()}",
             "quadrature_degree": scene.discretization.quadrature,
-            "mpi_ranks": m.mesh.comm.size,
             "mass": scene.modal.mass,
             "prestress": scene.modal.prestress,
             "physics": m.physics + ["inertia"],
@@ -102,8 +100,6 @@ class ModalResult:
                             "inner": "mumps" if self.linear_solver == "direct" else "cg+gamg",
                             "converged": self.converged, "iterations": self.iterations,
                             "time_s": self.eigensolve_time_s},
-            "wall_time_s": self.wall_time_s,
-            "peak_memory_mb": peak_memory_mb(m.mesh.comm),
         }
         if self.band is not None:
             out["band"] = self.band.summary(self.rigid_modes)

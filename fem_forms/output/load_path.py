@@ -22,6 +22,7 @@ from fem_forms.output.guard import attempt
 from fem_forms.output.plastic import plastic_fields
 from fem_forms.output.quantities import Quantities, output_fields
 from fem_forms.output.reactions import support_forces
+from fem_forms.output.summary import header
 from fem_forms.scene.spec import fix_names
 
 
@@ -172,10 +173,10 @@ class LoadPath:
         last = self.last or {"load_factor": 0.0, "time": 0.0, "steps": 0, "probes": {}, "records": {},
                              "files": {}}
         model = self.model
-        summary = {"analysis": "static", "title": self.scene.title, "converged": False, "interrupted": True,
+        summary = {**header("static", self.scene, self.comm, None if model is None else model.dofs, memory=False),
+                   "converged": False, "interrupted": True,
                    "load_reached": last["load_factor"], "time": last["time"], "load_steps": last["steps"],
-                   "mpi_ranks": self.comm.size,
-                   **({} if model is None else {"dofs": model.dofs, "mesh": model.loaded.info,
+                   **({} if model is None else {"mesh": model.loaded.info,
                                                 "physics": model.physics, "warnings": model.warnings}),
                    "probes": {n: {"point": self.scene.output.probes[n], "displacement": v}
                               for n, v in last["probes"].items()},

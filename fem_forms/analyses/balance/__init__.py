@@ -24,6 +24,7 @@ from fem_forms.meshes import load_mesh
 from fem_forms.output import results
 from fem_forms.output.balance import picture, write_outputs
 from fem_forms.output.fields import node_values
+from fem_forms.output.summary import header
 from fem_forms.scene import Scene
 
 
@@ -73,10 +74,9 @@ def run(scene: Scene, out, echo: bool = False) -> dict:
         picture(out / "balance.png", mesh, carved, r["before"], after, scene.title, f" ({b.goal})",
                 sag=node_values(r["u"]) if b.elastic else None, up=st.frame[0], check=b.goal == "check")
         files["picture"] = "balance.png"
-    summary = {"analysis": "balance", "title": scene.title, "goal": b.goal, "elastic": b.elastic,
-               **after, "before": r["before"], "cells": comm.allreduce(len(body.ids)),
-               "carvable_cells": comm.allreduce(int(body.carvable.sum())), "mpi_ranks": comm.size,
-               "wall_time_s": time.perf_counter() - t0, "files": files}
+    summary = {**header("balance", scene, comm, wall_time_s=time.perf_counter() - t0), "goal": b.goal,
+               "elastic": b.elastic, **after, "before": r["before"], "cells": comm.allreduce(len(body.ids)),
+               "carvable_cells": comm.allreduce(int(body.carvable.sum())), "files": files}
     if r.get("timing") is not None:
         tm = r["timing"]
         summary["lp"] = {"setup_s": tm.setup_s, "solve_s": tm.solve_s, "lps": tm.lps, "sifted_lps": tm.sifted,

@@ -20,6 +20,7 @@ from fem_forms.analyses.dynamic.system import DynamicSystem, build_system
 from fem_forms.errors import InputError, SolveError
 from fem_forms.output import probes
 from fem_forms.output.quantities import tensor_expressions
+from fem_forms.output.summary import header
 from fem_forms.output.strength import StrengthWatch, has_strength
 from fem_forms.scene import Scene
 from fem_forms.solvers import continuation
@@ -44,7 +45,7 @@ class DynamicResult:
         names = list(s.scene.output.probes)
         last = self.probe_rows[-1] if self.probe_rows else None
         return {
-            "analysis": "dynamic", "title": s.scene.title, "dofs": s.model.dofs,
+            **header("dynamic", s.scene, s.model.mesh.comm, s.model.dofs, self.wall_time_s),
             "converged": self.failure is None, "message": self.failure or "reached the end time",
             "scheme": s.scene.dynamic.scheme, "mass": s.scene.dynamic.mass,
             "materials": s.model.materials_report(),
@@ -56,7 +57,6 @@ class DynamicResult:
             "energy_final": {c: self.energy.now.value(c) for c in self.energy.columns()},
             "dt_stable": self.dt_stable, **self.solver,
             "physics": s.model.physics + ["inertia"] + _damping_names(s.scene) + _heat_names(s.scene),
-            "mpi_ranks": s.model.mesh.comm.size, "wall_time_s": self.wall_time_s,
             "probes": {n: {"point": s.scene.output.probes[n], "displacement": list(last[1 + 6 * i: 4 + 6 * i]),
                            "velocity": list(last[4 + 6 * i: 7 + 6 * i])} for i, n in enumerate(names)}
             if last else {},

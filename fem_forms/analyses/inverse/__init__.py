@@ -19,6 +19,7 @@ from fem_forms.meshes import load_mesh
 from fem_forms.output import fields, pictures, probes, results
 from fem_forms.output.quantities import Quantities
 from fem_forms.output.strength import has_strength, summary_line
+from fem_forms.output.summary import header
 from fem_forms.scene import Scene
 
 
@@ -48,10 +49,10 @@ def run(scene: Scene, out: Path, echo: bool = False) -> dict:
     if comm.rank == 0:
         out.mkdir(parents=True, exist_ok=True)
     comm.barrier()
-    summary = {"analysis": "inverse", "title": scene.title, "method": res.method,
-               "dofs": res.v.function_space.dofmap.index_map.size_global * 3,
+    summary = {**header("inverse", scene, comm, res.v.function_space.dofmap.index_map.size_global * 3),
+               "method": res.method,
                "iterations": res.iterations, "converged": res.converged, "design_time_s": res.solve_time,
-               "forward_solves": res.forward_solves, "mpi_ranks": comm.size,
+               "forward_solves": res.forward_solves,
                "physics": res.physics, "history": res.history}
     problems = [] if res.converged else [f"the {res.method} method did not reach a rest shape: {res.message}"]
     check = None

@@ -9,7 +9,7 @@ from typing import Callable
 from dolfinx import fem
 from mpi4py import MPI
 
-from fem_forms.equilibrium import peak_memory_mb
+from fem_forms.output.summary import header
 from fem_forms.errors import SolveError
 from fem_forms.meshes import LoadedMesh, load_mesh
 from fem_forms.output import probes
@@ -38,9 +38,8 @@ class ThermalResult:
         names = list(self.scene.output.probes)
         final = probes.evaluate(self.T, self.scene.output.probes)
         return {
-            "analysis": "thermal",
-            "title": self.scene.title,
-            "dofs": space.dofmap.index_map.size_global,
+            **header("thermal", self.scene, self.loaded.mesh.comm, space.dofmap.index_map.size_global,
+                     self.wall_time_s),
             "mesh": self.loaded.info,
             "converged": True,
             "transient": self.scene.dynamic is not None,
@@ -51,9 +50,6 @@ class ThermalResult:
             "min_temperature": min_value(self.T),
             "element": f"P{self.scene.discretization.degree} {self.loaded.mesh.topology.cell_name()}",
             "physics": self.physics,
-            "mpi_ranks": self.loaded.mesh.comm.size,
-            "peak_memory_mb": peak_memory_mb(self.loaded.mesh.comm),
-            "wall_time_s": self.wall_time_s,
             "probes": {n: {"point": self.scene.output.probes[n], "temperature": final[n][0]} for n in names},
         }
 
