@@ -20,6 +20,11 @@ def set_reporter(reporter: Callable[..., None] | None) -> None:
     _reporter = reporter
 
 
+def reporter() -> Callable[..., None] | None:
+    """The installed reporter (None: none)."""
+    return _reporter
+
+
 def report(event: str, **fields) -> None:
     """Pass an event to the installed reporter, if any (cheap when none is installed)."""
     if _reporter is not None:

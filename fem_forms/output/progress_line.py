@@ -134,5 +134,6 @@ def show_progress(enabled: bool = True, stream: TextIO | None = None,
 def clear_line() -> None:
     """Erase the installed reporter's terminal line, if any, before a line is printed out of turn (an
     interrupt announced from a signal handler)."""
-    if isinstance(progress._reporter, ProgressLine):
-        progress._reporter.close()
+    shown = progress.reporter()
+    if isinstance(shown, ProgressLine):
+        shown.close()

@@ -105,11 +105,23 @@ class Bordered:
         finally:
             self.set_values(saved)
 
+    def set_field_state(self, X: PETSc.Vec) -> PETSc.Vec:
+        """Put the field part of X into the forms' Function; that part as a Vec (owned by this object)."""
+        self.unpack(X, self._xf, scalars=False)
+        self.drv.set_state(self._xf)
+        return self._xf
+
+    def field_curvature(self, Y: PETSc.Vec) -> tuple[float, np.ndarray]:
+        """(Y_u . K Y_u, c_u_i . Y_u) of the field part Y_u of Y, K the last assembled tangent."""
+        self.unpack(Y, self._rf, scalars=False)
+        self.drv.A.mult(self._rf, self._zf)
+        return self._rf.dot(self._zf), np.array([cu.dot(self._rf) for cu in self.cu_vecs])
+
     # -- SNES callbacks ----------------------------------------------------------------------------
     def residual(self, snes, X: PETSc.Vec, F: PETSc.Vec) -> None:
         """F = [R(u, p) as the driver assembles it (Dirichlet rows x - g); c(u, p)]."""
         self.unpack(X, self._xf)
-        self.drv._residual(None, self._xf, self._bf)
+        self.drv.residual(self._xf, self._bf)
         F.array[: self.n] = self._bf.array_r[: self.n]
         c = self.equations()
         if self.root:
@@ -128,7 +140,7 @@ class Bordered:
         solve K B_j = R_p_j and form the Schur complement S = c_p - c_u.B."""
         self.unpack(X, self._xf)
         drv = self.drv
-        drv._jacobian(None, self._xf, drv.A, drv.A)
+        drv.tangent(self._xf, drv.A)
         self._assemble_border(self.R_p, self.Rp_vecs)
         self._assemble_border(self.c_u, self.cu_vecs)
         P = drv.preconditioning_matrix(drv.A)             # multigrid's AIJ or LDL^T's SBAIJ copy, or A

@@ -47,12 +47,11 @@ class MultiplierMerit:
         """M at X's field part (X's multipliers are ignored: p^ is held); 1e300 where it is not finite (an
         inverted element: the line search shortens the step)."""
         b = self.b
-        b.unpack(X, b._xf, scalars=False)
         saved = b.values()
         b.set_values(self.p_hat)
         try:
-            b.drv._set_state(b._xf)
-            value = b.comm.allreduce(fem.assemble_scalar(self.E), op=MPI.SUM) + b.drv.arrays.energy(b._xf)
+            xf = b.set_field_state(X)
+            value = b.comm.allreduce(fem.assemble_scalar(self.E), op=MPI.SUM) + b.drv.arrays.energy(xf)
             value += 0.5 * float(np.sum(self.rho * b.equations() ** 2))
         finally:
             b.set_values(saved)
@@ -60,11 +59,8 @@ class MultiplierMerit:
 
     def curvature(self, Y: PETSc.Vec) -> float:
         """Y_u.(K + sum_i rho_i c_u_i c_u_i^T) Y_u of the field part of Y (K the last assembled tangent)."""
-        b = self.b
-        b.unpack(Y, b._rf, scalars=False)
-        b.drv.A.mult(b._rf, b._zf)
-        along = np.array([cu.dot(b._rf) for cu in b.cu_vecs])
-        return b._rf.dot(b._zf) + float(np.sum(self.rho * along ** 2))
+        value, along = self.b.field_curvature(Y)
+        return value + float(np.sum(self.rho * along ** 2))
 
     def precheck(self, X: PETSc.Vec, Y: PETSc.Vec) -> bool:
         """PETSc's line-search pre-check: where the curvature along the field step is negative, flip it (the

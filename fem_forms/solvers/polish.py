@@ -21,9 +21,9 @@ _SHORT_STEP = PETSc.SNES.ConvergedReason.CONVERGED_SNORM_RELATIVE
 
 def near_equilibrium(driver, reason: int) -> bool:
     """The energy line search failed with the residual below NEAR of the load scale (no bounds)."""
-    last = driver._history[-1] if driver._history else math.inf
+    last = driver.history[-1] if driver.history else math.inf
     return (driver.bounds is None and reason == _FAILED
-            and last < NEAR * (getattr(driver, "_load_scale", None) or 0.0))
+            and last < NEAR * (driver.known_load_scale or 0.0))
 
 
 def stuck_at_equilibrium(driver, reason: int) -> bool:
@@ -50,28 +50,28 @@ def polish(driver, reason: int) -> tuple[int, int, int]:
     converged, the residual fell and u did not jump. Returns (reason, Newton iterations, Krylov iterations) added."""
     if driver.bounds is not None:       # a VI solve: setFromOptions resets its reduced KSP (PETSc error 60)
         return reason, 0, 0
-    last = driver._history[-1] if driver._history else math.inf
+    last = driver.history[-1] if driver.history else math.inf
     if not (near_equilibrium(driver, reason) or reason == _SHORT_STEP) \
             or last <= max(driver.base_atol(), driver.roundoff_floor(1.0)):
         return reason, 0, 0
-    saved, history = driver.x.copy(), list(driver._history)
+    saved, history = driver.x.copy(), list(driver.history)
     max_it = driver.snes.getTolerances()[3]
-    driver._set_line_search("basic")
+    driver.set_line_search("basic")
     driver.snes.setTolerances(max_it=MAX_STEPS)
-    driver._history = []
+    driver.history = []
     if driver.pc_reuse is not None and not driver.keep_preconditioner:
         driver.pc_reuse.start_solve()
     driver.snes.solve(None, driver.x)
     polished = driver.snes.getConvergedReason()
     its, kits = driver.snes.getIterationNumber(), driver.snes.getLinearSolveIterations()
-    driver._set_line_search(driver.options["snes_linesearch_type"])
+    driver.set_line_search(driver.options["snes_linesearch_type"])
     driver.snes.setTolerances(max_it=max_it)
-    if polished > 0 and driver._history and driver._history[-1] < last and not _jumped(driver, reason, saved):
-        driver._history = history + driver._history[1:]
+    if polished > 0 and driver.history and driver.history[-1] < last and not _jumped(driver, reason, saved):
+        driver.history = history + driver.history[1:]
         saved.destroy()
         return polished, its, kits
     saved.copy(driver.x)                       # no better: keep the line search's answer
     driver.x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-    driver._history = history
+    driver.history = history
     saved.destroy()
     return reason, its, kits

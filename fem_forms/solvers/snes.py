@@ -65,6 +65,8 @@ class SNESDriver:
                  prefix: str = "fem_forms_", near_nullspace: Callable[[], PETSc.NullSpace] | None = None,
                  reuse_factor: bool | str = False, keep_preconditioner: bool = False):
         self.p = problem
+        self._load_scale: float | None = None        # measured on first use (load_scale), or given
+        self.history: list[float] = []               # the residual norms of the last solve, one per iteration
         self.reuse_factor = reuse_factor
         # the multigrid hierarchy may outlive a solve (time steps: the next step's tangent is close)
         self.keep_preconditioner = keep_preconditioner
@@ -166,13 +168,14 @@ class SNESDriver:
         except Exception:                 # PETSc already finalised at interpreter exit
             pass
 
-    def _set_state(self, x: PETSc.Vec) -> None:
+    def set_state(self, x: PETSc.Vec) -> None:
+        """Put x (a Vec of the unknown) into the forms' Function."""
         x.copy(self.p.u.vector)
         self.p.u.vector.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
 
     def _residual(self, snes, x, b) -> None:
         t = time.perf_counter()
-        self._set_state(x)
+        self.set_state(x)
         with b.localForm() as bl:
             bl.set(0.0)
         fpetsc.assemble_vector(b, self.L)
@@ -206,7 +209,7 @@ class SNESDriver:
 
     def _objective(self, snes, x) -> float:
         t = time.perf_counter()
-        self._set_state(x)
+        self.set_state(x)
         value = self.comm.allreduce(fem.assemble_scalar(self.E), op=MPI.SUM)
         value += self.arrays.energy(x)
         self.assembly_time += time.perf_counter() - t
@@ -216,12 +219,20 @@ class SNESDriver:
         """Record the residual; from the first Newton step on, converge also at the round-off floor
         (PETSc tests convergence right after this call). Asking for less than round-off allows makes
         the energy line search fail on noise and costs cut-backs (measured: 8 Newton steps for 4)."""
-        self._history.append(float(fnorm))
+        self.history.append(float(fnorm))
         progress.report("newton", load=self.load_factor, iteration=int(it), residual=float(fnorm))
         if it > 0:
             snes.setTolerances(atol=max(self.base_atol(), self.roundoff_floor(1.0)))
 
     # -- public ----------------------------------------------------------------------------------
+    def residual(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
+        """The residual at x into b, as SNES sees it (Dirichlet rows x - g; array terms, lifting included)."""
+        self._residual(None, x, b)
+
+    def tangent(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
+        """The tangent at x into A (Dirichlet rows the identity; array terms' Hessians added)."""
+        self._jacobian(None, x, A, A)
+
     def residual_norm(self, projected: bool = True) -> float:
         """Assemble the residual at the current u, independently of SNES, and return its norm (with bounds
         and `projected`: the norm of its KKT violation, bounds.Bounds.kkt_violation)."""
@@ -263,13 +274,18 @@ class SNESDriver:
         """Residual norm of the unloaded state (u = 0) under the current load: the scale that
         convergence and acceptance are measured against. Computed once per driver (again with `refresh`:
         the loads, the rest shape or another field changed)."""
-        if refresh or getattr(self, "_load_scale", None) is None:
+        if refresh or self._load_scale is None:
             u = self.p.u
             saved = u.x.array.copy()
             u.x.array[:] = 0.0
             with self.bordered.unloaded() if self.bordered is not None else nullcontext():
                 self._load_scale = self.residual_norm(projected=False)
             u.x.array[:] = saved
+        return self._load_scale
+
+    @property
+    def known_load_scale(self) -> float | None:
+        """The load scale if it has been measured (or given), else None."""
         return self._load_scale
 
     def use_load_scale(self, value: float) -> None:
@@ -281,7 +297,7 @@ class SNESDriver:
         (a close first guess must not be asked for 1e-9 of its own tiny residual)."""
         if "snes_atol" in self.user_options:
             return float(self.user_options["snes_atol"])
-        scale = getattr(self, "_load_scale", None)
+        scale = self._load_scale
         return 1e-10 * scale if scale is not None else float(self.options.get("snes_atol", 0.0))
 
     def roundoff_floor(self, safety: float = 1e3) -> float:
@@ -298,7 +314,7 @@ class SNESDriver:
         Newton directions vanish on them. `check_start`: if that move makes the residual non-finite or crosses a
         contact, start from a linear extension instead (still crossing: the step fails); a caller whose supports
         never move (dynamics) skips this extra assembly."""
-        self._history: list[float] = []
+        self.history: list[float] = []
         self.p.u.vector.copy(self.x)
         if check_start:
             x_old = self.x.copy()
@@ -328,13 +344,13 @@ class SNESDriver:
         if self.E is not None:
             reason, its, kits = polish.polish(self, reason)
             iterations, krylov = iterations + its, krylov + kits
-        self._set_state(self.x)
-        return StepRecord(0.0, iterations, self._history,
+        self.set_state(self.x)
+        return StepRecord(0.0, iterations, self.history,
                           _REASONS.get(reason, str(reason)), reason > 0 or polish.stuck_at_equilibrium(self, reason),
                           krylov_iterations=krylov,
                           preconditioner_builds=self.pc_reuse.rebuilds - builds0 if self.pc_reuse else 0)
 
-    def _set_line_search(self, kind: str) -> None:
+    def set_line_search(self, kind: str) -> None:
         """petsc4py 3.18 has no SNESGetLineSearch: set the type through the options database, with every
         other snes_linesearch_* option of this driver (a new type starts from PETSc's defaults)."""
         opts = PETSc.Options()

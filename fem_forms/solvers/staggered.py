@@ -103,7 +103,7 @@ class AlternateMinimization(SNESDriver):
         first = super().solve_step(check_start)
         if self._inner or not first.accepted:
             return first
-        scale = getattr(self, "_load_scale", None)
+        scale = self.known_load_scale
         self._inner = True
         try:
             report = solve([*self.others, self], self.rtol, self.max_iterations)

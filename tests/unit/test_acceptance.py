@@ -107,7 +107,7 @@ class NoisyEnergyDriver(snes.SNESDriver):
 
     def _objective(self, snes_, x):
         value = super()._objective(snes_, x)
-        if self._history and self._history[-1] < self.noisy_below:
+        if self.history and self.history[-1] < self.noisy_below:
             self.noise_seen, self.calls = True, getattr(self, "calls", 0) + 1
             value += self.calls
         return value

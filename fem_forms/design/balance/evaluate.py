@@ -73,7 +73,7 @@ def evaluate(body: Body, st: Setting, solid: np.ndarray, rest: Body | None = Non
 def spin_ratio(inertia: np.ndarray, axis: np.ndarray) -> float:
     """I about the axis over the larger principal moment of the perpendicular block."""
     a = axis / np.linalg.norm(axis)
-    e1, e2 = goals._perpendicular(a)
+    e1, e2 = goals.perpendicular(a)
     B = np.array([[e1 @ inertia @ e1, e1 @ inertia @ e2], [e2 @ inertia @ e1, e2 @ inertia @ e2]])
     return float(a @ inertia @ a / np.linalg.eigvalsh(B)[-1])
 

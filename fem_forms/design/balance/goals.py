@@ -117,7 +117,7 @@ def stand(P: Problem, normals: np.ndarray, offsets: np.ndarray, frame: tuple, gr
 
 
 # ----------------------------------------------------------------------------- spin
-def _perpendicular(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def perpendicular(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     h = np.eye(3)[np.argmin(np.abs(a))]
     e1 = np.cross(a, h)
     e1 /= np.linalg.norm(e1)
@@ -127,7 +127,7 @@ def _perpendicular(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def spin(P: Problem, axis: np.ndarray, point: np.ndarray, along: bool) -> np.ndarray:
     """CoM on the axis through `point` (and at `point` when `along`), axis principal, Spin-It objective."""
     a = np.asarray(axis, float)
-    e1, e2 = _perpendicular(a)
+    e1, e2 = perpendicular(a)
     tol_c = CENTER_TOLERANCE * P.size
     I_full = rows.inertia(a, a, point) @ P.moments(np.ones(P.n))
     bands = [rows.first(e, point) for e in ((e1, e2, a) if along else (e1, e2))]
