@@ -11,7 +11,6 @@ import numpy as np
 
 from fem_forms.errors import InputError, SolveError
 from fem_forms.model import Model, build_model
-from fem_forms.physics.cavities import cavity_report
 from fem_forms.physics.thermal import HeatForms
 from fem_forms.physics.thermoelastic import young_modulus
 from fem_forms.solvers.thermal_step import HeatSolver, max_value, min_value
@@ -40,7 +39,6 @@ class StaticResult:
     probe_stresses: dict = field(default_factory=dict)   # probe -> stress, von_mises, strain (recovered)
     reactions: dict = field(default_factory=dict)        # reactions, applied_load, equilibrium_error
     quantities: Quantities | None = None                 # recovered stresses and strains
-    cavities: dict = field(default_factory=dict)         # name -> pressure, volume, volume_change
     term_reports: dict = field(default_factory=dict)     # each term's report (contact, min_distance, crack ...)
     strength: dict | None = None                         # safety factor against [material.strength]
     histories: list = field(default_factory=list)        # per accepted step (a crack's force-displacement curve)
@@ -81,7 +79,6 @@ class StaticResult:
                            "material": inside.get(n), **self.probe_stresses.get(n, {})}
                        for n, v in self.probes.items()},
             **self.reactions,
-            **({"cavities": self.cavities} if self.cavities else {}),
             **({"unstable_rejected": r.unstable_rejected} if r.unstable_rejected else {}),
             **self.term_reports,
             **({"strength": self.strength} if self.strength else {}),
@@ -275,7 +272,6 @@ def post_process(result: StaticResult) -> None:
         result.energy = model.mesh.comm.allreduce(fem.assemble_scalar(model.compiled("energy")), op=MPI.SUM) \
             + sum(t.energy_value(model.unknown.vector) for t in model.terms.arrays)
     result.max_displacement = max_norm(model.u)
-    result.cavities = cavity_report(model.terms)
     result.term_reports = model.terms.report(model.unknown.vector)
     result.probes = model.probes.evaluate(model.u)
     result.quantities = Quantities(model)

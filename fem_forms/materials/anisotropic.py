@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-from typing import ClassVar
+from typing import Callable, ClassVar
 
 import numpy as np
 import ufl
@@ -82,6 +82,11 @@ class Orthotropic:
     C: tuple
     small_strain: ClassVar[bool] = True
 
+    def young_modulus(self, value: Callable):
+        """The diagonal stiffnesses C11, C22, C33 (of every cell): the stiffest direction's modulus."""
+        C = value(self.C) if not isinstance(self.C, tuple) else np.asarray(self.C)
+        return np.reshape(C, (-1, 36))[:, [0, 7, 14]]
+
     def psi(self, F):
         return self.strain_energy(small_strain(F))
 
@@ -131,6 +136,9 @@ class FiberReinforced:
 
     def psi(self, F):
         return self.base.psi(F) + self.fiber_psi(F)
+
+    def young_modulus(self, value: Callable):
+        return self.base.young_modulus(value)             # the matrix's (fibres aside)
 
     def update(self, specs: list) -> None:
         """New fibre values from the scene's materials (the same families: other fibres need a new model)."""

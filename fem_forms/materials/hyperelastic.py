@@ -20,6 +20,11 @@ class Material(Protocol):
     exactly the derivative of psi (the energy line search uses psi)."""
     def psi(self, F) -> ufl.core.expr.Expr: ...
 
+    def young_modulus(self, value: Callable) -> Any:
+        """E of the small-strain limit (anisotropic: the stiffest direction's), `value(p)` giving a parameter's
+        values (a float, or a field's cell values): the scale of barriers, penalties and round-off. None
+        where the model has none (a user's psi)."""
+
 
 SMALL_STRAIN_MODELS = ("linear", "orthotropic")     # psi of the infinitesimal strain: no finite rotations
 
@@ -37,6 +42,9 @@ class GreenStrainForm:
     law: Any
     small_strain: ClassVar[bool] = False
 
+    def young_modulus(self, value: Callable):
+        return self.law.young_modulus(value)
+
     def psi(self, F):
         return self.law.strain_energy(green_strain(F))
 
@@ -45,6 +53,11 @@ class GreenStrainForm:
         if name not in ("mu", "lmbda", "C"):     # not pk1 (the law's is of the small strain), nor law itself
             raise AttributeError(name)           # (not set yet while copied: no recursion)
         return getattr(self.law, name)
+
+
+def young_of_lame(mu, lmbda):
+    """E from the Lame parameters (floats or arrays of them)."""
+    return mu * (3 * lmbda + 2 * mu) / (lmbda + mu)
 
 
 def lame_from_young_poisson(E: float, nu: float) -> tuple[float, float]:
@@ -71,6 +84,9 @@ class LinearElastic:
     def __post_init__(self):
         _check_lame(self.mu, self.lmbda)
 
+    def young_modulus(self, value: Callable):
+        return young_of_lame(value(self.mu), value(self.lmbda))
+
     def psi(self, F):
         return self.strain_energy(small_strain(F))
 
@@ -92,6 +108,9 @@ class StVenantKirchhoff:
     def __post_init__(self):
         _check_lame(self.mu, self.lmbda)
 
+    def young_modulus(self, value: Callable):
+        return young_of_lame(value(self.mu), value(self.lmbda))
+
     def psi(self, F):
         E = green_strain(F)
         return self.mu * ufl.inner(E, E) + 0.5 * self.lmbda * ufl.tr(E) ** 2
@@ -108,6 +127,9 @@ class NeoHookean:
 
     def __post_init__(self):
         _check_lame(self.mu, self.lmbda)
+
+    def young_modulus(self, value: Callable):
+        return young_of_lame(value(self.mu), value(self.lmbda))
 
     def psi(self, F):
         I1, _, J = invariants(F)
@@ -133,6 +155,9 @@ class MooneyRivlin:
         if not self.C10 + self.C01 > 0:
             raise InputError(f"material.C10/C01 = {self.C10}/{self.C01}: their sum must be positive")
         _check_lame(2 * (self.C10 + self.C01), self.lmbda)
+
+    def young_modulus(self, value: Callable):
+        return young_of_lame(2.0 * (value(self.C10) + value(self.C01)), value(self.lmbda))
 
     def psi(self, F):
         I1, I2, J = invariants(F)
@@ -171,6 +196,9 @@ class Corotated:
     def __post_init__(self):
         _check_lame(self.mu, self.lmbda)
 
+    def young_modulus(self, value: Callable):
+        return young_of_lame(value(self.mu), value(self.lmbda))
+
     def psi(self, F):
         return self.psi_of_invariants(*small_invariants(F))
 
@@ -200,6 +228,9 @@ class UserMaterial:
     """Wraps a user's own energy density function psi(F) -> UFL expression."""
     function: Callable
     name: str = "user"
+
+    def young_modulus(self, value: Callable) -> None:
+        return None                       # a user's psi(F) states no modulus
 
     def psi(self, F):
         return self.function(F)

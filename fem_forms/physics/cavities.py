@@ -138,17 +138,21 @@ class Inflation(LoadTerm):
             return float(self.pressure.value)
         return float(self._ctx.load.constant.value) * float(self.factor.value) * float(self.pressure.value)
 
-    def report(self) -> dict:
-        """results.json cavities[name]: pressure, volume and volume_change at the current state."""
+    def report(self, x=None) -> dict:
+        """results.json `cavities`: this cavity's numbers (merged with the other cavities')."""
+        return {"cavities": {self.cavity: self.numbers()}}
+
+    def numbers(self) -> dict:
+        """Pressure, volume and volume_change at the current state."""
         volume = self.volume()
         return {"pressure": self.pressure_now(), "volume": volume,
                 "volume_change": volume - float(self.rest_volume.value)}
 
     def record(self) -> dict:
-        r = self.report()
+        r = self.numbers()
         return {f"{self.cavity}_pressure": r["pressure"], f"{self.cavity}_volume": r["volume"]}
 
 
 def cavity_report(terms) -> dict:
     """results.json `cavities`: {name: {pressure, volume, volume_change}} of every inflated cavity."""
-    return {t.cavity: t.report() for t in terms if isinstance(t, Inflation)}
+    return {t.cavity: t.numbers() for t in terms if isinstance(t, Inflation)}

@@ -50,6 +50,11 @@ class MaterialMix:
         terms = [p.indicator * p.material.psi(F) for p in self.parts]
         return sum(terms[1:], terms[0])
 
+    def young_modulus(self, value):
+        """Every part's moduli together (None if any part states none)."""
+        each = [p.material.young_modulus(value) for p in self.parts]
+        return None if any(e is None for e in each) else np.concatenate([np.ravel(e) for e in each])
+
 
 class MaterialBinding:
     """The scene's materials bound to a mesh: `material` is what the solid's energy uses (one model with

@@ -21,31 +21,21 @@ from fem_forms.physics.terms import Context
 
 
 def young_modulus(material) -> float:
-    """E of a built-in model from its Lame parameters (Mooney-Rivlin: mu = 2 (C10 + C01)); with parameter
-    fields (several materials) the largest E over the cells (all ranks): a scale for barrier stiffness."""
-    material = getattr(material, "base", material)                  # fibres aside
-    parts = getattr(material, "parts", None)
-    if parts is not None:
-        return max(young_modulus(p.material) for p in parts)
-    if hasattr(material, "C") and not hasattr(material, "mu"):        # orthotropic: its stiffest direction
-        C = parameter_values(material.C) if not isinstance(material.C, tuple) else np.asarray(material.C)
-        E = np.reshape(C, (-1, 36))[:, [0, 7, 14]]
-        return _largest(E, material.C)
-    if hasattr(material, "C10"):
-        mu = 2.0 * (parameter_values(material.C10) + parameter_values(material.C01))
-    elif hasattr(material, "mu"):
-        mu = parameter_values(material.mu)
-    else:
+    """E of a built-in model as the material states it (Mooney-Rivlin: mu = 2 (C10 + C01); anisotropic: its
+    stiffest direction); with parameter fields (several materials) the largest over the cells of all ranks: a
+    scale for barrier stiffness. InputError for a model that states none (a user's psi(F))."""
+    comms = []
+
+    def value(p):
+        if isinstance(p, fem.Function):                 # a field over a distributed mesh: every rank's cells
+            comms.append(p.function_space.mesh.comm)
+        return parameter_values(p)
+    stated = getattr(material, "young_modulus", None)   # a user's own material object may not state it
+    E = stated(value) if stated is not None else None
+    if E is None:
         raise InputError("thermal.modulus_slope: needs a built-in material model (a user psi(F) has no E)")
-    lmbda = parameter_values(material.lmbda)
-    return _largest(np.atleast_1d(mu * (3 * lmbda + 2 * mu) / (lmbda + mu)), material.lmbda)
-
-
-def _largest(values: np.ndarray, parameter) -> float:
-    """The largest of local values, over all ranks when the parameter is a field of a distributed mesh."""
-    mesh = getattr(getattr(parameter, "function_space", None), "mesh", None)
-    local = float(np.max(values)) if np.size(values) else -np.inf
-    return mesh.comm.allreduce(local, op=MPI.MAX) if mesh is not None else local
+    local = float(np.max(E)) if np.size(E) else -np.inf
+    return comms[0].allreduce(local, op=MPI.MAX) if comms else local
 
 
 def couple_temperature(scene, ctx: Context, material, degree: int) -> fem.Function:

@@ -79,7 +79,7 @@ class ViscoelasticSolid(ElasticEnergy):
             self.regions.fill(self.tau[i], tau)
         self.update(self.t)
 
-    def restart(self, state: State) -> None:
+    def start(self, state: State) -> None:
         """Back to t = 0 at rest: no displacement, no Prony stress, no committed elastic stress (a new solve of
         this model)."""
         for f in (*self.Q, self.S0, state.fields["unknown"]):
