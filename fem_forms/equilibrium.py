@@ -215,7 +215,7 @@ def solve_static(scene: Scene, material=None, model: Model | None = None,
     """Solve the scene's equilibrium. `material` may be a Material or a user's psi(F) function.
     `on_step(lam)` is called after each accepted load step (the state committed): the static analysis
     writes its load path there. Raises InputError for bad input; a failed solve is returned with
-    report.converged False and no answer numbers (see `post_process` for the last accepted state)."""
+    report.converged False: at a limit point with the answer numbers of the last accepted state, else none."""
     t0 = time.perf_counter()
     histories, sweeps = [], None
     model = model or build_model(scene, material)
@@ -255,14 +255,28 @@ def solve_static(scene: Scene, material=None, model: Model | None = None,
     result = StaticResult(model, report, histories=histories, sweeps=sweeps)
     if report.converged:
         post_process(result)
+    elif limit_point(result):     # the loads back at the last accepted factor (the state was rolled back there)
+        set_load(report.load_reached)
+        post_process(result)
     result.wall_time_s = time.perf_counter() - t0
     return result
 
 
+GAVE_UP = "no convergence: "        # how continuation._gave_up starts the message of a continuation that stopped
+LIMIT = "limit point: "             # ... or, once the path had flattened (and arc length's end), this
+
+
+def limit_point(result: StaticResult) -> bool:
+    """The continuation stopped past an accepted step because its cut-backs reached their floor (or an arc-
+    length path ended short of full load)."""
+    r = result.report
+    return not r.converged and r.load_reached > 0 and r.message.startswith((GAVE_UP, LIMIT))
+
+
 def post_process(result: StaticResult) -> None:
     """The answer numbers of the model's current state (energy, largest displacement, probes, recovered
-    stresses, reactions) into `result`. A solve that converged calls it at full load; the static analysis
-    calls it for a continuation stopped at a limit point, its loads set back to the last accepted factor."""
+    stresses, reactions) into `result`. solve_static calls it at full load, or for a continuation stopped
+    at a limit point with its loads set back to the last accepted factor (so writing the outputs never solves)."""
     model, report = result.model, result.report
     model.sync_displacement()
     if caveat := model.solid.energy_caveat:           # its step energy is no stored energy: not reported

@@ -12,7 +12,7 @@ import sys
 
 from mpi4py import MPI
 
-from fem_forms.equilibrium import StaticResult, load_path, load_span, post_process, solve_static
+from fem_forms.equilibrium import GAVE_UP, LIMIT, StaticResult, limit_point, load_span, solve_static
 from fem_forms.errors import SolveError
 from fem_forms.model import build_model
 from fem_forms.output import pictures, results
@@ -25,17 +25,6 @@ from fem_forms.output.strength import summary_line
 from fem_forms.output import fields
 from fem_forms.scene import Scene
 
-GAVE_UP = "no convergence: "        # how continuation._gave_up starts the message of a continuation that stopped
-LIMIT = "limit point: "             # ... or, once the path had flattened (and arc length's end), this
-
-
-def limit_point(result: StaticResult) -> bool:
-    """The continuation stopped past an accepted step because its cut-backs reached their floor (or an arc-
-    length path ended short of full load)."""
-    r = result.report
-    return not r.converged and r.load_reached > 0 and r.message.startswith((GAVE_UP, LIMIT))
-
-
 def write_static_outputs(result: StaticResult, out: "Path", path: LoadPath | None = None) -> dict:
     """Fields (XDMF), picture (PNG), Newton history (CSV), then results.json last and atomically. With the
     load path of a stepped run (`path`), its files and load_path.png; at a limit point, the last accepted
@@ -45,9 +34,7 @@ def write_static_outputs(result: StaticResult, out: "Path", path: LoadPath | Non
     if comm.rank == 0:
         out.mkdir(parents=True, exist_ok=True)
     comm.barrier()
-    limit = limit_point(result)
-    if limit and result.quantities is None:
-        last_accepted_state(result)
+    limit = limit_point(result)               # solve_static post-processed its last accepted state
     summary = result.summary()
     files = {}
     if limit and result.report.message.startswith(GAVE_UP):
@@ -98,14 +85,6 @@ def _write_fields(result: StaticResult, out: Path, names: list) -> bool:
     fields.write_fields(out / "fields.xdmf", result.model.mesh, field_functions(result.model, result.quantities,
                                                                                names))
     return True
-
-
-def last_accepted_state(result: StaticResult) -> None:
-    """A limit point's answer numbers: the loads set back to the last accepted factor (the continuation
-    left them at the step that failed; the state was rolled back), then the usual post-processing."""
-    set_load, _ = load_path(result.model)
-    set_load(result.report.load_reached)
-    post_process(result)
 
 
 def solve_and_write(scene: Scene, out: Path) -> dict:

@@ -14,7 +14,9 @@ from fem_forms.errors import InputError
 from fem_forms.materials import Material, as_material
 from fem_forms.materials.constants import bind_constants
 from fem_forms.meshes import LoadedMesh
-from fem_forms.physics.elastic import ElasticEnergy
+import fem_forms.physics.elastic  # noqa: F401 (registers the elastic solid)
+import fem_forms.physics.plastic  # noqa: F401 (registers the plastic solids)
+import fem_forms.physics.viscoelastic  # noqa: F401 (registers the viscoelastic solid)
 import fem_forms.physics.loads  # noqa: F401 (registers the load terms)
 import fem_forms.physics.cavities  # noqa: F401 (registers the inflation load)
 import fem_forms.physics.contact  # noqa: F401 (registers the [contact] terms)
@@ -25,11 +27,9 @@ from fem_forms.physics.material_fields import MaterialBinding, with_fibers
 from fem_forms.physics.parameters import Parameters
 from fem_forms.physics.regions import MaterialRegions
 from fem_forms.physics import quadrature
-from fem_forms.physics.plastic import plastic_term
 from fem_forms.elements import check_degree
-from fem_forms.physics.viscoelastic import ViscoelasticSolid
 from fem_forms.physics.supports import LoadFactor, body_regions, load_regions, supports
-from fem_forms.physics.terms import Context, LOAD_TERMS, SCENE_TERMS, Term, TermList
+from fem_forms.physics.terms import Context, LOAD_TERMS, SCENE_TERMS, SOLID_KINDS, Term, TermList
 from fem_forms.scene import Scene
 
 
@@ -86,17 +86,12 @@ def scene_physics(scene: Scene, loaded: LoadedMesh, u, bc_space: fem.FunctionSpa
 
 def declare_terms(scene: Scene, material: Material, mesh, model_name: str | None = None,
                   binding=None, regions=None) -> TermList:
-    """The one place a model's terms are declared: the solid (the scene's material, its plastic solid with
-    [material.plasticity]), one term per [[load]] in scene order, then those of each registered scene
-    section (SCENE_TERMS) the scene asks for."""
-    plastic = scene.material.plasticity if model_name in (None, scene.material.model) else None
-    if plastic is not None:
-        solid = plastic_term(material, plastic, scene.material.model, mesh, scene.discretization.quadrature)
-    elif any(m.prony is not None for m in scene.materials) and regions is not None:
-        solid = ViscoelasticSolid(material, model_name or scene.material.model, scene.materials, regions,
-                                  scene.discretization.quadrature, binding)
-    else:
-        solid = ElasticEnergy(material, model_name or scene.material.model, binding)
+    """The one place a model's terms are declared: the solid (the first registered kind, by priority, that the
+    scene asks for: plastic, viscoelastic, else elastic), one term per [[load]] in scene order, then those of
+    each registered scene section (SCENE_TERMS) the scene asks for."""
+    name = model_name or scene.material.model
+    solid = next(s for s in (build(scene, material, mesh, name, binding, regions) for _, build in SOLID_KINDS)
+                 if s is not None)
     terms: list[Term] = [solid]
     for i, spec in enumerate(scene.load):
         terms.append(LOAD_TERMS[spec.type](spec, i, mesh))

@@ -7,7 +7,7 @@ from fem_forms.materials import Material, mixed_energy
 from fem_forms.materials.hyperelastic import is_small_strain
 from fem_forms.materials.constants import set_parameters
 from fem_forms.materials.stresses import first_piola_kirchhoff
-from fem_forms.physics.terms import Context, Solid
+from fem_forms.physics.terms import Context, Solid, register_solid
 from fem_forms.physics.thermoelastic import thermoelastic_density
 
 
@@ -98,3 +98,9 @@ class ElasticEnergy(Solid):
         P = self.pk1(ctx)
         grad_v = ufl.grad(v) if ctx.rest_map is None else ufl.grad(v) * ufl.inv(ctx.rest_map)
         return ctx.volume(ufl.inner(P, grad_v))
+
+
+@register_solid(priority=0)
+def elastic_solid(scene, material, mesh, model_name: str, binding, regions) -> ElasticEnergy:
+    """The elastic solid: what no other kind of solid claims."""
+    return ElasticEnergy(material, model_name, binding)

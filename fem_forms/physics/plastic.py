@@ -25,7 +25,7 @@ from fem_forms.materials.plasticity import OBrien, VonMises
 from fem_forms.elements import MAX_DEGREE
 from fem_forms.physics import quadrature
 from fem_forms.physics.admissibility import SmallestValue, quadrature_points
-from fem_forms.physics.terms import Context, Solid
+from fem_forms.physics.terms import Context, Solid, register_solid
 from fem_forms.state import State
 
 
@@ -286,6 +286,15 @@ class FiniteVonMisesSolid(PlasticSolid):
     def plastic_strain(self):
         """Plastic Green strain (C_p - I) / 2 for output."""
         return 0.5 * (ufl.inv(self.eps_p) - ufl.Identity(3))
+
+
+@register_solid(priority=20)
+def plastic_solid(scene, material, mesh, model_name: str, binding, regions) -> PlasticSolid | None:
+    """The scene's material with [material.plasticity] (a single material; the scene's own model only)."""
+    plastic = scene.material.plasticity if model_name == scene.material.model else None
+    if plastic is None:
+        return None
+    return plastic_term(material, plastic, scene.material.model, mesh, scene.discretization.quadrature)
 
 
 def plastic_term(material, plastic, model_name: str, mesh, degree: int) -> PlasticSolid:

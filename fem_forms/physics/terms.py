@@ -338,6 +338,20 @@ class TermList:
         return {c for t in self.all for c in t.energy_columns}
 
 
+# the kinds of solid, most specific first: (priority, builder(scene, material, mesh, name, binding, regions) ->
+# Solid, or None where the scene does not ask for that kind); the elastic solid takes what no other does
+SOLID_KINDS: list[tuple[int, Callable]] = []
+
+
+def register_solid(priority: int) -> Callable:
+    """Function decorator: a kind of solid the scene may ask for; builders are tried by priority, highest first."""
+    def add(builder):
+        SOLID_KINDS.append((priority, builder))
+        SOLID_KINDS.sort(key=lambda kind: -kind[0])
+        return builder
+    return add
+
+
 # load type (the [[load]] type key) -> builder(spec, index in scene.load, mesh) -> Term
 LOAD_TERMS: dict[str, Callable] = {}
 

@@ -22,7 +22,7 @@ from fem_forms.kinematics import green_strain, small_strain
 from fem_forms.materials.hyperelastic import is_small_strain
 from fem_forms.physics.elastic import ElasticEnergy
 from fem_forms.physics.plastic import quadrature_rule, quadrature_scheme, quadrature_update
-from fem_forms.physics.terms import Context
+from fem_forms.physics.terms import Context, register_solid
 from fem_forms.state import State
 
 
@@ -162,3 +162,12 @@ class ViscoelasticSolid(ElasticEnergy):
             x = dt / tau.x.array
             a.x.array[:] = np.exp(-x)
             b.x.array[:] = g.x.array * (-np.expm1(-x) / x if dt > 0 else 1.0)
+
+
+@register_solid(priority=10)
+def viscoelastic_solid(scene, material, mesh, model_name: str, binding, regions) -> ViscoelasticSolid | None:
+    """A solid with Prony terms where any of the scene's materials has them (the scene's own materials)."""
+    if regions is None or not any(m.prony is not None for m in scene.materials):
+        return None
+    return ViscoelasticSolid(material, model_name, scene.materials, regions, scene.discretization.quadrature,
+                             binding)
