@@ -134,7 +134,7 @@ def test_max_step_caps_the_first_trial_with_petsc_s_sign():
     assert rec.iterations > 20 and drv.arrays.last_cap == 0.5     # halving the error each iteration
     np.testing.assert_allclose(capped.u.x.array, exact, rtol=0, atol=1e-7 * np.abs(exact).max())
     # the cap survives the line-search switch of the polish (petsc4py has no getLineSearch)
-    drv._set_line_search("basic")
+    drv.set_line_search("basic")
     capped.u.x.array[:] = 0.0
     term.steps.clear()
     drv.solve_step()
