@@ -201,12 +201,15 @@ def _sign_reference(V: fem.FunctionSpace) -> fem.Function:
     return w
 
 
-def _leaves_free(model: Model) -> bool:
-    """Whether the supports (and the terms' own, a foundation's) leave some rigid motion free."""
+def _held_by_support_terms(model: Model) -> bool:
+    """Whether the model has support terms (a spring, a foundation) and with the [[fix]] they leave no rigid
+    motion free (a model without them is judged as before, at no cost)."""
+    if not any(t.support_hint for t in model.terms):
+        return False
     zero = model.unknown.vector.duplicate()
     zero.set(0.0)
     try:
-        return bool(free_modes(model, zero)[0])
+        return not free_modes(model, zero)[0]
     finally:
         zero.destroy()
 
@@ -217,7 +220,7 @@ def _lowest(ops: Operators, scene: Scene, kind: str, symmetric: bool, nns, free_
     count = scene.modal.count
     # supported: target 0. If the supports leave rigid-body motion, K is singular: the solve then
     # fails or finds too few elastic modes, and is repeated as for an unsupported part.
-    held = bool(scene.fix) or rigid_below == 0.0          # held by [[fix]] or the terms' supports
+    held = bool(scene.fix) or rigid_below == 0.0          # held by [[fix]], or with the terms' supports
     attempts = ([(0.0, count)] if held else []) + [(free_target, count + RIGID_EXTRA)]
     for i, (target, nev) in enumerate(attempts):
         last = i == len(attempts) - 1
@@ -267,9 +270,9 @@ def solve_modal(scene: Scene, material=None, model: Model | None = None) -> Moda
     nns = linear.rigid_body_modes(model.V) if kind == "iterative" else None
 
     free_target = -SHIFT_FRACTION * ops.omega2_scale
-    # supports that hold every rigid motion ([[fix]], or springs and foundations however soft) leave no rigid-body
-    # mode: then a mode far below the body's elastic scale (a stiff plate bouncing on a soft bed) is a mode
-    rigid_below = RIGID_FRACTION * abs(free_target) if _leaves_free(model) else 0.0
+    # a body the terms' supports (springs, foundations, however soft) hold with the [[fix]] has no rigid-body
+    # mode: a mode far below the body's elastic scale (a stiff plate bouncing on a soft bed) is a mode there
+    rigid_below = 0.0 if _held_by_support_terms(model) else RIGID_FRACTION * abs(free_target)
     band = None
     try:
         if spec.up_to is not None:

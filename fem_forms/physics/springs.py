@@ -39,6 +39,9 @@ class Spring(Term):
 
     def set_values(self, scene) -> None:
         spec = scene.spring[self.index]
+        if spec.where != self.spec.where:
+            raise InputError(f"spring[{self.index}].where: another surface needs a new model (new values of "
+                             "anchor, stiffness and length do not)")
         self.anchor.value, self.k.value, self.spec = spec.anchor, spec.stiffness, spec
         self._rest_length()
 
@@ -47,9 +50,9 @@ class Spring(Term):
         if mesh.topology.cell_name() == "prism":
             raise InputError(f"spring[{self.index}]: not on a prism mesh (FFCx 0.5.0 cannot integrate over prism "
                              "facets); use tetrahedra or hexahedra")
-        if ctx.rest_offset is not None and not isinstance(ctx.u, fem.Function):     # the inverse problem's u
-            raise InputError(f"spring[{self.index}]: not in inverse designs yet (the spring's pull on the known "
-                             "deformed shape does not depend on the rest shape; FFCx 0.5 cannot compile its tangent)")
+        if ctx.rest_offset is not None:          # an inverse design (any method): the rest shape is unknown
+            raise InputError(f"spring[{self.index}]: not in inverse designs yet (its rest length is taken on the "
+                             "mesh, which there is the target, and FFCx 0.5 cannot compile its direct tangent)")
         facets = np.sort(locate_facets(ctx.loaded, self.spec.where)).astype(np.int32)
         tags = dmesh.meshtags(mesh, mesh.topology.dim - 1, facets, np.ones(len(facets), dtype=np.int32))
         self.ds = ufl.Measure("ds", domain=mesh, subdomain_data=tags, metadata=ctx.dx.metadata())(1)

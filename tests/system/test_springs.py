@@ -74,8 +74,26 @@ def test_bad_springs_are_refused_in_one_line(tmp_path, capsys):
     twice = hanging(spring=[{"name": "s", "where": {"axis": "z", "at": H}, "anchor": [0, 0, 1], "stiffness": K}] * 2)
     code, _, err, _ = run_scene(tmp_path, twice, capsys)
     assert code == 2 and "given to two springs" in err
-    inverse = {**hanging(analysis="inverse", inverse={"method": "direct"}),
-               "spring": [{"where": {"axis": "z", "at": H}, "anchor": [A / 2, A / 2, 1.0], "stiffness": K,
-                           "length": 0.5}]}
-    code, _, err, _ = run_scene(tmp_path, inverse, capsys)
-    assert code == 2 and "spring[0]: not in inverse designs yet" in err
+    for method in ("direct", "adjoint"):
+        inverse = {**hanging(analysis="inverse", inverse={"method": method}),
+                   "spring": [{"where": {"axis": "z", "at": H}, "anchor": [A / 2, A / 2, 1.0], "stiffness": K,
+                               "length": 0.5}]}
+        code, _, err, _ = run_scene(tmp_path, inverse, capsys)
+        assert code == 2 and "spring[0]: not in inverse designs yet" in err, method
+
+
+def test_a_shorter_rest_length_pulls_from_the_start_and_a_new_surface_needs_a_new_model(tmp_path):
+    """With a rest length 5 mm below its length at the start the spring carries m g 5 mm closer to its anchor."""
+    import fem_forms as ff
+    from fem_forms.model import build_model
+    from fem_forms.scene import Scene
+    short = hanging()
+    short["spring"][0]["length"] = 1.0 - 0.005
+    code, res, _, _ = run_scene(tmp_path, short)
+    assert code == 0
+    assert -res["probes"]["top"]["displacement"][2] == pytest.approx(SAG - 0.005, rel=2e-3)
+    model = build_model(Scene.from_dict(hanging()))
+    moved = hanging()
+    moved["spring"][0]["where"] = {"axis": "z", "at": 0.0}
+    with pytest.raises(ff.InputError, match=r"spring\[0\].where: another surface needs a new model"):
+        model.set_values(Scene.from_dict(moved))
