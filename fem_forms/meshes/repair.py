@@ -14,8 +14,6 @@ finished in 5 minutes on one core (README, "Real-world surfaces").
 from __future__ import annotations
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
 from fem_forms.errors import InputError
 
@@ -35,6 +33,8 @@ def boundary_loops(tris: np.ndarray) -> int:
         return 0
     verts, local = np.unique(open_edges, return_inverse=True)
     local = local.reshape(-1, 2)
+    from scipy.sparse import coo_matrix             # a surface's repair only: no run pays scipy's import
+    from scipy.sparse.csgraph import connected_components
     graph = coo_matrix((np.ones(len(local)), (local[:, 0], local[:, 1])), shape=(len(verts), len(verts)))
     return int(connected_components(graph, directed=False)[0])
 
