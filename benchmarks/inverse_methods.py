@@ -40,7 +40,7 @@ def worker(args) -> None:
     """One configuration in this process: prints a JSON line with the median time."""
     import fem_forms as ff
     from fem_forms.analyses import inverse
-    from fem_forms.equilibrium import solve_static
+    from fem_forms.analyses.static.solve import solve_static
     from mpi4py import MPI
     ff.quiet_jit()
     d = json.loads(args.scene)

@@ -47,7 +47,7 @@ def child(cells: list, modal: dict) -> dict:
     """One measurement in this (fresh) process."""
     sys.path.insert(0, str(ROOT))
     import fem_forms as ff
-    from fem_forms.modes import solve_modal
+    from fem_forms.analyses.modal import solve_modal
     from fem_forms.output.radiation import Radiation
     ff.quiet_jit()
     scene = ff.Scene.from_dict(scene_dict(cells, modal))

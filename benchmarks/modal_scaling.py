@@ -4,7 +4,7 @@ A steel cantilever 1 x 0.25 x 0.25 m (P2 tetrahedra, 4n x n x n cells) is solved
 Krylov-Schur with shift-and-invert about 0 and MUMPS LU ("direct"), or the same with CG + GAMG
 (rigid-body near-nullspace, rtol 1e-10) as the inner solver ("iterative"). Each is run as
 
-- ours: `fem_forms.modes.solve_modal(scene)`, end to end (mesh, forms, assembly,
+- ours: `fem_forms.analyses.modal.solve_modal(scene)`, end to end (mesh, forms, assembly,
   eigensolve, mass normalisation, signs, effective masses); the eigensolve part is also timed;
 - bare: the same K and M (assembled once by fem_forms, not timed) handed to a slepc4py EPS set up
   directly with the same settings; only EPS setup + solve is timed.
@@ -79,7 +79,7 @@ def child(n: int, kind: str, impl: str) -> dict:
     sys.path.insert(0, str(ROOT))
     import numpy as np
     import fem_forms as ff
-    from fem_forms.modes import assemble_operators, solve_modal
+    from fem_forms.analyses.modal import assemble_operators, solve_modal
     from fem_forms.model import build_model
     ff.quiet_jit()
     scene = ff.Scene.from_dict(scene_dict(n, kind))

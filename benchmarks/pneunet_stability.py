@@ -15,7 +15,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 import fem_forms as ff
-from fem_forms.equilibrium import load_path
+from fem_forms.analyses.static.solve import load_path
 from fem_forms.model import build_model
 from fem_forms.physics.cavities import cavity_report
 from fem_forms.solvers import continuation

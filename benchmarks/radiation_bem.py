@@ -93,7 +93,7 @@ def main() -> None:
     sys.path.insert(0, str(ROOT))
     import tomllib
     import fem_forms as ff
-    from fem_forms.modes import solve_modal
+    from fem_forms.analyses.modal import solve_modal
     from fem_forms.output.fields import boundary_surface
     from fem_forms.output.radiation import Radiation
     ff.quiet_jit()

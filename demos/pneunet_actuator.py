@@ -32,7 +32,7 @@ import fem_forms as ff
 from fem_forms import progress
 from fem_forms.analyses.dynamic.output import write_gif
 from fem_forms.analyses.static import write_static_outputs
-from fem_forms.equilibrium import solve_static
+from fem_forms.analyses.static.solve import solve_static
 from fem_forms.model import build_model
 from fem_forms.output.fields import boundary_surface
 from fem_forms.physics.cavities import cavity_report

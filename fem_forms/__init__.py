@@ -16,14 +16,14 @@ threads.pin_blas_environment()          # before numpy loads OpenBLAS (fem_forms
 
 from fem_forms.analyses.modal import write_modal_outputs
 from fem_forms.analyses.static import write_static_outputs
-from fem_forms.equilibrium import StaticResult, solve_static
+from fem_forms.analyses.static.solve import StaticResult, solve_static
 from fem_forms.errors import InputError, SolveError
 from fem_forms.logs import patient_jit, quiet_jit, wrap_form_compiles
 from fem_forms.materials import (Corotated, LinearElastic, MooneyRivlin, NeoHookean, StVenantKirchhoff,
                                  UserMaterial)
 from fem_forms.materials.hyperelastic import make_material
 from fem_forms.materials.stresses import cauchy_stress, first_piola_kirchhoff, von_mises
-from fem_forms.modes import ModalResult, solve_modal
+from fem_forms.analyses.modal import ModalResult, solve_modal
 from fem_forms.output.progress_line import show_progress
 from fem_forms.scene import Scene
 

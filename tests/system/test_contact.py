@@ -221,7 +221,7 @@ def test_the_contact_pressure_field_is_the_blocks_weight_over_its_base(tmp_path)
     """output.fields = ["contact_pressure"] on P2: at the bottom's vertices the block's weight over its base,
     rho g H (the pushes of the edge nodes gathered onto the corners: alone they zigzag), zero elsewhere."""
     import fem_forms as ff
-    from fem_forms.equilibrium import solve_static
+    from fem_forms.analyses.static.solve import solve_static
     scene = block_scene(output={"picture": False, "fields": ["contact_pressure"]})
     code, r, _, out = run_scene(tmp_path, scene)
     assert code == 0 and "contact_pressure" in (out / "fields.xdmf").read_text()

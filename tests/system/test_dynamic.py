@@ -13,9 +13,9 @@ import pytest
 from helpers import mpirun, run_scene, serial_and_two_ranks, to_toml
 import fem_forms as ff
 from fem_forms.analyses.dynamic import solve_dynamic
-from fem_forms.equilibrium import solve_static
+from fem_forms.analyses.static.solve import solve_static
 from fem_forms.errors import InputError
-from fem_forms.modes import solve_modal
+from fem_forms.analyses.modal import solve_modal
 
 L, H, E, NU, RHO, P = 1.0, 0.1, 1.0e6, 0.3, 1000.0, -100.0
 

@@ -12,7 +12,7 @@ import pytest
 from scipy.optimize import brentq, minimize_scalar
 
 import fem_forms as ff
-from fem_forms.equilibrium import load_path
+from fem_forms.analyses.static.solve import load_path
 from fem_forms.model import build_model
 from fem_forms.physics.cavities import cavity_report
 from fem_forms.solvers import continuation

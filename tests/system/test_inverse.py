@@ -100,7 +100,7 @@ def test_region_matching_design_lands_where_it_predicted(tmp_path):
     """Only the region is matched: the forward solve from the written rest shape lands on the shape
     the design predicted, the region within a small fraction of the uncorrected sag of the target,
     while the unmatched rest of the body may stay off the target."""
-    from fem_forms.equilibrium import solve_static
+    from fem_forms.analyses.static.solve import solve_static
     d = region_design()
     code, data, _, _ = run_scene(tmp_path, d)
     assert code == 0, data["problems"]

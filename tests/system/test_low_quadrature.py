@@ -4,7 +4,7 @@ centroid weight. Now the mass has its own exact rule and degree 3 the positive G
 import numpy as np
 import pytest
 
-from fem_forms.equilibrium import solve_static
+from fem_forms.analyses.static.solve import solve_static
 from fem_forms.scene import Scene
 from helpers import beam_scene
 

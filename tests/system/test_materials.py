@@ -13,7 +13,7 @@ import pytest
 
 import fem_forms as ff
 from fem_forms.errors import InputError
-from fem_forms.modes import solve_modal
+from fem_forms.analyses.modal import solve_modal
 from helpers import mpirun, run_scene, toml_dumps, with_
 from system.demo_runs import NUMBER, demo, grab, scene_dict  # noqa: F401 (demo: fixture)
 

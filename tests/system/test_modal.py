@@ -20,7 +20,7 @@ from helpers import MODAL_E, MODAL_L, MODAL_RHO, MODAL_T, ROOT, to_toml
 from helpers import modal_beam as beam
 from fem_forms import Scene
 from fem_forms.analyses.modal import write_modal_outputs
-from fem_forms.modes import solve_modal
+from fem_forms.analyses.modal import solve_modal
 
 PYTHON = str(ROOT / ".venv" / "bin" / "python")
 L, T, E, RHO = MODAL_L, MODAL_T, MODAL_E, MODAL_RHO          # slender square beam, nu = 0

@@ -14,8 +14,8 @@ from helpers import MODAL_E, MODAL_L, MODAL_RHO, MODAL_T, modal_beam, mpirun, se
 from fem_forms import Scene
 from fem_forms.cli import main
 from fem_forms.model import build_model
-from fem_forms.modes import band as modal_band
-from fem_forms.modes import assemble_operators, solve_modal
+from fem_forms.analyses.modal import band as modal_band
+from fem_forms.analyses.modal import assemble_operators, solve_modal
 
 
 def bar(up_to=None, **over):
@@ -108,8 +108,8 @@ SLICED_ON_TWO_RANKS = """
 import json, sys
 from mpi4py import MPI
 import fem_forms as ff
-from fem_forms.modes import band as modal_band
-from fem_forms.modes import solve_modal
+from fem_forms.analyses.modal import band as modal_band
+from fem_forms.analyses.modal import solve_modal
 modal_band.SLICE_ABOVE = 0
 res = solve_modal(ff.Scene.from_dict(json.loads(sys.argv[1])))
 summary = res.summary()                      # collective

@@ -17,7 +17,7 @@ from fem_forms import Scene
 from fem_forms.analyses.modal import write_modal_outputs
 from fem_forms.cli import main
 from fem_forms.model import build_model
-from fem_forms.modes import solve_modal
+from fem_forms.analyses.modal import solve_modal
 from fem_forms.output.radiation import Radiation
 from fem_forms.output.sound import table_damping
 

@@ -14,7 +14,7 @@ import pytest
 from scipy.spatial import ConvexHull, cKDTree
 
 import fem_forms as ff
-from fem_forms.equilibrium import solve_static
+from fem_forms.analyses.static.solve import solve_static
 from fem_forms.meshes.occ_parts import write_part
 from fem_forms.output.fields import node_values
 from helpers import mpirun, run_scene, toml_dumps

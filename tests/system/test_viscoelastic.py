@@ -205,7 +205,7 @@ def test_the_last_accepted_state_keeps_the_viscoelastic_state():
     """A run stopped at a limit point reports its last accepted state (solve_static sets the loads back through
     the load path, then post-processes): the solid's start belongs to the start of a solve, not to the load path
     (there it zeroed the displacement being reported)."""
-    from fem_forms.equilibrium import load_path, post_process
+    from fem_forms.analyses.static.solve import load_path, post_process
     r = ff.solve_static(ff.Scene.from_dict(bar(fix_history=(1e-4, [[0.0, 0.0], [1e-3, 1.0], [3.0, 1.0]]))))
     force, end = r.summary()["reactions"]["pull"][0], list(r.probes["end"])
     set_load, _ = load_path(r.model)                  # what solve_static does at a limit point

@@ -9,7 +9,7 @@ from mpi4py import MPI
 import pytest
 
 import fem_forms as ff
-from fem_forms.equilibrium import load_path
+from fem_forms.analyses.static.solve import load_path
 from fem_forms.model import build_model
 from fem_forms.solvers import continuation
 from fem_forms.solvers.snes import SNESDriver

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import fem_forms as ff
-from fem_forms.equilibrium import solve_static
+from fem_forms.analyses.static.solve import solve_static
 from fem_forms.model import build_model
 
 

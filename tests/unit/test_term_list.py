@@ -65,7 +65,7 @@ def test_a_registered_section_adds_its_terms_to_every_model(monkeypatch):
     k int u dX, assembled independently of the solver's forms."""
     from dolfinx import fem
     from mpi4py import MPI
-    from fem_forms.equilibrium import solve_static
+    from fem_forms.analyses.static.solve import solve_static
     from fem_forms.physics import terms as terms_module
     monkeypatch.setitem(terms_module.SCENE_TERMS, "spring", lambda sc, mesh: [Spring()])
     held = solve_static(scene())

@@ -24,7 +24,7 @@ from fem_forms.design.balance import stiffness_factors
 from fem_forms.design.balance.body import Body
 from fem_forms.design.balance.design import Setting, design
 from fem_forms.design.balance.evaluate import evaluate, unmet
-from fem_forms.equilibrium import StaticResult, solve_static
+from fem_forms.analyses.static.solve import StaticResult, solve_static
 from fem_forms.errors import SolveError
 from fem_forms.meshes import load_mesh
 from fem_forms.model import Model, build_model

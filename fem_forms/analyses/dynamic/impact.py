@@ -20,7 +20,7 @@ import numpy as np
 
 from fem_forms.errors import InputError, SolveError
 from fem_forms.model import build_model
-from fem_forms.modes import solve_modal
+from fem_forms.analyses.modal import solve_modal
 from fem_forms.output import impact_sound, sound
 from fem_forms.output.radiation import Radiation, check_listener
 from fem_forms.scene.analyses.modal import ModalSpec

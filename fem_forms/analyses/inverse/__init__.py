@@ -13,7 +13,7 @@ from fem_forms.design.direct import solve_direct
 from fem_forms.design.fixed_point import solve_fixed_point
 from fem_forms.design.optimizers import solve_adjoint
 from fem_forms.design.parameters import InverseResult, target_scene
-from fem_forms.equilibrium import max_norm
+from fem_forms.analyses.static.solve import max_norm
 from fem_forms.errors import SolveError
 from fem_forms.meshes import load_mesh
 from fem_forms.output import fields, pictures, probes, results

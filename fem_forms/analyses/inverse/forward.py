@@ -23,7 +23,7 @@ from petsc4py import PETSc
 from scipy.spatial import cKDTree
 
 from fem_forms.analyses.inverse.stability import Inertia, assemble_tangent, inertia_of, tangent_inertia
-from fem_forms.equilibrium import StaticResult, solve_static
+from fem_forms.analyses.static.solve import StaticResult, solve_static
 from fem_forms.meshes import LoadedMesh
 from fem_forms.model import build_model
 from fem_forms.scene import MeshSpec, Scene, Selector

@@ -1,4 +1,4 @@
-"""The one equilibrium solve: static, the modal prestress and the inverse design's forward check use it."""
+"""The one equilibrium solve: static, the modal prestress, the inverse design's forward check and the balance sag use it."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -9,12 +9,10 @@ from dolfinx import fem
 from mpi4py import MPI
 import numpy as np
 
-from fem_forms.errors import InputError, SolveError
+from fem_forms.analyses.static.heat import solve_temperature
+from fem_forms.errors import InputError
 from fem_forms.model import Model, build_model
-from fem_forms.physics.thermal import HeatForms
-from fem_forms.physics.thermoelastic import young_modulus
-from fem_forms.solvers.thermal_step import HeatSolver, max_value, min_value
-from fem_forms.state import State
+from fem_forms.solvers.thermal_step import max_value
 from fem_forms.output.histories import step_histories
 from fem_forms.output.quantities import Quantities
 from fem_forms.output.guard import attempt
@@ -95,33 +93,6 @@ def max_norm(f: fem.Function) -> float:
     vals = f.x.array[: n * bs].reshape(-1, bs)
     local = float(np.linalg.norm(vals, axis=1).max()) if len(vals) else 0.0
     return f.function_space.mesh.comm.allreduce(local, op=MPI.MAX)
-
-
-def solve_temperature(model: Model) -> None:
-    """The steady temperature of a coupled static scene (staggered: heat first, then the mechanics with
-    its thermal strain ramped by the load factor); SolveError if the heat solve fails."""
-    scene = model.scene
-    T = model.temperature
-    forms = HeatForms(scene.thermal, scene.materials, model.loaded, T, model.state.old["temperature"],
-                      False, scene.discretization.quadrature, regions=model.context.materials)
-    out = HeatSolver(forms, State({"temperature": T}), linear_kind=scene.solver.linear).solve()
-    if not out.accepted:
-        raise SolveError(f"{scene.title}: the steady heat problem did not converge ({out.why})")
-    check_modulus(model)
-    model.state.commit()
-
-
-def check_modulus(model: Model) -> None:
-    """E(T) = E + dE/dT (T - T_ref) must stay positive over the temperatures reached (one-line InputError)."""
-    th = model.scene.thermal
-    if th.modulus_slope == 0.0:
-        return
-    E = young_modulus(model.material)
-    for T in (min_value(model.temperature), max_value(model.temperature)):
-        if E + th.modulus_slope * (T - th.reference_temperature) <= 0:
-            raise InputError(f"thermal.modulus_slope = {th.modulus_slope}: E(T) = "
-                             f"{E + th.modulus_slope * (T - th.reference_temperature):.4g} Pa at T = {T:.6g} "
-                             "is not positive")
 
 
 def load_path(model: Model) -> tuple:

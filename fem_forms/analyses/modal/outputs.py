@@ -1,4 +1,4 @@
-"""Modal analysis: the scene's modes (fem_forms/modes: K phi = omega^2 M phi at rest or prestressed, by count or
+"""Modal analysis outputs: the scene's modes (solve.py: K phi = omega^2 M phi at rest or prestressed, by count or
 every one below `up_to`), written as results.json, modes.xdmf and a picture, and with [sound] the ring of the
 struck part as a WAV."""
 from __future__ import annotations
@@ -8,8 +8,8 @@ from pathlib import Path
 from mpi4py import MPI
 import numpy as np
 
-from fem_forms.equilibrium import max_norm
-from fem_forms.modes import ModalResult, solve_modal
+from fem_forms.analyses.static.solve import max_norm
+from fem_forms.analyses.modal.solve import ModalResult, solve_modal
 from fem_forms.output import fields, results, sound
 from fem_forms.output.guard import attempt
 from fem_forms.scene import Scene

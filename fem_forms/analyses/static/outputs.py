@@ -12,7 +12,7 @@ import sys
 
 from mpi4py import MPI
 
-from fem_forms.equilibrium import GAVE_UP, LIMIT, StaticResult, limit_point, load_span, solve_static
+from fem_forms.analyses.static.solve import GAVE_UP, LIMIT, StaticResult, limit_point, load_span, solve_static
 from fem_forms.errors import SolveError
 from fem_forms.model import build_model
 from fem_forms.output import pictures, results

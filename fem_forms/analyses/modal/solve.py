@@ -20,11 +20,11 @@ import numpy as np
 from petsc4py import PETSc
 import ufl
 
-from fem_forms.equilibrium import StaticResult, solve_static
+from fem_forms.analyses.static.solve import StaticResult, solve_static
 from fem_forms.errors import InputError, SolveError
 from fem_forms.meshes import bounding_box
 from fem_forms.model import Model, build_model
-from fem_forms.modes.band import Band, solve_band
+from fem_forms.analyses.modal.band import Band, solve_band
 from fem_forms.output import probes
 from fem_forms.output.radiation import check_listener
 from fem_forms.output.summary import header
