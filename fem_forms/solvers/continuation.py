@@ -11,9 +11,10 @@ import numpy as np
 from petsc4py import PETSc
 
 from fem_forms import progress
-from fem_forms.solvers import acceptance, linear
+from fem_forms.solvers import acceptance
 from fem_forms.solvers.limit import NEAR_LIMIT, PathStiffness
-from fem_forms.solvers.reports import UNSTABLE, SolveReport
+from fem_forms.solvers.reports import SolveReport
+from fem_forms.solvers.retry import RetryPolicy
 from fem_forms.solvers.snes import NonlinearProblem, SNESDriver
 from fem_forms.state import State
 
@@ -40,10 +41,11 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
     rope-like beam at E = 100 Pa takes 1,000+ of them). `on_step(lam)` runs after each accepted, committed step."""
     t0 = time.perf_counter()
     drv = driver or SNESDriver(problem, options, linear_kind, prefix, near_nullspace, reuse_factor)
+    retry = RetryPolicy(drv, linear_kind)
     assembly0 = drv.assembly_time
     u = problem.u
     set_load = problem.set_load or (lambda lam: None)
-    state, old = _starting_state(problem, drv)
+    state, old = _starting_state(problem, drv, retry)
     set_load(1.0)                                    # reference scale: the rest state's residual at full load
     r_full = drv.load_scale(refresh=True)            # a reused driver's loads or rest shape may have changed
     report = SolveReport(False, 0.0, 0, math.nan, linear_solver=drv.linear_kind, load_scale=r_full)
@@ -59,13 +61,13 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
             break
         set_load(trial)
         corner = any(abs(lam - s) < 1e-12 for s in stops)     # the load path turns: no extrapolation across
-        escaped = _start(drv, old, recent if predictor and not corner else [], trial - lam)
+        escaped = _start(drv, retry, old, recent if predictor and not corner else [], trial - lam)
         drv.load_factor = trial
         progress.report("load_step", load=trial, step=len(report.steps) + 1)
         rec = drv.solve_step()
         rec.load = trial
         why = acceptance.why_rejected(drv, rec, load_scale=r_full, stable_only=True)   # SNES, finite, admissible, ...
-        same_step = _adjust_solver(drv, rec, linear_kind, report) if not rec.accepted else _escape(drv, why, trial)
+        same_step = retry.after_failure(rec, report) if not rec.accepted else retry.after_rejection(why, trial)
         if rec.accepted and why is None:
             report.residual_norm = rec.checked_residual     # the independently re-assembled residual
         report.add_step(rec, why)
@@ -80,12 +82,12 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
             dlam, hold = next_increment(lam, dlam, hold, max_step), False
             report.load_reached = lam
             on_step(lam)
-            _descend_on_retry(drv, False)
+            retry.descend(False)
         else:
             state.rollback()                         # back to the last accepted state, history included
             cuts, dlam = (cuts, dlam) if same_step else (cuts + 1, 0.5 * dlam)
             hold = hold or acceptance.left_the_domain(rec, why)
-            _descend_on_retry(drv, True)
+            retry.descend(True)
             drv.rebuild()                        # fresh solver state after a failure
             drv.newton_cap = path.newton_cap()
             if cuts > max_cutbacks or dlam < min_step or (dlam < limit_step and path.near_limit()):
@@ -97,13 +99,13 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
     return _finish(report, drv, assembly0, t0, own_driver=driver is None)
 
 
-def _starting_state(problem: NonlinearProblem, drv: SNESDriver) -> tuple[State, object]:
+def _starting_state(problem: NonlinearProblem, drv: SNESDriver, retry: RetryPolicy) -> tuple[State, object]:
     """The state a cut-back returns to (the problem's own, or one holding its unknown; global scalars committed
     and rolled back with it), committed at the start, and the unknown's committed copy. The first tangent is
     the starting state's: a bordered solve's stability check counts negative eigenvalues against it."""
     if (stability := acceptance.stability_check(drv)) is not None:
         stability.new_path()
-    _descend_on_retry(drv, False)                    # a reused driver starts with full Newton steps again
+    retry.descend(False)                             # a reused driver starts with full Newton steps again
     state = problem.state or State({"unknown": problem.u})
     for s in problem.scalars:
         state.add_scalar(s.name, s.value)
@@ -144,17 +146,13 @@ def predicted_move(t: float, recent: list) -> np.ndarray:
     return t * d1 + t * (t + h1) * (d1 - step0 / h0) / (h1 + h0)
 
 
-def _merit(drv: SNESDriver):
-    return drv.bordered.merit if drv.bordered is not None else None
-
-
-def _start(drv: SNESDriver, old, recent: list, t: float) -> bool:
+def _start(drv: SNESDriver, retry: RetryPolicy, old, recent: list, t: float) -> bool:
     """Where the attempt's Newton starts: off the saddle the last attempt converged to, along its unstable mode
-    (_escape); for another descent of the merit the last accepted state (from an extrapolation a descent can fall
+    (RetryPolicy.after_rejection); for another descent of the merit the last accepted state (from an extrapolation a descent can fall
     into another branch's basin: the PneuNet's tip angle dropped 88 -> 78 deg); else that state moved by
     predicted_move over the load increment t, when `recent` has accepted steps to extrapolate. Returns whether
     it starts off a saddle (accepted, that step is a snap)."""
-    u, merit, stability = drv.p.u, _merit(drv), acceptance.stability_check(drv)
+    u, merit, stability = drv.p.u, retry.merit, acceptance.stability_check(drv)
     escaped = stability is not None and stability.take_start(u)
     if not escaped:
         if (merit is not None and merit.active) or not recent:
@@ -163,45 +161,6 @@ def _start(drv: SNESDriver, old, recent: list, t: float) -> bool:
         u.x.array[:] = old.x.array + drv.arrays.safe_share(old.vector, step) * step   # contact: no crossing
     u.x.scatter_forward()
     return escaped
-
-
-def _escape(drv: SNESDriver, why: str | None, trial: float) -> bool:
-    """After an attempt SNES converged but acceptance rejected: when it was a saddle of a volume-controlled
-    problem, retry the same load from a start pushed off it along its unstable mode (constrained_stability.py);
-    a symmetric state (two joined balloons inflated alike) never leaves its saddle otherwise. Once per load."""
-    stability = acceptance.stability_check(drv)
-    return (why or "").startswith(UNSTABLE) and stability is not None and stability.escape(trial)
-
-
-def _descend_on_retry(drv: SNESDriver, on: bool) -> None:
-    """Turn the merit line search of a volume-controlled (bordered multiplier) solve on for the retries after a
-    failed attempt, off after an accepted step (solvers/multiplier_merit.py). Measured on the PneuNet actuator
-    to 26.5 ml (2 ranks): full Newton steps alone stopped at the fold near 16.9 ml for h = 5, 4.5 and 4 mm and passed
-    it by luck at 6 and 3.5 mm; the retries pass it at every h. Turned off, the driver is rebuilt (a retry's
-    caller rebuilds it anyway)."""
-    merit = _merit(drv)
-    if merit is not None and merit.active != on:
-        merit.active = on
-        if not on:
-            drv.rebuild()
-
-
-def _adjust_solver(drv: SNESDriver, rec, linear_kind: str, report: SolveReport) -> bool:
-    """After SNES failed a step: change what the retry solves with (a fresh preconditioner, LU instead of an
-    indefinite iterative solve, Newton instead of a stalled chord, a factor per iteration instead of a stale
-    one). Returns whether the step is retried at its size (the chord's fallback) rather than halved."""
-    if rec.reason == "DIVERGED_LINEAR_SOLVE" and drv.stale_preconditioner_failed():
-        return False                             # the retry (fresh SNES) rebuilds the preconditioner
-    if (rec.reason == "DIVERGED_LINEAR_SOLVE" and drv.linear_kind == "iterative"
-            and linear_kind in linear.FALLBACK_TO_DIRECT):
-        drv.linear_kind = "direct"               # indefinite tangent: fall back to LU
-        report.linear_solver = "iterative->direct"
-    elif drv.reuse_factor == "chord":
-        drv.reuse_factor = True                  # the chord stalled: Newton (the stale LU preconditions)
-        return True                              # retries this step at its size
-    elif rec.reason == "DIVERGED_LINEAR_SOLVE" and drv.reuse_factor:
-        drv.reuse_factor = False                 # stale LU too far off: factor every iteration
-    return False
 
 
 def _gave_up(report: SolveReport, lam: float, trial: float, cuts: int, too_many: bool,

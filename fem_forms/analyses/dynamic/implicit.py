@@ -12,6 +12,7 @@ from petsc4py import PETSc
 from fem_forms.analyses.dynamic.system import DynamicSystem
 from fem_forms.physics.array_term import ArrayTerm
 from fem_forms.solvers import acceptance, linear, snes
+from fem_forms.solvers.retry import RetryPolicy
 from fem_forms.solvers.time_stepping import StepOutcome
 
 
@@ -93,6 +94,7 @@ class ImplicitStepper:
         self.driver = m.staggered_driver(self.problem, self._options(), linear_kind, **kwargs) or \
             snes.SNESDriver(self.problem, self._options(), linear_kind,
                             near_nullspace=lambda: linear.rigid_body_modes(m.V), **kwargs)
+        self.retry = RetryPolicy(self.driver, linear_kind)     # the continuation's policy: LU after CG fails
         self.line_search_retry = self.driver.E is not None and "snes_linesearch_type" not in self.user_options
         self.may_unlag = "snes_lag_jacobian" not in self.user_options
         self.fresh = True                          # the next step starts from a freshly built tangent
@@ -172,11 +174,10 @@ class ImplicitStepper:
         choice allows it (as the static continuation does); a kept hierarchy's failure is retried fresh.
         Returns whether it switched."""
         drv = self.driver
-        if not (self.iterative and rec.reason == "DIVERGED_LINEAR_SOLVE" and not self.stale_failed
-                and self.linear_kind in linear.FALLBACK_TO_DIRECT):
+        if not self.retry.to_direct(rec, self.stale_failed):
             return False
         self.iterative = False
-        drv.linear_kind, drv.reuse_factor = "direct", True
+        drv.reuse_factor = True
         drv.user_options = self._options()
         drv.rebuild()
         return True
