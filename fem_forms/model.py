@@ -3,6 +3,7 @@ total potential energy, residual and tangent (UFL)."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Callable
 
 from dolfinx import fem, geometry
 from mpi4py import MPI
@@ -214,9 +215,11 @@ NEARLY_INCOMPRESSIBLE_NU = 0.49
 
 
 def build_model(scene: Scene, material=None, comm: MPI.Comm = MPI.COMM_WORLD,
-                loaded: LoadedMesh | None = None, extra: dict | None = None) -> Model:
+                loaded: LoadedMesh | None = None, extra: dict | None = None,
+                more_fields: Callable[[fem.FunctionSpace], dict] | None = None) -> Model:
     """Mesh (the scene's, or `loaded`), spaces, supports and the forms of the scene's terms
-    (displacement or mixed u-p); `extra` enters the Context (a cellwise `stiffness_factor`, say)."""
+    (displacement or mixed u-p); `extra` enters the Context (a cellwise `stiffness_factor`, say);
+    `more_fields(V)` adds fields on the displacement space to the State (dynamics: velocity, acceleration)."""
     loaded = loaded or load_mesh(scene.mesh, comm, degree=scene.discretization.degree)
     mesh = loaded.mesh
     disc = scene.discretization
@@ -247,6 +250,7 @@ def build_model(scene: Scene, material=None, comm: MPI.Comm = MPI.COMM_WORLD,
     if scene.thermal is not None:
         fields["temperature"] = couple_temperature(scene, context, terms.solid.material, disc.degree)
     fields.update(terms.state_fields())                 # a term's own fields (the damage), committed with u
+    fields.update(more_fields(V) if more_fields is not None else {})
     warnings += [w for t in terms for w in t.warnings()]
     forms = equilibrium_forms(terms, context, unknown, v)
     # the mixed energy is a saddle in (u, p): no line-search objective there

@@ -62,15 +62,6 @@ class State:
             f.x.scatter_forward()
             self.old[name].x.array[:] = f.x.array
 
-    def update_of(self, name: str) -> Callable[[], np.ndarray]:
-        """How the history variable `name` is brought up to date from the fields (see add_history)."""
-        return self._updates[name]
-
-    def adopt_history(self, other: "State") -> None:
-        """Take over the history variables of another State (a driver that builds its own fields)."""
-        for name, function in other.history.items():
-            self.add_history(name, function, other.update_of(name))
-
     def rollback(self) -> None:
         """Return every field and history variable to the last committed values."""
         for name, f in {**self.fields, **self.history}.items():

@@ -91,16 +91,10 @@ class DynamicSystem:
 
 
 def build_system(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> DynamicSystem:
-    model = build_model(scene, comm=comm)
-    V, u = model.V, model.u
-    v, a = fem.Function(V, name="velocity"), fem.Function(V, name="acceleration")
-    fields = {"unknown": u, "velocity": v, "acceleration": a}
-    if model.temperature is not None:              # [thermal]: committed and rolled back with the motion
-        fields["temperature"] = model.temperature
-    fields.update(model.terms.state_fields())        # the terms' own (the damage), committed with the motion
-    state = State(fields)
-    state.adopt_history(model.state)                 # plastic history committed with each accepted step
-    model.state = state
+    model = build_model(scene, comm=comm, more_fields=lambda V: {
+        "velocity": fem.Function(V, name="velocity"), "acceleration": fem.Function(V, name="acceleration")})
+    V, u, state = model.V, model.u, model.state      # one State: u, v, a, T, the terms' fields and history
+    v, a = state.fields["velocity"], state.fields["acceleration"]
     old = state.old
     td = TimeDiscrete(model.mesh, old["unknown"], old["velocity"], old["acceleration"],
                       scheme_params(scene), scene.dynamic.dt)
