@@ -134,14 +134,23 @@ class EquilibriumForms:
     conservative: bool          # the residual is the exact gradient of `energy`
 
 
-def equilibrium_forms(terms: list[Term], ctx: Context, unknown: fem.Function, v) -> EquilibriumForms:
+def equilibrium_forms(terms: list[Term], ctx: Context, unknown: fem.Function, v, scale=None, inertia=None,
+                      damping: tuple = ()) -> EquilibriumForms:
     """Residual dPi/du[test] + non-conservative virtual work at v (v: the displacement part of the
-    test function), tangent by ufl.derivative."""
+    test function), tangent by ufl.derivative: the one recipe of a static model and of an implicit time step.
+    A time step gives the terms' Context at its generalized mid-point with `scale` 1 / (1 - alpha_f) (see
+    energy_variation), the time-discrete `inertia` energy (on the step's end; None: a lumped mass, added as
+    arrays) and the `damping` terms of the step."""
     test, trial = ufl.TestFunction(unknown.function_space), ufl.TrialFunction(unknown.function_space)
-    energy = total_energy(terms, ctx)
-    extra = virtual_work(terms, ctx, v)
-    variation = energy_variation(terms, ctx, unknown, test, v)
-    parts = [p for p in (variation, extra) if p is not None]
+    stored = total_energy(terms, ctx)
+    energy = stored if scale is None or stored is None else scale * stored
+    extra = virtual_work(list(terms) + list(damping), ctx, v)
+    parts = [energy_variation(terms, ctx, unknown, test, v) if scale is None else
+             energy_variation(terms, ctx, unknown, test, v, scale=scale)]
+    if inertia is not None:
+        energy = inertia if energy is None else energy + inertia
+        parts.append(ufl.derivative(inertia, unknown, test))
+    parts = [p for p in parts + [extra] if p is not None]
     residual = sum(parts[1:], parts[0])
     jacobian = ufl.derivative(residual, unknown, trial)
     return EquilibriumForms(energy, residual, jacobian, extra is None)

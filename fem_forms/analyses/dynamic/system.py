@@ -13,7 +13,7 @@ from petsc4py import PETSc
 import ufl
 
 from fem_forms.model import Model, build_model
-from fem_forms.physics.assemble import energy_variation, total_energy, virtual_work
+from fem_forms.physics.assemble import equilibrium_forms, virtual_work
 from fem_forms.physics.damping import RayleighDamping, ViscousDamping
 from fem_forms.physics.inertia import DiscreteInertia, Inertia
 from fem_forms.physics.terms import Context, Term
@@ -102,18 +102,11 @@ def build_system(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> DynamicSystem
     ctx_f = replace(model.context, u=td.mid_f(u, old["unknown"]))
     velocity_f = td.mid_f(td.velocity(u), old["velocity"])
     damping = damping_terms(scene, model, ctx_f, velocity_f, with_mass=not lumped)
-    test, trial = ufl.TestFunction(V), ufl.TrialFunction(V)
-    stored = total_energy(model.terms, ctx_f)          # None: no conservative term (a plastic solid)
-    energy = None if stored is None else (1 / (1 - td.alpha_f)) * stored
-    # d energy / du: the stored part through each term's own variation where it has one (at u_f)
-    parts = [energy_variation(model.terms, ctx_f, u, test, test, scale=1 / (1 - td.alpha_f))]
-    if not lumped:
-        inertia = DiscreteInertia(td, u).energy(model.context)
-        energy = inertia if energy is None else energy + inertia
-        parts.append(ufl.derivative(inertia, u, test))
-    extra = virtual_work(model.terms + damping, ctx_f, test)
-    parts = [p for p in parts + [extra] if p is not None]
-    residual = sum(parts[1:], parts[0])
+    test = ufl.TestFunction(V)
+    # the model's recipe with its terms at the generalized mid-point u_f, the inertia and the damping added
+    inertia = None if lumped else DiscreteInertia(td, u).energy(model.context)
+    forms = equilibrium_forms(model.terms, ctx_f, u, test, scale=1 / (1 - td.alpha_f), inertia=inertia,
+                              damping=tuple(damping))
     v_h = fem.Function(V, name="velocity_h")
     explicit = model.residual
     wd = virtual_work(damping_terms(scene, model, model.context, v_h, True), model.context, test)
@@ -124,6 +117,6 @@ def build_system(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> DynamicSystem
     constrained = np.unique(np.concatenate([bc.dof_indices()[0][: bc.dof_indices()[1]] for bc in model.bcs])) \
         if model.bcs else np.empty(0, dtype=np.int32)
     constrained = constrained[constrained < nown]
-    return DynamicSystem(scene, model, state, td, v, a, residual, ufl.derivative(residual, u, trial),
-                         energy if extra is None else None, explicit, v_h,
+    return DynamicSystem(scene, model, state, td, v, a, forms.residual, forms.jacobian,
+                         forms.energy if forms.conservative else None, explicit, v_h,
                          hrz_lumped_mass(model, mass) if lumped else None, constrained, model.loads, mass)
