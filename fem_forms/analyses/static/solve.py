@@ -1,4 +1,5 @@
-"""The one equilibrium solve: static, the modal prestress, the inverse design's forward check and the balance sag use it."""
+"""The one equilibrium solve: static, the modal prestress, the inverse design's forward check and the balance
+sag use it."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field

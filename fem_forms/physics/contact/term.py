@@ -369,7 +369,8 @@ class ContactTerm(ArrayTerm):
         out["min_distance"] = rep["min_distance"]
         return out
 
-    support_hint = "an obstacle holds what lies within contact.distance at the start; without friction only along its normal"
+    support_hint = ("an obstacle holds what lies within contact.distance at the start; without friction only along "
+                    "its normal")
 
     def holds(self, model, modes: list) -> np.ndarray:
         """What the obstacles hold of each rigid mode (their push at rest), as columns."""
