@@ -88,6 +88,11 @@ def test_volume_control_reaches_the_falling_branch(sphere_mesh, tmp_path, capsys
     assert inner_stretch(cav) == pytest.approx(stretch, rel=1e-8)
     assert cav["pressure"] / MU == pytest.approx(ogden_pressure(stretch), rel=0.02)
     assert cav["pressure"] / MU < P_MAX - 0.02                # on the falling branch
+    # the mixed formulation's energy is a saddle in (u, p): the stability check does not run, and the run says so,
+    # in results.json and before it solves
+    assert res["stability_checked"] is False and "mixed formulation" in res["stability_unchecked_why"]
+    said = err.index("fem-forms: warning: volume control in the mixed formulation")
+    assert said < err.index("load step 1")
 
 
 @pytest.mark.parametrize("stretch, lost", [(1.5, 0), (2.3, 1)])
@@ -148,6 +153,7 @@ def test_two_joined_balloons_share_the_air_as_ogden_says(balloons_run):
     big = brentq(lambda s: ogden_pressure(s) - ogden_pressure((total - s**3) ** (1 / 3)), 2.6, 2.89)
     small = (total - big**3) ** (1 / 3)
     assert len(res["unstable_rejected"]) >= 1                 # the evenly inflated pair: a saddle
+    assert res["stability_checked"] is True                   # volume control, displacement formulation
     stretches = sorted(1 + abs(res["probes"][k]["displacement"][0]) for k in ("a", "b"))
     assert stretches == pytest.approx([small, big], rel=0.01)
     assert res["cavities"]["inside"]["pressure"] / mu == pytest.approx(ogden_pressure(big), rel=0.01)

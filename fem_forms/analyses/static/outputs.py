@@ -8,13 +8,15 @@ results.json with "interrupted": true (output/interrupts.py says how, also under
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Callable
 import sys
 
 from mpi4py import MPI
 
-from fem_forms.analyses.static.solve import GAVE_UP, LIMIT, StaticResult, limit_point, load_span, solve_static
+from fem_forms.analyses.static.solve import (GAVE_UP, LIMIT, StaticResult, limit_point, load_span, solve_static,
+                                             stability_checked)
 from fem_forms.errors import SolveError
-from fem_forms.model import build_model
+from fem_forms.model import Model, build_model
 from fem_forms.output import pictures, results
 from fem_forms.output.guard import attempt
 from fem_forms.output.interrupts import Interrupts
@@ -87,14 +89,18 @@ def _write_fields(result: StaticResult, out: Path, names: list) -> bool:
     return True
 
 
-def solve_and_write(scene: Scene, out: Path) -> dict:
+def solve_and_write(scene: Scene, out: Path, on_model: Callable[[Model], None] | None = None) -> dict:
     """Solve with the load path written step by step, then the outputs; an interrupt anywhere leaves the
-    last accepted state and an interrupted results.json, then propagates (exit 130 / 143)."""
+    last accepted state and an interrupted results.json, then propagates (exit 130 / 143). `on_model(model)`
+    runs once the model is built, before the solve (the CLI prints the warnings known by then)."""
     comm = MPI.COMM_WORLD                             # the folder is made when there is something to write:
     path = LoadPath(scene, out, comm)                 # bad input found while building leaves nothing
     with Interrupts(comm, path.write_interrupted) as interrupts:
         try:
             model = build_model(scene)
+            if on_model is not None:
+                stability_checked(model)
+                on_model(model)
             path.attach(model, load_span(model), interrupts)
             result = solve_static(scene, model=model, on_step=path)
             interrupts.check()
@@ -109,10 +115,18 @@ def solve_and_write(scene: Scene, out: Path) -> dict:
 
 def run(scene: Scene, out, echo: bool = False) -> dict:
     """CLI entry: solve, write outputs, print a summary; SolveError (exit 3) if not converged."""
-    summary = solve_and_write(scene, Path(out))
+    said: list[str] = []
+
+    def warn_early(model: Model) -> None:            # what is known before the solve is said before it
+        if echo and MPI.COMM_WORLD.rank == 0:
+            for w in model.warnings:
+                print(f"fem-forms: warning: {w}", file=sys.stderr)
+        said.extend(model.warnings)
+    summary = solve_and_write(scene, Path(out), on_model=warn_early)
     if echo and MPI.COMM_WORLD.rank == 0:
         for w in summary["warnings"]:
-            print(f"fem-forms: warning: {w}", file=sys.stderr)
+            if w not in said:
+                print(f"fem-forms: warning: {w}", file=sys.stderr)
     if echo and MPI.COMM_WORLD.rank == 0 and summary["converged"]:
         print(f"{scene.title}: {summary['dofs']} dofs, {summary['newton_iterations']} Newton iterations "
               f"in {summary['load_steps']} load steps, max |u| = {summary['max_displacement']:.6g} m, "

@@ -79,6 +79,7 @@ class StaticResult:
                        for n, v in self.probes.items()},
             **self.reactions,
             **({"unstable_rejected": r.unstable_rejected} if r.unstable_rejected else {}),
+            **stability_checked(self.model),
             **self.term_reports,
             **({"strength": self.strength} if self.strength else {}),
             **{k: v for h in self.histories for k, v in h.summary().items()},
@@ -94,6 +95,26 @@ def max_norm(f: fem.Function) -> float:
     vals = f.x.array[: n * bs].reshape(-1, bs)
     local = float(np.linalg.norm(vals, axis=1).max()) if len(vals) else 0.0
     return f.function_space.mesh.comm.allreduce(local, op=MPI.MAX)
+
+
+UNCHECKED_MIXED = ("volume control in the mixed formulation: states are accepted without the stability check (its "
+                   "inertia test needs the displacement's own energy; the mixed energy is a saddle in (u, p)); "
+                   "results.json stability_checked = false")
+
+
+def stability_checked(model: Model) -> dict:
+    """results.json `stability_checked` of a model with scalar unknowns (volume control): whether only stable
+    states are accepted (solvers/constrained_stability.py), and why not; {} without scalars. An unchecked model
+    gets a warning, before its solve."""
+    scalars = model.global_scalars()
+    if not scalars:
+        return {}
+    if model.conservative and all(s.multiplier is not None for s in scalars):
+        return {"stability_checked": True}
+    why = UNCHECKED_MIXED if not model.conservative else "a scalar unknown that is no Lagrange multiplier of the energy"
+    if why not in model.warnings:
+        model.warnings.append(why)
+    return {"stability_checked": False, "stability_unchecked_why": why}
 
 
 def load_path(model: Model) -> tuple:
@@ -192,6 +213,7 @@ def solve_static(scene: Scene, material=None, model: Model | None = None,
     histories, sweeps = [], None
     model = model or build_model(scene, material)
     model.probes                                           # located now: a probe outside the mesh is bad input
+    stability_checked(model)                               # said before the solve, where it is not checked
     model.terms.start(model.state)     # a new solve: each term's start (a solid with time at rest, the notches)
     if model.temperature is not None:
         solve_temperature(model)
