@@ -18,6 +18,7 @@ from fem_forms import progress
 
 CLEAR = "\r\x1b[K"          # back to column 0, erase to the end of the line
 REDRAW_EVERY_S = 0.1        # a terminal line is redrawn at most this often for Newton iterations
+PLAIN_EVERY_S = 0.5         # in a log, accepted time steps faster than this are counted into the next line
 
 
 class ProgressLine:
@@ -33,6 +34,8 @@ class ProgressLine:
         self._shown = False          # a terminal line is on screen
         self._last_draw = -1.0
         self._time0: tuple[float, float] | None = None   # (wall, simulated time) at the first time step
+        self._last_line = -1.0       # when a plain line was last written
+        self._quiet_steps = 0        # accepted time steps not written on a line of their own since then
 
     # -- the reporter ------------------------------------------------------------------------------
     def __call__(self, event: str, **fields) -> None:
@@ -44,11 +47,14 @@ class ProgressLine:
                       residual=fields.get("residual"))
         elif event == "time_step":
             st.update(time=fields.get("time"), dt=fields.get("dt"), time_step=fields.get("step"),
-                      total_time=fields.get("total_time"), iteration=None, residual=None)
+                      total_time=fields.get("total_time"), iteration=None)     # the step's last residual kept
             if self._time0 is None:
                 self._time0 = (time.perf_counter(), float(fields.get("time") or 0.0))
         elif event == "step_accepted":
             st["accepted"] = st.get("accepted", 0) + 1
+        elif event == "march_done":
+            self._march_done(fields)
+            return
         elif event == "solve_done":     # the next solve (e.g. a forward check) counts from 1 again
             self.close()
             self.state = {}
@@ -56,11 +62,34 @@ class ProgressLine:
         if self.tty:
             if event != "newton" or time.perf_counter() - self._last_draw >= REDRAW_EVERY_S:
                 self._draw(self.status())
-        elif event in ("step_accepted", "step_rejected"):
-            verdict = "accepted" if event == "step_accepted" else f"rejected ({fields.get('why') or 'failed'})"
+        elif event in ("step_accepted", "step_rejected") or (event == "time_step" and self._due()):
+            verdict = "rejected ({})".format(fields.get("why") or "failed") if event == "step_rejected" else \
+                "accepted" + (f" (and {self._quiet_steps} steps before it)" if self._quiet_steps else "")
             iters = fields.get("iterations")
-            self._write(f"fem-forms: {self.status(newton=False)}: {verdict}"
-                        + (f" after {iters} Newton iterations" if iters is not None else "") + "\n")
+            self._line(f"fem-forms: {self.status(newton=False)}: {verdict}"
+                       + (f" after {iters} Newton iterations" if iters is not None else ""),
+                       counted=event != "step_rejected")
+        elif event == "time_step":
+            self._quiet_steps += 1
+
+    def _due(self) -> bool:
+        """Whether an accepted time step gets a line of its own in a log (at most one per PLAIN_EVERY_S)."""
+        return time.perf_counter() - self._last_line >= PLAIN_EVERY_S
+
+    def _line(self, text: str, counted: bool = True) -> None:
+        """A plain line; `counted`: it accounts for the accepted steps not written since the last such line."""
+        self._write(text + "\n")
+        self._last_line = time.perf_counter()
+        self._quiet_steps = 0 if counted else self._quiet_steps
+
+    def _march_done(self, fields: dict) -> None:
+        """The last line of a time march: where it got, in how many steps, how long it took."""
+        self.close()
+        if not self.tty:
+            rejected = fields.get("rejected") or 0
+            self._line(f"fem-forms: reached t = {fields.get('time', 0.0):.6g} s in {fields.get('steps')} steps"
+                       + (f" ({rejected} rejected)" if rejected else "") + f", {time.perf_counter() - self.t0:.1f} s")
+        self.state = {}
 
     def close(self) -> None:
         """Erase the terminal line (if one is shown), so what is printed next starts clean."""

@@ -26,6 +26,7 @@ from fem_forms.cli import default_out, main
 from fem_forms.output import results
 from fem_forms.output.progress_line import CLEAR, ProgressLine
 from fem_forms.study import Run, write_report
+from helpers import toml_dumps
 
 ROOT = Path(__file__).resolve().parents[2]
 PYTHON = sys.executable
@@ -132,6 +133,42 @@ def test_time_steps_show_time_and_an_eta():
     assert "t = 0.5 / 1 s (step 5, dt 0.1)" in line
     eta = float(line.split("ETA ")[1].split(" s")[0])
     assert eta == pytest.approx(2.0, abs=0.6)
+
+
+def test_time_steps_in_a_log_get_lines_at_most_twice_a_second_and_a_last_line():
+    """A dynamic run writes to a log as it goes: its first step, every rejected step, an accepted step at most every
+    PLAIN_EVERY_S with the count of those in between, and where it ended."""
+    buf = io.StringIO()
+    rep = ProgressLine(buf, tty=False)
+    for k in range(1, 101):                           # 100 fast steps (well under a second)
+        rep("newton", load=1.0, iteration=0, residual=1e-3)
+        rep("newton", load=1.0, iteration=1, residual=1e-11)
+        if k == 50:
+            rep("step_rejected", load=0.049, iterations=7, why="SNES DIVERGED_MAX_IT")
+        rep("time_step", time=k * 1e-3, dt=1e-3, step=k, total_time=0.1, iterations=2)
+    rep._last_line -= 1.0                             # pretend a second went by
+    rep("time_step", time=0.101, dt=1e-3, step=101, total_time=0.101, iterations=2)
+    rep("march_done", time=0.101, steps=101, rejected=1)
+    lines = buf.getvalue().splitlines()
+    assert len(lines) == 4, lines
+    assert "t = 0.001 / 0.1 s (step 1, dt 0.001)" in lines[0] and "accepted after 2 Newton iterations" in lines[0]
+    assert "residual 1.00e-11" in lines[0]
+    assert "rejected (SNES DIVERGED_MAX_IT)" in lines[1]
+    assert "t = 0.101" in lines[2] and "(and 99 steps before it)" in lines[2]      # steps 2-100, none lost
+    assert lines[3].startswith("fem-forms: reached t = 0.101 s in 101 steps (1 rejected)")
+
+
+def test_a_dynamic_run_prints_its_progress(tmp_path, capsys):
+    d = {"title": "swing", "analysis": "dynamic", "mesh": {"size": [0.2, 0.02, 0.02], "cells": [4, 1, 1]},
+         "material": {"E": 1e6, "nu": 0.3, "rho": 1000.0}, "discretization": {"degree": 1},
+         "fix": [{"where": {"axis": "x", "at": 0.0}}], "load": [{"type": "gravity"}],
+         "dynamic": {"duration": 0.02, "dt": 1e-3}, "output": {"picture": False, "fields": False}}
+    path = tmp_path / "scene.toml"
+    path.write_text(toml_dumps(d))
+    assert main(["run", str(path), "--out", str(tmp_path / "out")]) == 0
+    err = capsys.readouterr().err
+    assert "t = 0.001 / 0.02 s (step 1, dt 0.001)" in err and "accepted after" in err
+    assert "fem-forms: reached t = 0.02 s in 20 steps" in err
 
 
 def test_cli_shows_progress_unless_quiet_and_the_api_stays_silent(tmp_path, capsys):
