@@ -40,6 +40,11 @@ def test_a_block_slides_down_a_slope_steeper_than_its_friction_angle(tmp_path):
     a = 2 * np.polyfit(h["time"][late], h["c_ux"][late], 2)[0]
     assert a == pytest.approx(G * (math.sin(THETA) - mu * math.cos(THETA)), rel=0.03)   # measured 0.3 %
     assert abs(h["c_uy"]).max() < 1e-3
+    # probes.csv carries the floor's force on the 1 kg block every step: its weight's normal part and, sliding,
+    # mu times that against the motion; the active points and the smallest gap beside
+    assert np.median(h["slope_Fz"][late]) == pytest.approx(G * math.cos(THETA), rel=0.01)
+    assert np.median(h["slope_Fx"][late]) == pytest.approx(-mu * G * math.cos(THETA), rel=0.02)
+    assert h["slope_active"][late].min() > 0 and h["min_distance"].min() > 0
 
 
 def test_a_block_sticks_on_a_slope_flatter_than_its_friction_angle(tmp_path):

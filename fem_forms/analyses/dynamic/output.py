@@ -8,18 +8,20 @@ from dolfinx import io
 import numpy as np
 
 from fem_forms.output import fields, probes
+from fem_forms.output.load_path import records
 from fem_forms.output.plastic import plastic_fields
 
 COMPONENTS = ("ux", "uy", "uz", "vx", "vy", "vz")
 
 
 def write_csvs(out: Path, result, comm) -> None:
-    """probes.csv (time, then NAME_ux .. NAME_vz per probe, NAME_T if heat) and energy.csv, by the CSV
-    writer the static load path shares (output/probes.write_table)."""
+    """probes.csv (time, then NAME_ux .. NAME_vz per probe, NAME_T if heat, then the terms' records) and
+    energy.csv, by the CSV writer the static load path shares (output/probes.write_table)."""
     names = list(result.system.scene.output.probes)
     head = ["time"] + probes.columns(names, COMPONENTS)
-    if result.system.model.temperature is not None:
+    if result.system.model.temperature is not None and names:
         head += [f"{n}_T" for n in names]
+    head += list(records(result.system.model))
     probes.write_table(out / "probes.csv", head, result.probe_rows, comm)
     cols = result.energy.columns()
     probes.write_table(out / "energy.csv", ["time", *cols],

@@ -19,6 +19,7 @@ from fem_forms.analyses.dynamic.implicit import ImplicitStepper
 from fem_forms.analyses.dynamic.system import DynamicSystem, build_system
 from fem_forms.errors import InputError, SolveError
 from fem_forms.output import probes
+from fem_forms.output.load_path import records
 from fem_forms.output.quantities import tensor_expressions
 from fem_forms.output.summary import header
 from fem_forms.output.strength import StrengthWatch, has_strength
@@ -138,17 +139,18 @@ def initial_acceleration(system: DynamicSystem, released: set) -> None:
 
 
 def probe_row(points: probes.ProbeSet, system: DynamicSystem, t: float) -> list:
-    """[t, then (ux, uy, uz, vx, vy, vz) at each probe] (points located once, before the march)."""
-    if not points.names:
-        return [t]
-    u, v = points.evaluate(system.u), points.evaluate(system.v)
+    """[t, then (ux, uy, uz, vx, vy, vz) at each probe, NAME_T at each with heat, then the terms' records (an
+    obstacle's force, active points and the smallest gap; a cavity's pressure and volume; the crack's numbers)]
+    (points located once, before the march). Collective."""
     row = [t]
-    for n in points.names:
-        row += list(u[n]) + list(v[n])
-    if system.model.temperature is not None:       # NAME_T columns after every probe's motion
-        T = points.evaluate(system.model.temperature)
-        row += [T[n][0] for n in points.names]
-    return row
+    if points.names:
+        u, v = points.evaluate(system.u), points.evaluate(system.v)
+        for n in points.names:
+            row += list(u[n]) + list(v[n])
+        if system.model.temperature is not None:       # NAME_T columns after every probe's motion
+            T = points.evaluate(system.model.temperature)
+            row += [T[n][0] for n in points.names]
+    return row + list(records(system.model).values())
 
 
 def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = None,

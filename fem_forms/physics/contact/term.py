@@ -363,9 +363,13 @@ class ContactTerm(ArrayTerm):
         return push / self.surface.area
 
     def record(self) -> dict[str, float]:
-        """probes.csv columns after every accepted step: each obstacle's force and the smallest gap."""
+        """probes.csv columns after every accepted step: each obstacle's force and active points, the smallest gap."""
         rep = self.report(self.state)
-        out = {f"{n}_F{c}": f for n, r in rep["contact"].items() for c, f in zip("xyz", r["force"])}
+        out = {}
+        for n, r in rep["contact"].items():
+            out.update({f"{n}_F{c}": f for c, f in zip("xyz", r["force"])})
+            if "active_points" in r:
+                out[f"{n}_active"] = r["active_points"]
         out["min_distance"] = rep["min_distance"]
         return out
 
