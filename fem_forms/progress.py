@@ -3,7 +3,8 @@
 The solvers call ``report(event, **fields)``; what is shown, where and how (one line updated in place on a
 terminal, plain lines otherwise, nothing with --quiet or in the Python API by default) is the reporter's
 business. Events: "load_step" (load, step), "newton" (load, iteration, residual), "step_accepted"
-(load, iterations), "step_rejected" (load, why), "time_step" (time, dt, step, total_time), "solve_done"
+(load, iterations), "step_rejected" (load, why), "time_step" (time, dt, step, total_time, iterations: an
+accepted time step), "march_done" (time, steps, rejected, failed: a time march ended or gave up), "solve_done"
 (converged; a solve ended, so a terminal status line can be cleared before results are printed).
 The reporter shown to users is fem_forms.output.progress_line.ProgressLine.
 """

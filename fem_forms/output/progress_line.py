@@ -87,9 +87,10 @@ class ProgressLine:
         self.close()
         if not self.tty:
             rejected = fields.get("rejected") or 0
-            self._line(f"fem-forms: reached t = {fields.get('time', 0.0):.6g} s in {fields.get('steps')} steps"
+            ended = "stopped at" if fields.get("failed") else "reached"
+            self._line(f"fem-forms: {ended} t = {fields.get('time', 0.0):.6g} s in {fields.get('steps')} steps"
                        + (f" ({rejected} rejected)" if rejected else "") + f", {time.perf_counter() - self.t0:.1f} s")
-        self.state = {}
+        self.state, self._time0 = {}, None            # a next march starts its own ETA
 
     def close(self) -> None:
         """Erase the terminal line (if one is shown), so what is printed next starts clean."""

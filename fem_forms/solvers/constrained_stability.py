@@ -34,6 +34,7 @@ class ConstrainedStability:
         self.q = np.zeros((bordered.m, bordered.m))   # c_u_i.K^-1 c_u_j at the last tangent
         self.start: tuple | None = None          # (field array, scalar values) a retry starts from
         self.escaped_at: float | None = None     # the load factor of the last escape (one per trial)
+        self.counted = False                     # an LDL^T counted K's negative eigenvalues at some tangent
 
     @staticmethod
     def of(bordered) -> ConstrainedStability | None:
@@ -53,6 +54,7 @@ class ConstrainedStability:
         pc = ksp.getPC()
         ldlt = pc.getType() == "cholesky" and pc.getFactorSolverType() == "mumps"
         self.negative = pc.getFactorMatrix().getMumpsInfog(12) if ldlt else None
+        self.counted = self.counted or self.negative is not None
         self.reference = self.negative if self.reference is None else self.reference
 
     def instability(self) -> str | None:

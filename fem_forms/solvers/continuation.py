@@ -125,6 +125,8 @@ def _finish(report: SolveReport, drv: SNESDriver, assembly0: float, t0: float, o
     """Timings into the report; a driver built for this solve is destroyed."""
     report.assembly_time = drv.assembly_time - assembly0
     report.solve_time = time.perf_counter() - t0 - report.assembly_time
+    stability = acceptance.stability_check(drv)
+    report.stability_checked = None if stability is None else stability.counted
     if own_driver:
         drv.snes.destroy()
     progress.report("solve_done", converged=report.converged)

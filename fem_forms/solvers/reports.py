@@ -38,6 +38,7 @@ class SolveReport:
     message: str = ""
     load_scale: float = 0.0         # the residual of the starting state under the full load (tolerances' scale)
     peak_load_factor: float | None = None   # arc length: the largest load factor on the path followed
+    stability_checked: bool | None = None   # volume control: the tangent's inertia was counted (None: no check)
 
     def add_step(self, rec: StepRecord, why: str | None) -> None:
         """Book a finished step: accepted when `why` (the reason to reject it) is None; progress reported."""

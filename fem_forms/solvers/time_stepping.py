@@ -71,6 +71,9 @@ def march(stepper: Stepper, t0: float, t_end: float, dt: float, on_accept: Calla
         if not out.accepted:
             rep.rejected += 1
             cuts += 1
+            if cuts > max_cutbacks or (0.5 * h < dt_floor and h < end - t):     # gives up: the log says so
+                progress.report("step_rejected", load=t, why=out.why)
+                progress.report("march_done", time=t, steps=rep.steps, rejected=rep.rejected, failed=True)
             if cuts > max_cutbacks:
                 raise SolveError(f"time step cut {cuts - 1} times in a row at t = {t:.6g} "
                                  f"(dt = {h:.3g}; solver.max_cutbacks = {max_cutbacks}): {out.why}")

@@ -95,6 +95,19 @@ def test_volume_control_reaches_the_falling_branch(sphere_mesh, tmp_path, capsys
     assert said < err.index("load step 1")
 
 
+@pytest.mark.parametrize("linear, checked", [("direct", True), ("iterative", False)])
+def test_volume_control_says_whether_it_checked_stability(sphere_mesh, tmp_path, capsys, linear, checked):
+    """Only MUMPS's LDL^T counts the tangent's inertia: with an iterative solver the states go unchecked, and
+    results.json says so (the displacement formulation; the mixed one is never checked, tested above)."""
+    d = sphere_scene(sphere_mesh, steps=2, volume=0.3)
+    d["discretization"] = {"degree": 2}
+    d["solver"]["linear"] = linear
+    code, res, err, _ = run_scene(tmp_path, d, capsys)
+    assert code == 0, err
+    assert res["stability_checked"] is checked
+    assert ("LDL^T only" in res.get("stability_unchecked_why", "")) is not checked
+
+
 @pytest.mark.parametrize("stretch, lost", [(1.5, 0), (2.3, 1)])
 def test_volume_control_accepts_the_stable_states_of_both_branches(sphere_mesh, stretch, lost):
     """The solver accepts only stable states under volume control (solvers/constrained_stability.py): the tangent's

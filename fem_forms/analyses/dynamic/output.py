@@ -22,11 +22,17 @@ def write_csvs(out: Path, result, comm) -> None:
     if result.system.model.temperature is not None and names:
         head += [f"{n}_T" for n in names]
     head += list(records(result.system.model))
+    result.probe_rows = [padded(r, len(head)) for r in result.probe_rows]
     probes.write_table(out / "probes.csv", head, result.probe_rows, comm)
     cols = result.energy.columns()
     probes.write_table(out / "energy.csv", ["time", *cols],
                        [[t] + [e.value(c) for c in cols] for t, e in result.energy.history], comm)
     comm.barrier()
+
+
+def padded(row: list, width: int) -> list:
+    """A probes.csv row as wide as the header: rows a checkpoint of an older version carried lack the records."""
+    return list(row) + [float("nan")] * (width - len(row))
 
 
 class MotionWriter:

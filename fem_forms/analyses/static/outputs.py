@@ -98,10 +98,10 @@ def solve_and_write(scene: Scene, out: Path, on_model: Callable[[Model], None] |
     with Interrupts(comm, path.write_interrupted) as interrupts:
         try:
             model = build_model(scene)
+            path.attach(model, load_span(model), interrupts)
             if on_model is not None:
                 stability_checked(model)
                 on_model(model)
-            path.attach(model, load_span(model), interrupts)
             result = solve_static(scene, model=model, on_step=path)
             interrupts.check()
             with interrupts.critical():

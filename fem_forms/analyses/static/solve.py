@@ -79,7 +79,7 @@ class StaticResult:
                        for n, v in self.probes.items()},
             **self.reactions,
             **({"unstable_rejected": r.unstable_rejected} if r.unstable_rejected else {}),
-            **stability_checked(self.model),
+            **stability_checked(self.model, r),
             **self.term_reports,
             **({"strength": self.strength} if self.strength else {}),
             **{k: v for h in self.histories for k, v in h.summary().items()},
@@ -102,16 +102,22 @@ UNCHECKED_MIXED = ("volume control in the mixed formulation: states are accepted
                    "results.json stability_checked = false")
 
 
-def stability_checked(model: Model) -> dict:
+UNCOUNTED = ("volume control: states were accepted without the stability check (the tangent's inertia is counted by "
+             "MUMPS's LDL^T only; this solve used LU or an iterative solver)")
+
+
+def stability_checked(model: Model, report: snes.SolveReport | None = None) -> dict:
     """results.json `stability_checked` of a model with scalar unknowns (volume control): whether only stable
-    states are accepted (solvers/constrained_stability.py), and why not; {} without scalars. An unchecked model
-    gets a warning, before its solve."""
-    scalars = model.global_scalars()
-    if not scalars:
+    states were accepted (solvers/constrained_stability.py), and why not; {} without scalars. Before the solve
+    (no `report`) the mixed formulation is known to go unchecked: it gets its warning then."""
+    if not model.global_scalars():
         return {}
-    if model.conservative and all(s.multiplier is not None for s in scalars):
-        return {"stability_checked": True}
-    why = UNCHECKED_MIXED if not model.conservative else "a scalar unknown that is no Lagrange multiplier of the energy"
+    if model.scene.discretization.formulation == "mixed":
+        why = UNCHECKED_MIXED
+    elif report is None or report.stability_checked:
+        return {} if report is None else {"stability_checked": True}
+    else:
+        why = UNCOUNTED
     if why not in model.warnings:
         model.warnings.append(why)
     return {"stability_checked": False, "stability_unchecked_why": why}

@@ -365,12 +365,9 @@ class ContactTerm(ArrayTerm):
     def record(self) -> dict[str, float]:
         """probes.csv columns after every accepted step: each obstacle's force and active points, the smallest gap."""
         rep = self.report(self.state)
-        out = {}
-        for n, r in rep["contact"].items():
-            out.update({f"{n}_F{c}": f for c, f in zip("xyz", r["force"])})
-            if "active_points" in r:
-                out[f"{n}_active"] = r["active_points"]
+        out = {f"{n}_F{c}": f for n, r in rep["contact"].items() for c, f in zip("xyz", r["force"])}
         out["min_distance"] = rep["min_distance"]
+        out.update({f"{n}_active": r["active_points"] for n, r in rep["contact"].items() if "active_points" in r})
         return out
 
     support_hint = ("an obstacle holds what lies within contact.distance at the start; without friction only along "
