@@ -9,12 +9,15 @@ from pathlib import Path
 
 from mpi4py import MPI
 
+from fem_forms.analyses.dynamic import checkpoint
 from fem_forms.analyses.dynamic.impact import ImpactRecorder, impact_entry
 from fem_forms.analyses.dynamic.output import MotionWriter, write_csvs, write_gif, write_history_png
 from fem_forms.analyses.dynamic.solve import DynamicResult, solve_dynamic
 from fem_forms.errors import SolveError
 from fem_forms.output import results
 from fem_forms.output.guard import attempt
+from fem_forms.output.interrupts import Interrupts
+from fem_forms.output.summary import header
 from fem_forms.output.plastic import plastic_summary
 from fem_forms.output.quantities import Quantities
 from fem_forms.output.strength import summary_line
@@ -41,12 +44,23 @@ def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> d
         writer(system, t, step)
 
     recorder = ImpactRecorder(scene.sound) if scene.sound is not None else None   # [sound.impact]
-    try:
-        result = solve_dynamic(scene, out, Path(restart) if restart else None, on_frame=frame, on_step=recorder)
-    finally:
-        if writer is not None:
-            writer.close()
+    held: dict = {}
+    with Interrupts(comm, lambda: interrupted_note(held.get("result"), scene, out, comm)) as interrupts:
+        try:
+            result = solve_dynamic(scene, out, Path(restart) if restart else None, on_frame=frame,
+                                   on_step=recorder, interrupts=interrupts, on_result=lambda r: held.update(result=r))
+        except KeyboardInterrupt:
+            if writer is not None:
+                writer.close()
+                writer = None
+            keep_interrupted(held.get("result"), scene, out, comm)
+            raise
+        finally:
+            if writer is not None:
+                writer.close()
     write_csvs(out, result, comm)
+    if result.failure is not None and result.last_accepted is not None:     # a failed run can be continued
+        checkpoint.save(out / "checkpoint", result, *result.last_accepted)
     summary = result.summary()
     warnings = summary.setdefault("warnings", [])
     # final probes: recovered stress and strain of the last state, as the static analysis reports them
@@ -96,6 +110,35 @@ def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> d
     if result.failure is not None:
         raise SolveError(f"{scene.title}: {result.failure}")
     return summary
+
+
+def keep_interrupted(result, scene: Scene, out: Path, comm) -> None:
+    """A run stopped by a signal (every rank here together): the step in progress undone, probes.csv, energy.csv
+    and a checkpoint of the last accepted step, and results.json with "interrupted": true."""
+    if result is None or result.last_accepted is None:
+        return
+    result.system.state.rollback()                         # the step in progress leaves no trace
+    t, step, dt = result.last_accepted
+    result.report.steps, result.report.time_reached = step, t
+    write_csvs(out, result, comm)
+    checkpoint.save(out / "checkpoint", result, t, step, dt)
+    summary = result.summary()
+    summary.update(converged=False, interrupted=True, files={"probes": "probes.csv", "energy": "energy.csv",
+                                                             "checkpoint": "checkpoint"},
+                   message=f"interrupted at t = {t:.6g} s after {step} steps; the files hold that step, and "
+                           f"--restart {out} continues from it")
+    results.write_json_atomic(out / "results.json", summary, comm)
+
+
+def interrupted_note(result, scene: Scene, out: Path, comm) -> None:
+    """Rank 0's results.json when a signal reaches several ranks (no collective call: the others may be anywhere);
+    every rank then writes the whole account at its next accepted step."""
+    if comm.rank != 0 or result is None or result.last_accepted is None:
+        return
+    t, step, _ = result.last_accepted
+    summary = {**header("dynamic", scene, comm, memory=False), "converged": False, "interrupted": True,
+               "time_reached": t, "steps": step, "message": f"interrupted at t = {t:.6g} s after {step} steps"}
+    results.write_json_atomic(out / "results.json", summary, MPI.COMM_SELF)
 
 
 def _balance(summary: dict) -> str:

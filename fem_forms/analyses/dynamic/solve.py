@@ -2,6 +2,7 @@
 acceleration), the march with the scene's scheme, per-step probes and energies, frames and checkpoints."""
 from __future__ import annotations
 
+from contextlib import nullcontext
 from dataclasses import dataclass, field
 import time
 from pathlib import Path
@@ -40,6 +41,7 @@ class DynamicResult:
     solver: dict = field(default_factory=dict)        # the implicit step's linear solver and its totals
     failure: str | None = None                        # why the march gave up (results.json converged false)
     strength: dict | None = None                      # the lowest safety factor over the accepted steps
+    last_accepted: tuple | None = None                # (t, step, dt) of the last accepted, committed step
 
     def summary(self) -> dict:
         s, r = self.system, self.report
@@ -154,10 +156,12 @@ def probe_row(points: probes.ProbeSet, system: DynamicSystem, t: float) -> list:
 
 
 def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = None,
-                  on_frame=None, on_step=None) -> DynamicResult:
+                  on_frame=None, on_step=None, interrupts=None, on_result=None) -> DynamicResult:
     """March the scene's [dynamic] span; `on_frame(system, t, step)` every output_every steps (and at
     t = 0); `on_step(system, t)` at t = 0 and after every accepted step (the state then committed);
-    checkpoints into out/checkpoint every checkpoint_every steps; `restart` continues from one."""
+    checkpoints into out/checkpoint every checkpoint_every steps; `restart` continues from one. With
+    `interrupts` (output/interrupts.py) each accepted step is booked whole before a signal stops the run;
+    `on_result(result)` receives the result as soon as it exists (what an interrupted run writes from)."""
     t0 = time.perf_counter()
     dyn = scene.dynamic
     for m in scene.materials:
@@ -184,13 +188,18 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
         stepper = StaggeredStepper(system, stepper)
     account = EnergyAccount(system, released)
     result = DynamicResult(system, MarchReport(), account, dt_stable=dt_stable)
+    if on_result is not None:
+        on_result(result)
+    critical = interrupts.critical if interrupts is not None else nullcontext
     watch = StrengthWatch(system.model, tensor_expressions(system.model)["cauchy_stress"]) \
         if has_strength(scene) else None
     t_start, step0, dt = 0.0, 0, dyn.dt
     if restart is not None:
         t_start, step0, dt = checkpoint.load(restart, result)
+        result.last_accepted = (t_start, step0, dt)
         system.model.terms.resume(t_start)         # the next step starts at the checkpoint's time
     else:
+        result.last_accepted = (0.0, 0, dt)
         account.start(0.0)
         result.probe_rows.append(probe_row(points, system, 0.0))
         if watch is not None:
@@ -203,18 +212,22 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
     state = {"t": t_start}
 
     def on_accept(t: float, h: float, step: int) -> None:
-        account.advance(state["t"], t)
-        system.state.commit()
-        state["t"] = t
-        result.probe_rows.append(probe_row(points, system, t))
-        if watch is not None:
-            watch.step(t)
-        if on_frame and step % dyn.output_every == 0:
-            on_frame(system, t, step)
-        if on_step:
-            on_step(system, t)
-        if out is not None and dyn.checkpoint_every and step % dyn.checkpoint_every == 0:
-            checkpoint.save(out / "checkpoint", result, t, step, h)
+        with critical():                       # a step is booked whole, or not at all
+            account.advance(state["t"], t)
+            system.state.commit()
+            state["t"] = t
+            result.probe_rows.append(probe_row(points, system, t))
+            result.last_accepted = (t, step, h)
+            if watch is not None:
+                watch.step(t)
+            if on_frame and step % dyn.output_every == 0:
+                on_frame(system, t, step)
+            if on_step:
+                on_step(system, t)
+            if out is not None and dyn.checkpoint_every and step % dyn.checkpoint_every == 0:
+                checkpoint.save(out / "checkpoint", result, t, step, h)
+        if interrupts is not None:
+            interrupts.check()                 # several ranks: all stop here together
 
     try:
         march(stepper, t_start, dyn.duration, dt, on_accept,
