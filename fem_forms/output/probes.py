@@ -66,6 +66,16 @@ def columns(names: list[str], components: tuple = DISPLACEMENT) -> list[str]:
     return [f"{n}_{c}" for n in names for c in components]
 
 
+def append_row(path: Path, row: list, comm: MPI.Comm = MPI.COMM_WORLD) -> None:
+    """One more line of numbers at the end of a table write_table began (rank 0, one write, flushed): a run
+    killed outright still leaves its rows up to the last one appended."""
+    if comm.rank != 0:
+        return
+    with open(path, "a") as f:
+        f.write(",".join(f"{x:.10g}" for x in row) + "\n")
+        f.flush()
+
+
 def write_table(path: Path, head: list[str], rows: list, comm: MPI.Comm = MPI.COMM_WORLD) -> None:
     """A CSV (header, then one line of numbers per row, 10 significant digits) written by rank 0 only (no
     collective call: it may run where other ranks have stopped) through a temporary file renamed over

@@ -88,8 +88,8 @@ def march(stepper: Stepper, t0: float, t_end: float, dt: float, on_accept: Calla
         step += 1
         rep.steps, rep.time_reached = rep.steps + 1, t
         rep.dt_min, rep.dt_max = min(rep.dt_min, h), max(rep.dt_max, h)
+        on_accept(t, h, step)                   # booked (and written) before it is said to be accepted
         progress.report("time_step", time=t, dt=h, step=step, total_time=t_end, iterations=out.iterations)
-        on_accept(t, h, step)
         if adaptive and math.isfinite(out.error):
             factor = 0.9 * (tolerance / max(out.error, 1e-300)) ** (1 / 3)
             dt = min(dt_max, h * min(2.0, max(0.5, factor)))

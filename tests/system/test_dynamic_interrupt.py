@@ -53,3 +53,21 @@ def test_a_stopped_dynamic_run_keeps_its_steps_and_continues_to_the_same_end(tmp
     assert b["steps"] == a["steps"] == 300 and "interrupted" not in b
     assert b["probes"]["tip"]["displacement"] == pytest.approx(a["probes"]["tip"]["displacement"], rel=1e-9)
     assert len((out / "probes.csv").read_text().splitlines()) == 302
+
+
+def test_a_killed_dynamic_run_leaves_its_history_up_to_its_last_step(tmp_path):
+    """kill -9 runs no handler: the rows appended after each accepted step are what is left, whole, and no
+    results.json (never a half-written one)."""
+    scene = tmp_path / "scene.toml"
+    scene.write_text(toml_dumps(SWING))
+    out = tmp_path / "out"
+    p = subprocess.Popen(fem_forms(scene, "--out", out), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         env=ENV, cwd=ROOT)
+    p.stderr.readline()                             # the first accepted step is on disk
+    p.send_signal(signal.SIGKILL)
+    p.communicate(timeout=60)
+    for csv in ("probes.csv", "energy.csv"):
+        rows = [r.split(",") for r in (out / csv).read_text().splitlines()]
+        assert len(rows) >= 3                       # the header, t = 0, at least the first step
+        assert all(len(r) == len(rows[0]) for r in rows) and float(rows[2][0]) == pytest.approx(1e-3)
+    assert not (out / "results.json").exists() and not list(out.glob(".results-*"))

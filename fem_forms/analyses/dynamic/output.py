@@ -16,18 +16,33 @@ COMPONENTS = ("ux", "uy", "uz", "vx", "vy", "vz")
 
 def write_csvs(out: Path, result, comm) -> None:
     """probes.csv (time, then NAME_ux .. NAME_vz per probe, NAME_T if heat, then the terms' records) and
-    energy.csv, by the CSV writer the static load path shares (output/probes.write_table)."""
-    names = list(result.system.scene.output.probes)
-    head = ["time"] + probes.columns(names, COMPONENTS)
-    if result.system.model.temperature is not None and names:
-        head += [f"{n}_T" for n in names]
-    head += list(records(result.system.model))
+    energy.csv, by the CSV writer the static load path shares (output/probes.write_table); a run appends each
+    accepted step's rows to them as it goes (append_rows)."""
+    head = probe_head(result)
     result.probe_rows = [padded(r, len(head)) for r in result.probe_rows]
     probes.write_table(out / "probes.csv", head, result.probe_rows, comm)
     cols = result.energy.columns()
     probes.write_table(out / "energy.csv", ["time", *cols],
                        [[t] + [e.value(c) for c in cols] for t, e in result.energy.history], comm)
     comm.barrier()
+
+
+def append_rows(out: Path, result, comm) -> None:
+    """The last accepted step's rows at the end of probes.csv and energy.csv (rank 0, flushed)."""
+    probes.append_row(out / "probes.csv", padded(result.probe_rows[-1], len(probe_head(result))), comm)
+    t, e = result.energy.history[-1]
+    probes.append_row(out / "energy.csv", [t] + [e.value(c) for c in result.energy.columns()], comm)
+
+
+def probe_head(result) -> list[str]:
+    """probes.csv's columns (found once per run: the records' names cost their evaluation; collective)."""
+    if result.probe_columns is None:
+        names = list(result.system.scene.output.probes)
+        head = ["time"] + probes.columns(names, COMPONENTS)
+        if result.system.model.temperature is not None and names:
+            head += [f"{n}_T" for n in names]
+        result.probe_columns = head + list(records(result.system.model))
+    return result.probe_columns
 
 
 def padded(row: list, width: int) -> list:

@@ -17,6 +17,7 @@ from fem_forms.analyses.dynamic.energy import EnergyAccount
 from fem_forms.analyses.dynamic.explicit import ExplicitStepper, check_stable
 from fem_forms.analyses.dynamic.thermal import StaggeredStepper
 from fem_forms.analyses.dynamic.implicit import ImplicitStepper
+from fem_forms.analyses.dynamic.output import append_rows, write_csvs
 from fem_forms.analyses.dynamic.system import DynamicSystem, build_system
 from fem_forms.errors import InputError, SolveError
 from fem_forms.output import probes
@@ -42,6 +43,7 @@ class DynamicResult:
     failure: str | None = None                        # why the march gave up (results.json converged false)
     strength: dict | None = None                      # the lowest safety factor over the accepted steps
     last_accepted: tuple | None = None                # (t, step, dt) of the last accepted, committed step
+    probe_columns: list | None = None                 # probes.csv's header, found once
 
     def summary(self) -> dict:
         s, r = self.system, self.report
@@ -208,6 +210,8 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
             on_frame(system, 0.0, 0)
         if on_step:
             on_step(system, 0.0)
+    if out is not None:                        # the tables begin now and grow by a row per accepted step
+        write_csvs(out, result, system.model.mesh.comm)
 
     state = {"t": t_start}
 
@@ -224,6 +228,8 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
                 on_frame(system, t, step)
             if on_step:
                 on_step(system, t)
+            if out is not None:
+                append_rows(out, result, system.model.mesh.comm)
             if out is not None and dyn.checkpoint_every and step % dyn.checkpoint_every == 0:
                 checkpoint.save(out / "checkpoint", result, t, step, h)
         if interrupts is not None:
