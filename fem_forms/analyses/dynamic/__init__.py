@@ -61,26 +61,8 @@ def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> d
     write_csvs(out, result, comm)
     if result.failure is not None and result.last_accepted is not None:     # a failed run can be continued
         checkpoint.save(out / "checkpoint", result, *result.last_accepted)
-    summary = result.summary()
-    warnings = summary.setdefault("warnings", [])
-    # final probes: recovered stress and strain of the last state, as the static analysis reports them
-    model = result.system.model
-    stresses = attempt(warnings, "stress recovery at the probes",
-                       lambda: Quantities(model).at_probes(model.probes), {})
-    for name, values in stresses.items():
-        summary["probes"].setdefault(name, {}).update(values)
-    for name, material in model.probe_materials().items():      # the material each probe lies in
-        summary["probes"].setdefault(name, {})["material"] = material
-    T = result.system.model.temperature
-    if T is not None:                              # [thermal]: the temperature at the end
-        summary["max_temperature"] = max_value(T)
-        for name, value in result.system.model.probes.evaluate(T).items():
-            summary["probes"][name]["temperature"] = value[0]
-    summary.update(plastic_summary(result.system.model))
-    summary.update(model.terms.report(model.u.vector))         # each term's numbers at the end (contact, crack)
-    if "max_plastic_strain" in summary and not result.energy.plastic_accounted:
-        warnings.append("plasticity: the plastic work is not in the energy account; energy_balance_error "
-                        "includes it")
+    summary = end_state(result)
+    warnings = summary["warnings"]
     files = {"probes": "probes.csv", "energy": "energy.csv"}
     if recorder is not None and recorder.times:
         impact = attempt(warnings, "impact sound", lambda: impact_entry(result, recorder, scene.sound, out))
@@ -109,6 +91,31 @@ def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> d
                           not None else ""))
     if result.failure is not None:
         raise SolveError(f"{scene.title}: {result.failure}")
+    return summary
+
+
+def end_state(result: DynamicResult) -> dict:
+    """The run's summary with the last state's numbers: recovered stress and strain and the material at each
+    probe (as the static analysis reports them), the temperature, the plastic and the terms' numbers."""
+    summary = result.summary()
+    warnings = summary.setdefault("warnings", [])
+    model = result.system.model
+    stresses = attempt(warnings, "stress recovery at the probes",
+                       lambda: Quantities(model).at_probes(model.probes), {})
+    for name, values in stresses.items():
+        summary["probes"].setdefault(name, {}).update(values)
+    for name, material in model.probe_materials().items():      # the material each probe lies in
+        summary["probes"].setdefault(name, {})["material"] = material
+    T = model.temperature
+    if T is not None:                              # [thermal]: the temperature at the end
+        summary["max_temperature"] = max_value(T)
+        for name, value in model.probes.evaluate(T).items():
+            summary["probes"][name]["temperature"] = value[0]
+    summary.update(plastic_summary(model))
+    summary.update(model.terms.report(model.u.vector))         # each term's numbers at the end (contact, crack)
+    if "max_plastic_strain" in summary and not result.energy.plastic_accounted:
+        warnings.append("plasticity: the plastic work is not in the energy account; energy_balance_error "
+                        "includes it")
     return summary
 
 

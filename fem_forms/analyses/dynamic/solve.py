@@ -157,14 +157,9 @@ def probe_row(points: probes.ProbeSet, system: DynamicSystem, t: float) -> list:
     return row + list(records(system.model).values())
 
 
-def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = None,
-                  on_frame=None, on_step=None, interrupts=None, on_result=None) -> DynamicResult:
-    """March the scene's [dynamic] span; `on_frame(system, t, step)` every output_every steps (and at
-    t = 0); `on_step(system, t)` at t = 0 and after every accepted step (the state then committed);
-    checkpoints into out/checkpoint every checkpoint_every steps; `restart` continues from one. With
-    `interrupts` (output/interrupts.py) each accepted step is booked whole before a signal stops the run;
-    `on_result(result)` receives the result as soon as it exists (what an interrupted run writes from)."""
-    t0 = time.perf_counter()
+def start_system(scene: Scene) -> tuple:
+    """(system, stepper, released loads, stable dt of an explicit scheme or None): the system at its initial
+    state (at rest or in static equilibrium, initial velocity, consistent acceleration), committed."""
     dyn = scene.dynamic
     for m in scene.materials:
         if m.rho <= 0:
@@ -174,7 +169,7 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
     if system.model.temperature is not None:
         system.model.temperature.x.array[:] = scene.thermal.initial_temperature
     released = set(dyn.initial_loads) if dyn.initial == "static" else set()
-    points = system.model.probes                      # located now: a point outside the mesh is bad input
+    system.model.probes                               # located now: a point outside the mesh is bad input
     if dyn.initial == "static":
         initial_static(system)
     initial_velocity(system)
@@ -188,6 +183,20 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
         stepper = ImplicitStepper(system, released, scene.solver.petsc)
     if system.model.temperature is not None:
         stepper = StaggeredStepper(system, stepper)
+    return system, stepper, released, dt_stable
+
+
+def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = None,
+                  on_frame=None, on_step=None, interrupts=None, on_result=None) -> DynamicResult:
+    """March the scene's [dynamic] span; `on_frame(system, t, step)` every output_every steps (and at
+    t = 0); `on_step(system, t)` at t = 0 and after every accepted step (the state then committed);
+    checkpoints into out/checkpoint every checkpoint_every steps; `restart` continues from one. With
+    `interrupts` (output/interrupts.py) each accepted step is booked whole before a signal stops the run;
+    `on_result(result)` receives the result as soon as it exists (what an interrupted run writes from)."""
+    t0 = time.perf_counter()
+    dyn = scene.dynamic
+    system, stepper, released, dt_stable = start_system(scene)
+    points = system.model.probes
     account = EnergyAccount(system, released)
     result = DynamicResult(system, MarchReport(), account, dt_stable=dt_stable)
     if on_result is not None:
