@@ -7,13 +7,12 @@ reported with the supports', and its stored energy is the dynamic account's `sup
 from __future__ import annotations
 
 from dolfinx import fem, mesh as dmesh
-from dolfinx.fem import petsc as fpetsc
-from mpi4py import MPI
 import numpy as np
 from petsc4py import PETSc
 import ufl
 
 from fem_forms.errors import InputError
+from fem_forms.physics.term_integrals import Integrals, held_by_energy
 from fem_forms.physics.terms import Context, Term, register_load
 
 
@@ -29,7 +28,7 @@ class Foundation(Term):
             raise InputError(f"load[{index}].history: a foundation is a support; it has no history")
         self.index, self.keys = index, ("load", index)
         self.k = fem.Constant(mesh, PETSc.ScalarType(spec.stiffness))   # a new stiffness compiles nothing
-        self._forms: dict = {}
+        self.integral = Integrals(mesh.comm)
 
     def set_values(self, scene) -> None:
         self.k.value = scene.load[self.index].stiffness
@@ -45,19 +44,13 @@ class Foundation(Term):
         w, _ = self._normal_motion(ctx)
         return sum(ctx.area(0.5 * self.k * w * w, r) for r in ctx.regions[self.index])
 
-    def _value(self, name: str, make) -> float:
-        if name not in self._forms:
-            self._forms[name] = fem.form(make())
-        comm = self.ctx.mesh.comm
-        return comm.allreduce(fem.assemble_scalar(self._forms[name]), op=MPI.SUM)
-
     def stored_energies(self, x: PETSc.Vec) -> dict[str, float]:
-        return {"support": self._value("energy", lambda: self.energy(self.ctx))}
+        return {"support": self.integral("energy", lambda: self.energy(self.ctx))}
 
     def support_forces(self, x: PETSc.Vec) -> np.ndarray:
         """(1, 3): the foundation's push on the body, -int k (u . N) N dA."""
         w, N = self._normal_motion(self.ctx)
-        return np.array([[self._value(f"F{i}", lambda i=i: sum(self.ctx.area(-self.k * w * N[i], r)
+        return np.array([[self.integral(f"F{i}", lambda i=i: sum(self.ctx.area(-self.k * w * N[i], r)
                                                                  for r in self.ctx.regions[self.index]))
                           for i in range(3)]])
 
@@ -67,24 +60,3 @@ class Foundation(Term):
 
     def holds(self, model, modes: list) -> np.ndarray:
         return held_by_energy(self.energy(model.context), model.unknown, modes)
-
-
-def held_by_energy(energy: ufl.Form, unknown: fem.Function, modes: list) -> np.ndarray:
-    """Rows R with R^T R = the Gram matrix of the support's restoring forces d2E[m_i] . d2E[m_j] for the rigid
-    modes m_i, scaled to its largest entry (1: held as firmly as the most held mode; 0: free)."""
-    V = unknown.function_space
-    w = fem.Function(V)
-    form = fem.form(ufl.derivative(ufl.derivative(energy, unknown, ufl.TestFunction(V)), unknown, w))
-    forces = []
-    for m in modes:
-        w.vector.array[:] = m.array
-        w.x.scatter_forward()
-        b = fpetsc.assemble_vector(form)
-        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        forces.append(b)
-    gram = np.array([[a.dot(b) for b in forces] for a in forces])
-    for b in forces:
-        b.destroy()
-    gram /= max(float(np.abs(gram).max()), 1e-300)
-    values, vectors = np.linalg.eigh(gram)
-    return (vectors * np.sqrt(np.clip(values, 0.0, None))).T

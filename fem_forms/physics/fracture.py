@@ -21,6 +21,7 @@ import ufl
 
 from fem_forms.errors import InputError
 from fem_forms.physics.principal import tensile_energy
+from fem_forms.physics.term_integrals import Integrals
 from fem_forms.physics.terms import Context, SubProblem, Term, register_terms
 
 C_W = {"AT1": 8.0 / 3.0, "AT2": 2.0}
@@ -45,7 +46,7 @@ class PhaseField(Term):
             return fem.Constant(mesh, PETSc.ScalarType(v))
         self.Gc, self.ell, self.k = const(spec.toughness), const(spec.length), const(spec.residual_stiffness)
         self.model, self.split = spec.model, spec.split
-        self._forms: dict = {}
+        self.integral = Integrals(mesh.comm)
 
     def set_values(self, scene) -> None:
         fr = scene.fracture
@@ -133,10 +134,7 @@ class PhaseField(Term):
 
     # -- what a run reports -------------------------------------------------------------------------
     def _scalar(self, name: str, density) -> float:
-        if name not in self._forms:
-            self._forms[name] = fem.form(self.ctx.volume(density))
-        comm = self.d.function_space.mesh.comm
-        return comm.allreduce(fem.assemble_scalar(self._forms[name]), op=MPI.SUM)
+        return self.integral(name, lambda: self.ctx.volume(density))
 
     def record(self) -> dict[str, float]:
         """The damage's largest value, the crack area (surface energy / Gc), its surface energy and the volume

@@ -15,7 +15,7 @@ from petsc4py import PETSc
 import ufl
 
 from fem_forms.errors import InputError
-from fem_forms.physics.foundation import held_by_energy
+from fem_forms.physics.term_integrals import Integrals, held_by_energy
 from fem_forms.physics.supports import locate_facets
 from fem_forms.physics.terms import Context, Term, register_terms
 
@@ -35,7 +35,7 @@ class Spring(Term):
             return fem.Constant(mesh, PETSc.ScalarType(v))
         self.anchor, self.k, self.offset = const(tuple(spec.anchor)), const(spec.stiffness), const(0.0)
         self.area = const(1.0)
-        self._forms: dict = {}
+        self.integral = Integrals(mesh.comm)
 
     def set_values(self, scene) -> None:
         spec = scene.spring[self.index]
@@ -90,19 +90,14 @@ class Spring(Term):
         s, _, dA = self._stretch(ctx)
         return 0.5 * self.k / self.area * s * s * dA * self.ds
 
-    def _value(self, name: str, make) -> float:
-        if name not in self._forms:
-            self._forms[name] = fem.form(make())
-        return self.ctx.mesh.comm.allreduce(fem.assemble_scalar(self._forms[name]), op=MPI.SUM)
-
     def _force(self) -> np.ndarray:
         """The spring's pull on the body (N): -int k/A (|x - a| - L0) (x - a)/|x - a| dA."""
         s, e, dA = self._stretch(self.ctx)
-        return np.array([self._value(f"F{i}", lambda i=i: -self.k / self.area * s * e[i] * dA * self.ds)
+        return np.array([self.integral(f"F{i}", lambda i=i: -self.k / self.area * s * e[i] * dA * self.ds)
                          for i in range(3)])
 
     def stored_energies(self, x: PETSc.Vec) -> dict[str, float]:
-        return {"support": self._value("energy", lambda: self.energy(self.ctx))}
+        return {"support": self.integral("energy", lambda: self.energy(self.ctx))}
 
     def support_forces(self, x: PETSc.Vec) -> np.ndarray:
         return self._force()[None, :]
@@ -111,7 +106,7 @@ class Spring(Term):
         """results.json springs.NAME: force (its pull on the body, N), tension (N) and energy (J)."""
         force = self._force()
         s, _, dA = self._stretch(self.ctx)
-        tension = self._value("tension", lambda: self.k / self.area * s * dA * self.ds)
+        tension = self.integral("tension", lambda: self.k / self.area * s * dA * self.ds)
         return {"springs": {self.label: {"force": force.tolist(), "tension": tension,
                                          "energy": self.stored_energies(x)["support"]}}}
 
