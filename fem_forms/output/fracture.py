@@ -9,25 +9,19 @@ import numpy as np
 
 from fem_forms.output import fields, pictures, probes
 from fem_forms.output.reactions import support_forces
-from fem_forms.physics.fracture import PhaseField
 from fem_forms.physics.histories import piecewise_linear
 from fem_forms.scene.spec import fix_names
 
 
 class FractureHistory:
-    """The static run's `on_step(lam)` for [fracture] (chained with the load path's): one row per step."""
+    """The static run's `on_step(lam)` for a term keeping a crack (its `record()`, `crack_center()` and damage
+    field `d`), chained with the load path's: one row per step."""
 
-    def __init__(self, model, span: float, term: PhaseField):
+    def __init__(self, model, span: float, term):
         self.model, self.span, self.term = model, span, term
         self.names = fix_names(model.scene.fix)
         self.rows: list[list[float]] = []
         self.records: list[dict] = []
-
-    @classmethod
-    def of(cls, model, span: float) -> "FractureHistory | None":
-        """The history of a model with a phase field (None without one)."""
-        term = next((t for t in model.terms if isinstance(t, PhaseField)), None)
-        return cls(model, span, term) if term is not None else None
 
     def prescribed(self, lam: float) -> np.ndarray:
         """(fixes, 3): each support's prescribed displacement at load factor lam (0 where it holds still)."""

@@ -35,6 +35,7 @@ class PhaseField(Term):
     keys = ("fracture",)
     fields = ("damage",)
     energy_columns = ("fracture",)
+    step_histories = ("crack",)
 
     def __init__(self, spec, mesh):
         self.spec = spec

@@ -85,6 +85,7 @@ class Term:
     # in a static run without histories, where t is the load factor
     lagging: bool = False
     energy_columns: tuple = ()         # the dynamic energy account's columns this term fills (stored_energies)
+    step_histories: tuple = ()         # per-step tables its output keeps in a static run (output/histories.py kinds)
 
     def state_fields(self) -> dict:
         """The fields this term adds to the State beside the unknown (committed and rolled back with it)."""
