@@ -95,3 +95,24 @@ def check_range(k: Key, v: Any, key: str) -> None:
     why = range_message(k, v)
     if why:
         raise InputError(f"{key} = {brief(v)}: {why}")
+
+
+def flat_keys(keys) -> list[Key]:
+    """The keys a spec holds: sub-table keys flattened in (the reader fills them into the same spec), each
+    attribute once (the first declaration's)."""
+    out, seen = [], set()
+    for k in keys:
+        for leaf in (flat_keys(k.keys) if k.kind == "table" else [k]):
+            if leaf.target not in seen:
+                seen.add(leaf.target)
+                out.append(leaf)
+    return out
+
+
+def spec_class(name: str, doc: str, keys, module: str) -> type:
+    """The dataclass a scene table is read into, one field per key with the key's default: the keys are its
+    one declaration (a field's type and meaning are in the key's kind, unit and doc)."""
+    fields = [(k.target, Any, k.field()) for k in flat_keys(keys)]
+    cls = dataclasses.make_dataclass(name, fields, namespace={"__doc__": doc})
+    cls.__module__ = module
+    return cls

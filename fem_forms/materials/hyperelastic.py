@@ -92,8 +92,12 @@ class LinearElastic(LameModel):
     """Small-strain elasticity: psi = mu eps:eps + lambda/2 (tr eps)^2."""
     small_strain: ClassVar[bool] = True
 
+    def strain(self, F):
+        """The strain psi is quadratic in: eps = sym(grad u)."""
+        return small_strain(F)
+
     def psi(self, F):
-        return self.strain_energy(small_strain(F))
+        return self.strain_energy(self.strain(F))
 
     def strain_energy(self, eps):
         """mu eps:eps + lambda/2 (tr eps)^2 of a symmetric strain tensor."""
@@ -101,18 +105,17 @@ class LinearElastic(LameModel):
 
     def volumetric(self, F):
         """theta with psi = psi|_(lambda=0) + lambda/2 theta^2 (for the mixed u-p formulation)."""
-        return ufl.tr(small_strain(F))
+        return ufl.tr(self.strain(F))
 
 
 @dataclass(frozen=True)
-class StVenantKirchhoff(LameModel):
-    """St. Venant-Kirchhoff: psi = mu E:E + lambda/2 (tr E)^2 with E the Green strain."""
-    def psi(self, F):
-        E = green_strain(F)
-        return self.mu * ufl.inner(E, E) + 0.5 * self.lmbda * ufl.tr(E) ** 2
+class StVenantKirchhoff(LinearElastic):
+    """St. Venant-Kirchhoff: psi = mu E:E + lambda/2 (tr E)^2 with E the Green strain (the small-strain law
+    written in the Green strain, so a rigid rotation stores no energy)."""
+    small_strain: ClassVar[bool] = False
 
-    def volumetric(self, F):
-        return ufl.tr(green_strain(F))
+    def strain(self, F):
+        return green_strain(F)
 
 
 @dataclass(frozen=True)

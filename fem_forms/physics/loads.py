@@ -8,27 +8,19 @@ pressure acts on the deformed surface and has none: it adds its virtual work to 
 """
 from __future__ import annotations
 
-from dolfinx import fem, mesh as dmesh
-from petsc4py import PETSc
 import ufl
 
 from fem_forms.physics.terms import Context, Load as LoadTerm, register_load
-from fem_forms.scene import Load
 
 
 @register_load("gravity")
 class Gravity(LoadTerm):
     """Weight: -lambda int rho g . u dX (rho the density field), over the body or a gmsh volume group."""
     name = "gravity"
-
-    def declare(self, spec: Load, mesh: dmesh.Mesh) -> None:
-        self.g = fem.Constant(mesh, PETSc.ScalarType(tuple(spec.g)))
-
-    def set_spec(self, spec: Load) -> None:
-        self.g.value = spec.g
+    value_key = "g"
 
     def energy(self, ctx: Context) -> ufl.Form:
-        weight = ctx.parameters.density * ufl.dot(self.g, ctx.u)
+        weight = ctx.parameters.density * ufl.dot(self.value, ctx.u)
         if self.index in ctx.body_regions:                 # restricted to a gmsh volume group
             work = sum(ctx.volume(weight, k) for k in ctx.body_regions[self.index])
         else:
@@ -40,12 +32,7 @@ class Gravity(LoadTerm):
 class Traction(LoadTerm):
     """Dead traction per rest area on the selected facets: -lambda int T . u dA."""
     name = "traction"
-
-    def declare(self, spec: Load, mesh: dmesh.Mesh) -> None:
-        self.value = fem.Constant(mesh, PETSc.ScalarType(tuple(spec.value)))
-
-    def set_spec(self, spec: Load) -> None:
-        self.value.value = spec.value
+    value_key = "value"
 
     def energy(self, ctx: Context) -> ufl.Form:
         return -ctx.load.constant * self.factor * sum(ctx.area(ufl.dot(self.value, ctx.u), k)
@@ -57,12 +44,7 @@ class Pressure(LoadTerm):
     """Follower pressure p on the deformed surface, pushing against its outward normal:
     virtual work lambda int p J F^-T N . v dA."""
     name = "pressure"
-
-    def declare(self, spec: Load, mesh: dmesh.Mesh) -> None:
-        self.value = fem.Constant(mesh, PETSc.ScalarType(spec.pressure))
-
-    def set_spec(self, spec: Load) -> None:
-        self.value.value = spec.pressure
+    value_key = "pressure"
 
     def virtual_work(self, ctx: Context, v) -> ufl.Form:
         F = ctx.F

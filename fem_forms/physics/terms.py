@@ -204,6 +204,11 @@ class Solid(Term):
         return self.is_plastic
 
 
+def _constant_value(v):
+    """A scene value as a Constant takes it: a vector as a tuple, a number as it is."""
+    return tuple(v) if isinstance(v, (list, tuple)) else v
+
+
 class Load(Term):
     """An external load from one [[load]] table: its values are Constants, scaled by the model's load
     factor and by its own `factor` (its history at the current time; 1 without one)."""
@@ -216,11 +221,17 @@ class Load(Term):
         self.factor = fem.Constant(mesh, PETSc.ScalarType(1.0))
         self.declare(spec, mesh)
 
+    value_key: str | None = None       # the [[load]] key held in the Constant `value` (g, value, pressure)
+
     def declare(self, spec, mesh: dmesh.Mesh) -> None:
-        """Create this load's Constants from its [[load]] table."""
+        """Create this load's Constants from its [[load]] table (by default `value` from `value_key`)."""
+        if self.value_key is not None:
+            self.value = fem.Constant(mesh, PETSc.ScalarType(_constant_value(getattr(spec, self.value_key))))
 
     def set_spec(self, spec) -> None:
         """Take new values of this load's [[load]] table into its Constants."""
+        if self.value_key is not None:
+            self.value.value = getattr(spec, self.value_key)
 
     def set_values(self, scene) -> None:
         self.history = list(scene.load[self.index].history or [])
@@ -275,13 +286,16 @@ class TermList:
             raise InputError(f"{', '.join(t.name for t in self.arrays)}: not available in {analysis} yet (its "
                              "energy is computed as arrays; static and implicit dynamic solves take it)")
 
+    def _each(self, hook: str, *args) -> None:
+        """Call the hook of every term, in scene order."""
+        for term in self.all:
+            getattr(term, hook)(*args)
+
     def set_values(self, scene) -> None:
-        for t in self.all:
-            t.set_values(scene)
+        self._each("set_values", scene)
 
     def update(self, t: float) -> None:
-        for term in self.all:
-            term.update(t)
+        self._each("update", t)
 
     # --- the life cycle, over every term ----------------------------------------------------------
     @property
@@ -297,12 +311,10 @@ class TermList:
         return {k: f for t in self.all for k, f in t.state_fields().items()}
 
     def start(self, state) -> None:
-        for t in self.all:
-            t.start(state)
+        self._each("start", state)
 
     def resume(self, t: float) -> None:
-        for term in self.all:
-            term.resume(t)
+        self._each("resume", t)
 
     def inadmissible(self, x: PETSc.Vec) -> str | None:
         return next((why for t in self.all if (why := t.inadmissible(x)) is not None), None)

@@ -7,6 +7,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from fem_forms.keys import spec_class
 from fem_forms.errors import InputError
 from fem_forms.elements import MAX_DEGREE as MAX_QUADRATURE_DEGREE, check_degree
 from fem_forms.scene.materials import MATERIAL
@@ -286,17 +287,10 @@ SOLVER_KEYS = (
         choices=("load", "arc-length")),
     Key("petsc", "options", "PETSc options (name without dash = value), applied last", default={}),
 )
-_SOLVER = {k.name: k for k in SOLVER_KEYS}
 
 
-@dataclass
-class SolverSpec:
-    steps: int = _SOLVER["steps"].field()
-    max_cutbacks: int = _SOLVER["max_cutbacks"].field()
-    max_step: float = _SOLVER["max_step"].field()
-    linear: str = _SOLVER["linear"].field()
-    control: str = _SOLVER["control"].field()
-    petsc: dict = _SOLVER["petsc"].field()
+SolverSpec = spec_class("SolverSpec", "[solver]: Newton, load stepping and the linear solver.",
+                        SOLVER_KEYS, __name__)
 
 
 # fields [output] fields may name (fem_forms/output/quantities.py computes each)
@@ -312,14 +306,10 @@ OUTPUT_KEYS = (
         "a list of names, true (the default list) or false (none)", default=["displacement", "von_mises"],
         choices=FIELD_NAMES),
 )
-_OUTPUT = {k.name: k for k in OUTPUT_KEYS}
 
 
-@dataclass
-class OutputSpec:
-    probes: dict = _OUTPUT["probes"].field()
-    picture: bool = _OUTPUT["picture"].field()
-    fields: list = _OUTPUT["fields"].field()
+OutputSpec = spec_class("OutputSpec", "[output]: probes, picture and the fields written for ParaView.",
+                        OUTPUT_KEYS, __name__)
 
 
 # --- the core sections, in reading order ----------------------------------------------------

@@ -3,8 +3,8 @@ by Incremental Potential Contact (a barrier on surface distances, never an inter
 by every analysis that can take contact."""
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 
+from fem_forms.keys import spec_class
 from fem_forms.errors import InputError
 from fem_forms.scene.reader import Key, Section, Table
 
@@ -42,30 +42,11 @@ CONTACT_KEYS = (
 )
 
 
-@dataclass
-class Obstacle:
-    """One rigid obstacle as the scene gives it."""
-    name: str
-    shape: str
-    friction: float = 0.0
-    point: list | None = None
-    normal: list | None = None
-    center: list | None = None
-    radius: float | None = None
-    min: list | None = None
-    max: list | None = None
-    axis: list | None = None
-    file: object = None
-    motion: list | None = None              # [[t, dx, dy, dz], ...]
+Obstacle = spec_class("Obstacle", "One rigid obstacle as the scene gives it.", OBSTACLE_KEYS, __name__)
 
 
-@dataclass
-class ContactSpec:
-    """[contact]: self-contact, its friction, the barrier distance and the obstacles."""
-    self: bool = False
-    friction: float = 0.0
-    distance: float | None = None           # None: 1e-3 x the bounding-box diagonal, decided with the mesh
-    obstacle: list = field(default_factory=list)
+ContactSpec = spec_class("ContactSpec", "[contact]: self-contact, its friction, the barrier distance and the obstacles.",
+                         CONTACT_KEYS, __name__)
 
 
 def _obstacle(data: dict, key: str, index: int) -> Obstacle:

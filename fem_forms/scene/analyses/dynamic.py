@@ -1,8 +1,8 @@
 """Transient dynamics: its [dynamic] (time, scheme, mass, start) and [damping] sections."""
 from __future__ import annotations
 
-from dataclasses import dataclass
 
+from fem_forms.keys import spec_class
 from fem_forms.errors import InputError
 from fem_forms.scene.analyses import Analysis
 from fem_forms.scene.analyses.contact_section import CONTACT
@@ -41,24 +41,10 @@ DYNAMIC_KEYS = (
                         Key("about", "vector", "a point on the axis", unit="m", default=[0.0, 0.0, 0.0],
                             length=3))))),
 )
-_D = {k.name: k for k in DYNAMIC_KEYS}
 
 
-@dataclass
-class DynamicSpec:
-    """[dynamic]: how long, with which step and scheme, from which initial state."""
-    duration: float = _D["duration"].field()
-    dt: float = _D["dt"].field()
-    scheme: str = _D["scheme"].field()
-    rho_inf: float = _D["rho_inf"].field()
-    mass: str = _D["mass"].field()
-    adaptive: bool = _D["adaptive"].field()
-    tolerance: float = _D["tolerance"].field()
-    output_every: int = _D["output_every"].field()
-    checkpoint_every: int = _D["checkpoint_every"].field()
-    initial: str = _D["initial"].field()
-    initial_loads: list = _D["initial_loads"].field()
-    velocity: object = _D["initial_velocity"].field()   # [vx, vy, vz] or {"angular": w, "about": x0}
+DynamicSpec = spec_class("DynamicSpec", "[dynamic]: how long, with which step and scheme, from which initial state.",
+                         DYNAMIC_KEYS, __name__)
 
 
 def _dynamic_rules(s: DynamicSpec, t: Table) -> None:
@@ -80,13 +66,8 @@ VISCOUS = Key("viscous", "table", "Kelvin-Voigt viscous stress from the rate of 
 DAMPING_KEYS = (RAYLEIGH, VISCOUS)
 
 
-@dataclass
-class DampingSpec:
-    """[damping]: Rayleigh coefficients and Kelvin-Voigt viscosities (all zero: undamped)."""
-    alpha: float = 0.0
-    beta: float = 0.0
-    shear: float = 0.0
-    bulk: float = 0.0
+DampingSpec = spec_class("DampingSpec", "[damping]: Rayleigh coefficients and Kelvin-Voigt viscosities (all zero: undamped).",
+                         DAMPING_KEYS, __name__)
 
 
 def _check(scene) -> None:

@@ -4,6 +4,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from fem_forms.keys import spec_class
 from fem_forms.errors import InputError
 from fem_forms.scene.analyses import Analysis
 from fem_forms.scene.reader import Key, Section, Table
@@ -16,16 +17,10 @@ MODAL_KEYS = (
     Key("prestress", "boolean", "modes about the static equilibrium under the scene's loads", default=False),
     Key("mass", "string", "mass matrix", default="consistent", choices=("consistent", "lumped")),
 )
-_MODAL = {k.name: k for k in MODAL_KEYS}
 
 
-@dataclass
-class ModalSpec:
-    """[modal]: how many elastic modes, about which state, with which mass matrix."""
-    count: int = _MODAL["count"].field()
-    up_to: float | None = _MODAL["up_to"].field()   # Hz: all modes below it (count then unused)
-    prestress: bool = _MODAL["prestress"].field()   # True: tangent at the static equilibrium under the loads
-    mass: str = _MODAL["mass"].field()              # "consistent" | "lumped"
+ModalSpec = spec_class("ModalSpec", "[modal]: how many elastic modes, about which state, with which mass matrix.",
+                       MODAL_KEYS, __name__)
 
 
 def _modal_rules(s: ModalSpec, t: Table) -> None:

@@ -2,8 +2,9 @@
 thermal analysis and by the static and dynamic analyses it couples into."""
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
+from fem_forms.keys import spec_class
 from fem_forms.errors import InputError
 from fem_forms.scene.materials import THERMAL_CONSTANTS
 from fem_forms.scene.reader import Key, Section, Table
@@ -48,7 +49,6 @@ THERMAL_KEYS = (
         "temperature, convection, radiation (boundaries not named are insulated)", default=[],
         keys=BOUNDARY_KEYS),
 )
-_T = {k.name: k for k in THERMAL_KEYS}
 
 
 @dataclass
@@ -68,18 +68,8 @@ class ThermalBoundary:
         return self.kind
 
 
-@dataclass
-class ThermalSpec:
-    """[thermal]: conduction, heat capacity, expansion, E(T) and the boundary conditions."""
-    conductivity: float | None = None
-    specific_heat: float | None = None
-    expansion: float = _T["expansion"].field()
-    reference_temperature: float = _T["reference_temperature"].field()
-    initial_temperature: float = _T["initial_temperature"].field()
-    modulus_slope: float = _T["modulus_slope"].field()
-    damping_heat: bool = _T["damping_heat"].field()
-    absolute_zero: float = _T["absolute_zero"].field()
-    boundary: list = field(default_factory=list)     # ThermalBoundary after the rules
+ThermalSpec = spec_class("ThermalSpec", "[thermal]: conduction, heat capacity, expansion, E(T) and the boundary conditions.",
+                         THERMAL_KEYS, __name__)
 
 
 def _boundary(data: dict, key: str) -> ThermalBoundary:
