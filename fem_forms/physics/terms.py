@@ -101,6 +101,11 @@ class Term:
     def resume(self, t: float) -> None:
         """Continue at time t from a restored checkpoint (its fields restored with the State)."""
 
+    def settle(self, factor: float) -> float:
+        """A start from rest: scale this term's numerical stiffness (a barrier's) by `factor`, the one that best
+        balances the other terms' force at the start, within the term's bounds; the factor applied (1: none)."""
+        return 1.0
+
     def inadmissible(self, x: PETSc.Vec) -> str | None:
         """Why the state x cannot be accepted (an intersection), or None: checked on every accepted step."""
         return None

@@ -208,7 +208,7 @@ def viscoelastic_rules(scene) -> None:
         raise InputError(f"{key}: for analysis = 'static' or 'dynamic' only (this scene's is {scene.analysis!r})")
     if scene.analysis == "dynamic" and scene.dynamic.scheme == "central-difference":
         raise InputError(f"{key}: not with the explicit central-difference scheme (its steps solve nothing: no "
-                         "step energy); use newmark or generalized-alpha")
+                         "step energy); use newmark, generalized-alpha or backward-euler")
     if visco.plasticity_model is not None:
         raise InputError(f"{key}: not with [material.plasticity] (not implemented together)")
     if scene.discretization.formulation != "displacement":

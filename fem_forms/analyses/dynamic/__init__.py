@@ -116,6 +116,9 @@ def end_state(result: DynamicResult) -> dict:
     if "max_plastic_strain" in summary and not result.energy.plastic_accounted:
         warnings.append("plasticity: the plastic work is not in the energy account; energy_balance_error "
                         "includes it")
+    if model.scene.dynamic.scheme == "backward-euler":
+        warnings.append("dynamic.scheme = 'backward-euler' damps every vibration (first order): "
+                        "energy_balance_error includes the energy it took")
     return summary
 
 

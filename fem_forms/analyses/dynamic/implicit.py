@@ -29,12 +29,12 @@ class LumpedInertia(ArrayTerm):
 
     def _parts(self, x):
         td, old, n = self.s.td, self.s.state.old, self.n
-        am, af, beta, gamma = td.params
+        am, af, beta, gamma, wa = td.params
         dt = float(td.dt.value)
         u0, v0, a0 = (old[k].x.array[:n] for k in ("unknown", "velocity", "acceleration"))
-        pred = u0 + dt * v0 + dt * dt * (0.5 - beta) * a0
+        pred = u0 + dt * v0 + dt * dt * (0.5 - beta) * wa * a0
         acc = (x.array - pred) / (beta * dt * dt)
-        vel = v0 + dt * ((1 - gamma) * a0 + gamma * acc)
+        vel = v0 + dt * ((1 - gamma) * wa * a0 + gamma * acc)
         return am, af, beta, gamma, dt, pred, acc, vel, v0, a0
 
     def add_gradient(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
@@ -43,7 +43,7 @@ class LumpedInertia(ArrayTerm):
         b.array[:] += self.D.array * force
 
     def add_hessian(self, x: PETSc.Vec, A: PETSc.Mat, constrained: np.ndarray) -> None:
-        am, af, beta, gamma = self.s.td.params
+        am, af, beta, gamma, _ = self.s.td.params
         dt = float(self.s.td.dt.value)
         d = self.D.copy()
         d.scale((1 - am) / (beta * dt * dt) + self.alpha * (1 - af) * gamma / (beta * dt))

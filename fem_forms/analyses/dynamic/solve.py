@@ -106,8 +106,9 @@ def initial_static(system: DynamicSystem) -> None:
     m.load.set(1.0)
 
 
-def initial_acceleration(system: DynamicSystem, released: set) -> None:
-    """M a0 = F(0) - f_int(u0) - C v0 (lumped: a division; consistent: CG on M)."""
+def initial_acceleration(system: DynamicSystem, released: set, at_rest: bool = False) -> None:
+    """M a0 = F(0) - f_int(u0) - C v0 (lumped: a division; consistent: CG on M). `at_rest`: the run starts at
+    rest where the scene put it, so a barrier already pushing is first settled (Term.settle) against the rest."""
     system.set_load_time(0.0, 0.0, released)
     system.v_h.x.array[:] = system.v.x.array
     L = fem.form(system.explicit_residual)
@@ -120,6 +121,9 @@ def initial_acceleration(system: DynamicSystem, released: set) -> None:
         push.set(0.0)
         term.add_gradient(system.u.vector, push)
         push.assemble()
+        fpetsc.set_bc(push, system.model.bcs, scale=0.0)
+        if at_rest and (share := settling_share(b, push)) is not None:
+            push.scale(term.settle(share))
         b.axpy(-1.0, push)
         push.destroy()
     fpetsc.set_bc(b, system.model.bcs, scale=0.0)
@@ -140,6 +144,15 @@ def initial_acceleration(system: DynamicSystem, released: set) -> None:
         M.destroy()
     a.x.scatter_forward()
     b.destroy()
+
+
+def settling_share(force: PETSc.Vec, push: PETSc.Vec) -> float | None:
+    """s with the net force of s x push (a barrier's gradient) best balancing the net of `force` (the loads less
+    the elastic forces) on the body: s = F.P / |P|^2 of the node sums; None when nothing pushes. Collective."""
+    comm = force.comm.tompi4py()
+    F, P = (comm.allreduce(v.array.reshape(-1, 3).sum(axis=0)) for v in (force, push))
+    size = float(P @ P)
+    return float(F @ P) / size if size > 0 else None
 
 
 def probe_row(points: probes.ProbeSet, system: DynamicSystem, t: float) -> list:
@@ -173,7 +186,7 @@ def start_system(scene: Scene) -> tuple:
     if dyn.initial == "static":
         initial_static(system)
     initial_velocity(system)
-    initial_acceleration(system, released)
+    initial_acceleration(system, released, at_rest=dyn.initial == "rest" and not any(dyn.velocity or []))
     system.state.commit()
     dt_stable = None
     if dyn.scheme == "central-difference":

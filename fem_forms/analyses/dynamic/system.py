@@ -17,15 +17,17 @@ from fem_forms.physics.assemble import equilibrium_forms, virtual_work
 from fem_forms.physics.damping import RayleighDamping, ViscousDamping
 from fem_forms.physics.inertia import DiscreteInertia, Inertia
 from fem_forms.physics.terms import Context, Term
-from fem_forms.physics.time_discrete import NEWMARK_AVERAGE, TimeDiscrete, chung_hulbert
+from fem_forms.physics.time_discrete import BACKWARD_EULER, NEWMARK_AVERAGE, TimeDiscrete, chung_hulbert
 from fem_forms.scene import Scene
 from fem_forms.state import State
 
 
 def scheme_params(scene: Scene) -> tuple:
-    """(alpha_m, alpha_f, beta, gamma) of the scene's implicit scheme."""
+    """(alpha_m, alpha_f, beta, gamma, w_a) of the scene's implicit scheme."""
     if scene.dynamic.scheme == "generalized-alpha":
         return chung_hulbert(scene.dynamic.rho_inf)
+    if scene.dynamic.scheme == "backward-euler":
+        return BACKWARD_EULER
     return NEWMARK_AVERAGE
 
 

@@ -29,6 +29,7 @@ DEFAULT_DISTANCE = 1e-3      # dhat as a share of the part's bounding-box diagon
 SLIP_RATE = 1e-3             # friction's slip eps: this share of the bounding-box diagonal per unit of time
 TOO_CLOSE = 1e-4             # a gap below this share of dhat doubles kappa (IPC's adaptive stiffness) ...
 MAX_RAISE = 1e6              # ... up to this many times its first value
+SETTLE_FLOOR = 1e-3          # a start from rest inside the barrier's range lowers kappa at most this far
 
 
 class ContactTerm(ArrayTerm):
@@ -258,6 +259,17 @@ class ContactTerm(ArrayTerm):
         rows = np.repeat(base[:, None] + np.arange(3), 3, axis=1).ravel()
         cols = np.tile(base[:, None] + np.arange(3), (1, 3)).ravel()
         add_entries(A, rows.astype(PETSc.IntType), cols.astype(PETSc.IntType), blocks.reshape(-1), constrained)
+
+    def settle(self, factor: float) -> float:
+        """A body at rest inside the barrier's range at t = 0: kappa scaled so the barrier's push balances the
+        loads there (IPC's initial barrier stiffness), not the launch a push of the elastic scale would give;
+        at least SETTLE_FLOOR x kappa (no load pressing: the push is all but gone)."""
+        factor = max(float(factor), SETTLE_FLOOR)
+        self.kappa *= factor
+        self.kappa0 = self.kappa
+        for c in self.ipc:
+            c.stiffness *= factor
+        return factor
 
     def _adapt(self, smallest: float) -> None:
         """Double kappa when the accepted state's smallest gap is below TOO_CLOSE x dhat: the same contact force

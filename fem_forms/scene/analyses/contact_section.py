@@ -45,8 +45,9 @@ CONTACT_KEYS = (
 Obstacle = spec_class("Obstacle", "One rigid obstacle as the scene gives it.", OBSTACLE_KEYS, __name__)
 
 
-ContactSpec = spec_class("ContactSpec", "[contact]: self-contact, its friction, the barrier distance and the obstacles.",
-                         CONTACT_KEYS, __name__)
+ContactSpec = spec_class(
+    "ContactSpec", "[contact]: self-contact, its friction, the barrier distance and the obstacles.",
+    CONTACT_KEYS, __name__)
 
 
 def _obstacle(data: dict, key: str, index: int) -> Obstacle:

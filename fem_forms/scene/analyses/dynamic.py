@@ -11,13 +11,14 @@ from fem_forms.scene.analyses.impact_section import IMPACT_SOUND, check_impact
 from fem_forms.scene.analyses.thermal_section import THERMAL, check_coupled
 from fem_forms.scene.reader import Key, Section, Table
 
-SCHEMES = ("newmark", "generalized-alpha", "central-difference")
+SCHEMES = ("newmark", "generalized-alpha", "backward-euler", "central-difference")
 DYNAMIC_KEYS = (
     Key("duration", "number", "simulated time", default=1.0, unit="s", exclusive_minimum=0),
     Key("dt", "number", "time step (implicit schemes may cut or adapt it)", default=1e-3, unit="s",
         exclusive_minimum=0),
-    Key("scheme", "string", "newmark (average acceleration), generalized-alpha (Chung-Hulbert) or "
-        "central-difference (explicit, lumped mass)", default="newmark", choices=SCHEMES),
+    Key("scheme", "string", "newmark (average acceleration), generalized-alpha (Chung-Hulbert), backward-euler "
+        "(first order, damps vibrations: robust with contact) or central-difference (explicit, lumped mass)",
+        default="newmark", choices=SCHEMES),
     Key("rho_inf", "number", "generalized-alpha spectral radius at infinite frequency", default=0.8,
         minimum=0, maximum=1),
     Key("mass", "string", "mass matrix: consistent, or lumped (HRZ; required for central-difference)",
@@ -66,8 +67,9 @@ VISCOUS = Key("viscous", "table", "Kelvin-Voigt viscous stress from the rate of 
 DAMPING_KEYS = (RAYLEIGH, VISCOUS)
 
 
-DampingSpec = spec_class("DampingSpec", "[damping]: Rayleigh coefficients and Kelvin-Voigt viscosities (all zero: undamped).",
-                         DAMPING_KEYS, __name__)
+DampingSpec = spec_class(
+    "DampingSpec", "[damping]: Rayleigh coefficients and Kelvin-Voigt viscosities (all zero: undamped).",
+    DAMPING_KEYS, __name__)
 
 
 def _check(scene) -> None:
@@ -80,7 +82,7 @@ def _check(scene) -> None:
             raise InputError(f"fix[{i}].value: dynamic analysis holds supports fixed (value must be zero)")
     if scene.contact is not None and scene.dynamic.scheme == "central-difference":
         raise InputError("contact: not with dynamic.scheme = 'central-difference' (the barrier needs the implicit "
-                         "step's step filter); use 'newmark' or 'generalized-alpha'")
+                         "step's step filter); use 'newmark', 'generalized-alpha' or 'backward-euler'")
     check_coupled(scene)
     check_impact(scene)
 

@@ -68,8 +68,9 @@ class ThermalBoundary:
         return self.kind
 
 
-ThermalSpec = spec_class("ThermalSpec", "[thermal]: conduction, heat capacity, expansion, E(T) and the boundary conditions.",
-                         THERMAL_KEYS, __name__)
+ThermalSpec = spec_class(
+    "ThermalSpec", "[thermal]: conduction, heat capacity, expansion, E(T) and the boundary conditions.",
+    THERMAL_KEYS, __name__)
 
 
 def _boundary(data: dict, key: str) -> ThermalBoundary:
