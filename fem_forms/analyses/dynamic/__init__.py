@@ -6,6 +6,7 @@ run), output (files), checkpoint (--restart)."""
 from __future__ import annotations
 
 from pathlib import Path
+import sys
 
 from mpi4py import MPI
 
@@ -47,8 +48,13 @@ def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> d
     held: dict = {}
     with Interrupts(comm, lambda: interrupted_note(held.get("result"), scene, out, comm)) as interrupts:
         try:
+            def started(r) -> None:                # what the start found is said before the march
+                held.update(result=r)
+                if echo and comm.rank == 0:
+                    for w in r.system.start_warnings:
+                        print(f"fem-forms: warning: {w}", file=sys.stderr)
             result = solve_dynamic(scene, out, Path(restart) if restart else None, on_frame=frame,
-                                   on_step=recorder, interrupts=interrupts, on_result=lambda r: held.update(result=r))
+                                   on_step=recorder, interrupts=interrupts, on_result=started)
         except KeyboardInterrupt:
             if writer is not None:
                 writer.close()
@@ -99,6 +105,7 @@ def end_state(result: DynamicResult) -> dict:
     probe (as the static analysis reports them), the temperature, the plastic and the terms' numbers."""
     summary = result.summary()
     warnings = summary.setdefault("warnings", [])
+    warnings.extend(result.system.start_warnings)
     model = result.system.model
     stresses = attempt(warnings, "stress recovery at the probes",
                        lambda: Quantities(model).at_probes(model.probes), {})

@@ -106,15 +106,17 @@ def initial_static(system: DynamicSystem) -> None:
     m.load.set(1.0)
 
 
-def initial_acceleration(system: DynamicSystem, released: set, at_rest: bool = False) -> None:
-    """M a0 = F(0) - f_int(u0) - C v0 (lumped: a division; consistent: CG on M). `at_rest`: the run starts at
-    rest where the scene put it, so a barrier already pushing is first settled (Term.settle) against the rest."""
+def initial_acceleration(system: DynamicSystem, released: set, settle: bool = False) -> bool:
+    """M a0 = F(0) - f_int(u0) - C v0 (lumped: a division; consistent: CG on M). `settle`: the run starts where
+    the scene put the part (no static start), so a barrier already pushing is first settled (Term.settle).
+    Returns whether it was: the part starts in contact, undeformed."""
     system.set_load_time(0.0, 0.0, released)
     system.v_h.x.array[:] = system.v.x.array
     L = fem.form(system.explicit_residual)
     b = fpetsc.assemble_vector(L)
     b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
     b.scale(-1.0)
+    settled = False
     system.model.terms.lag(0.0)
     for term in system.model.terms.arrays:             # an array term's force at the start (a barrier pushing)
         push = b.duplicate()
@@ -122,8 +124,9 @@ def initial_acceleration(system: DynamicSystem, released: set, at_rest: bool = F
         term.add_gradient(system.u.vector, push)
         push.assemble()
         fpetsc.set_bc(push, system.model.bcs, scale=0.0)
-        if at_rest and (share := settling_share(b, push)) is not None:
+        if settle and (share := settling_share(b, push)) is not None:
             push.scale(term.settle(share))
+            settled = True
         b.axpy(-1.0, push)
         push.destroy()
     fpetsc.set_bc(b, system.model.bcs, scale=0.0)
@@ -144,6 +147,7 @@ def initial_acceleration(system: DynamicSystem, released: set, at_rest: bool = F
         M.destroy()
     a.x.scatter_forward()
     b.destroy()
+    return settled
 
 
 def settling_share(force: PETSc.Vec, push: PETSc.Vec) -> float | None:
@@ -186,7 +190,11 @@ def start_system(scene: Scene) -> tuple:
     if dyn.initial == "static":
         initial_static(system)
     initial_velocity(system)
-    initial_acceleration(system, released, at_rest=dyn.initial == "rest" and not any(dyn.velocity or []))
+    if initial_acceleration(system, released, settle=dyn.initial == "rest") and dyn.scheme != "backward-euler":
+        system.start_warnings.append(
+            f"the part starts in contact, undeformed: {dyn.scheme} keeps the contact's first shock as ringing at the "
+            "step's frequency (slow steps, rejected steps); initial = \"static\" rests it on what holds it first, "
+            "scheme = \"backward-euler\" damps the ringing")
     system.state.commit()
     dt_stable = None
     if dyn.scheme == "central-difference":

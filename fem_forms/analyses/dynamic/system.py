@@ -3,7 +3,7 @@ midpoint, the time-discrete inertia and the damping terms, the State (u, v, a wi
 (consistent form or HRZ-lumped diagonal) and each load's history."""
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
@@ -78,6 +78,7 @@ class DynamicSystem:
     constrained: np.ndarray       # owned local indices of supported dofs
     loads: list                   # the model's load terms (each with its factor Constant)
     mass: fem.Form                # the consistent mass form, compiled once
+    start_warnings: list = field(default_factory=list)     # what the start found (printed before the march)
 
     @property
     def u(self) -> fem.Function:
