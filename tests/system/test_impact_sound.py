@@ -149,3 +149,24 @@ def test_a_long_flight_around_the_contact_only_delays_the_ring():
     assert np.all(qd[:, :2205] == 0.0)
     assert np.abs(qd[:, 2205:] - q[:, :-2205]).max() < 1e-9 * np.abs(q).max()
     assert np.abs(vd[:, 2205:] - v[:, :-2205]).max() < 1e-9 * np.abs(v).max()
+
+
+def test_a_restarted_run_hears_the_whole_impact(tmp_path):
+    """Stopped halfway through the impact (a checkpoint at step 30 of 60) and continued with --restart: the impact
+    sound's contact history, and the wall time, cover the run from t = 0, as the uninterrupted run's do (issue 48
+    item 3; before: only the restarted part's contact was heard)."""
+    whole_dir, half_dir = tmp_path / "whole", tmp_path / "half"
+    whole_dir.mkdir()
+    half_dir.mkdir()
+    code, whole, _, _ = run_scene(whole_dir, SCENE)
+    assert code == 0
+    half = with_(with_(SCENE, "dynamic.duration", 1.5e-4), "dynamic.checkpoint_every", 30)
+    code, first, _, out = run_scene(half_dir, half)
+    assert code == 0 and first["steps"] == 30 and first["impact_sound"]["contact_time_s"] > 0   # mid-contact
+    assert main(["run", str(whole_dir / "scene.toml"), "--out", str(out), "--restart", str(out), "-q"]) == 0
+    cont = json.loads((out / "results.json").read_text())
+    assert cont["steps"] == whole["steps"] == 60
+    for key in ("contact_start_s", "contact_end_s", "contact_time_s", "peak_force_N", "impulse_Ns"):
+        assert cont["impact_sound"][key] == pytest.approx(whole["impact_sound"][key], rel=1e-6), key
+    assert cont["impact_sound"]["peaks_hz"] == pytest.approx(whole["impact_sound"]["peaks_hz"], rel=1e-6)
+    assert cont["wall_time_s"] > first["wall_time_s"]           # the first part's time counted too

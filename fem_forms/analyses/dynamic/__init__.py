@@ -54,7 +54,8 @@ def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> d
                     for w in r.system.start_warnings:
                         print(f"fem-forms: warning: {w}", file=sys.stderr)
             result = solve_dynamic(scene, out, Path(restart) if restart else None, on_frame=frame,
-                                   on_step=recorder, interrupts=interrupts, on_result=started)
+                                   on_step=recorder, interrupts=interrupts, on_result=started,
+                                   keepers=(recorder,) if recorder is not None else ())
         except KeyboardInterrupt:
             if writer is not None:
                 writer.close()

@@ -1,6 +1,6 @@
 """Checkpoints of a dynamic run and --restart: each rank saves its local arrays (u, v, a, with [thermal] T, and a
-plastic solid's history at its quadrature points), and rank 0 the time, step, dt, counters, energies and
-probe rows so far. A restart needs the same number of ranks
+plastic solid's history at its quadrature points), and rank 0 the time, step, dt, counters, energies,
+probe rows and wall time so far, and the histories of the run's keepers (the impact recorder's contact forces). A restart needs the same number of ranks
 (the same partitioning) and continues to the same answer as an uninterrupted run."""
 from __future__ import annotations
 
@@ -32,7 +32,10 @@ def save(folder: Path, result, t: float, step: int, dt: float) -> None:
                 "report": {"steps": r.steps, "time_reached": r.time_reached, "dt_min": r.dt_min,
                            "dt_max": r.dt_max, "newton_iterations": r.newton_iterations, "rejected": r.rejected},
                 "energies": [[tt, e.row()] for tt, e in result.energy.history],
-                "probe_rows": result.probe_rows}
+                "probe_rows": result.probe_rows, "wall_time_s": result.elapsed()}
+        kept = {f"{i}/{k}": v for i, keeper in enumerate(result.keepers) for k, v in keeper.saved().items()}
+        np.savez(folder / ".kept.npz", **kept)              # the keepers' histories (the same on every rank)
+        os.replace(folder / ".kept.npz", folder / "kept.npz")
         tmp = folder / ".meta.json"
         tmp.write_text(json.dumps(meta))
         os.replace(tmp, folder / "meta.json")
@@ -62,4 +65,9 @@ def load(out: Path, result) -> tuple[float, int, float]:
     result.energy.history = [(t, Energies(*row)) for t, row in meta["energies"]]
     result.energy.now = result.energy.history[-1][1]
     result.probe_rows = [list(r) for r in meta["probe_rows"]]
+    result.wall_before = meta.get("wall_time_s", 0.0)
+    if result.keepers and (folder / "kept.npz").is_file():
+        kept = np.load(folder / "kept.npz")
+        for i, keeper in enumerate(result.keepers):
+            keeper.restore({k.split("/", 1)[1]: kept[k] for k in kept.files if k.startswith(f"{i}/")})
     return meta["time"], meta["step"], meta["dt"]

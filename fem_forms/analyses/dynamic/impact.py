@@ -48,6 +48,20 @@ class ImpactRecorder:
         self.nodes.append(np.asarray(act).copy())
         self.forces.append(np.asarray(force).reshape(-1, 3).copy())
 
+    def saved(self) -> dict[str, np.ndarray]:
+        """Its history as flat arrays (a checkpoint's): times, each step's node count, nodes, forces."""
+        counts = np.array([len(n) for n in self.nodes], dtype=np.int64)
+        return {"times": np.asarray(self.times, dtype=float), "counts": counts,
+                "nodes": np.concatenate(self.nodes) if self.nodes else np.zeros(0, np.int64),
+                "forces": np.concatenate(self.forces) if self.forces else np.zeros((0, 3))}
+
+    def restore(self, data: dict) -> None:
+        """The history of `saved()`: a restarted run's sound covers the impact from t = 0."""
+        cut = np.cumsum(data["counts"])[:-1]
+        self.times = [float(t) for t in data["times"]]
+        self.nodes = list(np.split(data["nodes"], cut)) if len(self.times) else []
+        self.forces = list(np.split(data["forces"].reshape(-1, 3), cut)) if len(self.times) else []
+
     def totals(self) -> np.ndarray:
         """(steps, 3) the obstacle's total force on the part at each recorded step."""
         return np.array([f.sum(axis=0) for f in self.forces]).reshape(-1, 3)

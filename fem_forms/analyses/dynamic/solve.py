@@ -44,6 +44,13 @@ class DynamicResult:
     strength: dict | None = None                      # the lowest safety factor over the accepted steps
     last_accepted: tuple | None = None                # (t, step, dt) of the last accepted, committed step
     probe_columns: list | None = None                 # probes.csv's header, found once
+    keepers: tuple = ()                               # step hooks whose history a checkpoint carries (saved/restore)
+    started: float = field(default_factory=time.perf_counter)   # this process's start of the run
+    wall_before: float = 0.0                          # wall time of the run before a --restart (its checkpoint's)
+
+    def elapsed(self) -> float:
+        """The run's wall time so far, from t = 0 across restarts."""
+        return self.wall_before + time.perf_counter() - self.started
 
     def summary(self) -> dict:
         s, r = self.system, self.report
@@ -208,18 +215,20 @@ def start_system(scene: Scene) -> tuple:
 
 
 def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = None,
-                  on_frame=None, on_step=None, interrupts=None, on_result=None) -> DynamicResult:
+                  on_frame=None, on_step=None, interrupts=None, on_result=None, keepers: tuple = ()) -> DynamicResult:
     """March the scene's [dynamic] span; `on_frame(system, t, step)` every output_every steps (and at
     t = 0); `on_step(system, t)` at t = 0 and after every accepted step (the state then committed);
     checkpoints into out/checkpoint every checkpoint_every steps; `restart` continues from one. With
     `interrupts` (output/interrupts.py) each accepted step is booked whole before a signal stops the run;
-    `on_result(result)` receives the result as soon as it exists (what an interrupted run writes from)."""
+    `on_result(result)` receives the result as soon as it exists (what an interrupted run writes from). `keepers`:
+    step hooks with a history of their own (the impact recorder: `saved()` arrays, `restore(arrays)`), carried by
+    the checkpoint so that a restarted run's account covers it from t = 0."""
     t0 = time.perf_counter()
     dyn = scene.dynamic
     system, stepper, released, dt_stable = start_system(scene)
     points = system.model.probes
     account = EnergyAccount(system, released)
-    result = DynamicResult(system, MarchReport(), account, dt_stable=dt_stable)
+    result = DynamicResult(system, MarchReport(), account, dt_stable=dt_stable, keepers=tuple(keepers), started=t0)
     if on_result is not None:
         on_result(result)
     critical = interrupts.critical if interrupts is not None else nullcontext
@@ -274,7 +283,7 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
         result.failure = str(e)
     if isinstance(stepper.motion, ImplicitStepper):           # the staggered heat step wraps the motion
         result.solver = stepper.motion.summary()
-    result.wall_time_s = time.perf_counter() - t0
+    result.wall_time_s = result.elapsed()
     result.strength = watch.lowest if watch is not None else None
     return result
 
