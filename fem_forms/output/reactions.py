@@ -25,13 +25,16 @@ import ufl
 from fem_forms.scene.spec import fix_names
 
 
-def support_forces(model) -> np.ndarray:
-    """(number of fixes, 3): the force each support exerts on the body, summed over all ranks."""
-    b = fpetsc.assemble_vector(model.compiled("residual"))
-    b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-    for term in model.terms.arrays:                      # contact at a held node is part of its reaction
-        term.add_gradient(model.unknown.vector, b)
-    b.assemble()
+def support_forces(model, b: PETSc.Vec | None = None) -> np.ndarray:
+    """(number of fixes, 3): the force each support exerts on the body, summed over all ranks. `b`: the residual
+    to read them from (a dynamic run's, with the inertia; its owner destroys it), else the model's, assembled."""
+    own = b is None
+    if own:
+        b = fpetsc.assemble_vector(model.compiled("residual"))
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        for term in model.terms.arrays:                      # contact at a held node is part of its reaction
+            term.add_gradient(model.unknown.vector, b)
+        b.assemble()
     residual = b.array                                   # owned entries only
     held = np.zeros(len(residual), dtype=bool)
     forces = np.zeros((len(model.scene.fix), 3))
@@ -41,7 +44,8 @@ def support_forces(model) -> np.ndarray:
         dofs = dofs[~held[dofs]]
         held[dofs] = True
         forces[fix, component] += residual[dofs].sum()
-    b.destroy()
+    if own:
+        b.destroy()
     total = np.zeros_like(forces)
     model.mesh.comm.Allreduce(forces, total, op=MPI.SUM)
     return total

@@ -245,7 +245,7 @@ def test_cli_outputs_and_restart(tmp_path, capsys):
     assert tip["von_mises"] == pytest.approx(np.sqrt(1.5 * np.sum(s_dev * s_dev)), rel=1e-10)
     assert np.array(tip["strain"]).shape == (3, 3)
     head = (out / "probes.csv").read_text().splitlines()
-    assert head[0] == "time,tip_ux,tip_uy,tip_uz,tip_vx,tip_vy,tip_vz" and len(head) == 22
+    assert head[0] == "time,tip_ux,tip_uy,tip_uz,tip_vx,tip_vy,tip_vz,fix0_Fx,fix0_Fy,fix0_Fz" and len(head) == 22
     assert (out / "energy.csv").read_text().startswith("time,kinetic,elastic,external_work,dissipated")
     for f in ("motion.xdmf", "motion.gif", "history.png"):
         assert (out / f).exists()
@@ -303,7 +303,7 @@ def test_restart_under_two_ranks_reproduces_an_uninterrupted_run(tmp_path):
                        rtol=1e-7, atol=1e-12)
     assert abs(a["probes"]["tip"]["displacement"][2]) > 1e-4          # the beam did move
     pa, pb = (np.loadtxt(o / "probes.csv", delimiter=",", skiprows=1) for o in (full, cont))
-    assert pa.shape == pb.shape == (21, 7)
+    assert pa.shape == pb.shape == (21, 10)
     assert np.allclose(pb, pa, rtol=1e-7, atol=1e-9 * np.abs(pa).max())
     for k in ("kinetic", "elastic", "external_work"):
         assert b["energy_final"][k] == pytest.approx(a["energy_final"][k], rel=1e-7)
@@ -334,3 +334,16 @@ def test_energy_balance_is_relative_only_above_round_off():
     assert account.balance_error(floor=1e-13) == pytest.approx(1e-9 / (3.0 + 1e-9))
     account.history = [(0.0, Energies()), (1.0, Energies())]
     assert account.balance_error() == 0.0                      # nothing at all, no floor: as before
+
+
+@pytest.mark.parametrize("mass", ["consistent", "lumped"])
+def test_probes_csv_carries_the_supports_force_every_step(tmp_path, mass):
+    """probes.csv FIX_Fx, FIX_Fy, FIX_Fz per step (issue 48 item 4): the residual of the motion at the held dofs,
+    inertia included: the beam held at rest in its static sag (initial = static) keeps the tip load on its clamp at
+    every step, t = 0 included (before: no support force in a dynamic run's probes.csv)."""
+    held = beam({"initial": "static", "mass": mass})
+    code, _, _, out = run_scene(tmp_path, held)
+    assert code == 0
+    h = np.genfromtxt(out / "probes.csv", delimiter=",", names=True)
+    assert h["fix0_Fz"] == pytest.approx(-P * H * H, rel=1e-8)               # every step, t = 0 included
+    assert np.abs(h["fix0_Fx"]).max() < 1e-8 and np.abs(h["fix0_Fy"]).max() < 1e-8

@@ -10,6 +10,7 @@ import numpy as np
 from fem_forms.output import fields, probes
 from fem_forms.output.load_path import records
 from fem_forms.output.plastic import plastic_fields
+from fem_forms.scene.spec import fix_names
 
 COMPONENTS = ("ux", "uy", "uz", "vx", "vy", "vz")
 
@@ -41,6 +42,7 @@ def probe_head(result) -> list[str]:
         head = ["time"] + probes.columns(names, COMPONENTS)
         if result.system.model.temperature is not None and names:
             head += [f"{n}_T" for n in names]
+        head += probes.columns(fix_names(result.system.scene.fix), ("Fx", "Fy", "Fz"))   # each support's force
         result.probe_columns = head + list(records(result.system.model))
     return result.probe_columns
 

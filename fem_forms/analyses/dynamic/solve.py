@@ -18,6 +18,7 @@ from fem_forms.analyses.dynamic.explicit import ExplicitStepper, check_stable
 from fem_forms.analyses.dynamic.thermal import StaggeredStepper
 from fem_forms.analyses.dynamic.implicit import ImplicitStepper
 from fem_forms.analyses.dynamic.output import append_rows, write_csvs
+from fem_forms.analyses.dynamic.reactions import DynamicReactions
 from fem_forms.analyses.dynamic.system import DynamicSystem, build_system
 from fem_forms.errors import InputError, SolveError
 from fem_forms.output import probes
@@ -166,10 +167,11 @@ def settling_share(force: PETSc.Vec, push: PETSc.Vec) -> float | None:
     return float(F @ P) / size if size > 0 else None
 
 
-def probe_row(points: probes.ProbeSet, system: DynamicSystem, t: float) -> list:
-    """[t, then (ux, uy, uz, vx, vy, vz) at each probe, NAME_T at each with heat, then the terms' records (an
-    obstacle's force, active points and the smallest gap; a cavity's pressure and volume; the crack's numbers)]
-    (points located once, before the march). Collective."""
+def probe_row(points: probes.ProbeSet, system: DynamicSystem, t: float,
+              reactions: DynamicReactions | None = None) -> list:
+    """[t, then (ux, uy, uz, vx, vy, vz) at each probe, NAME_T at each with heat, FIX_Fx, FIX_Fy, FIX_Fz per
+    support (`reactions`), then the terms' records (an obstacle's force, active points and the smallest gap; a
+    cavity's pressure and volume; the crack's numbers)] (points located once, before the march). Collective."""
     row = [t]
     if points.names:
         u, v = points.evaluate(system.u), points.evaluate(system.v)
@@ -178,6 +180,8 @@ def probe_row(points: probes.ProbeSet, system: DynamicSystem, t: float) -> list:
         if system.model.temperature is not None:       # NAME_T columns after every probe's motion
             T = points.evaluate(system.model.temperature)
             row += [T[n][0] for n in points.names]
+    if reactions is not None:
+        row += reactions().ravel().tolist()
     return row + list(records(system.model).values())
 
 
@@ -227,6 +231,7 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
     dyn = scene.dynamic
     system, stepper, released, dt_stable = start_system(scene)
     points = system.model.probes
+    reactions = DynamicReactions(system) if scene.fix else None     # probes.csv's support forces every step
     account = EnergyAccount(system, released)
     result = DynamicResult(system, MarchReport(), account, dt_stable=dt_stable, keepers=tuple(keepers), started=t0)
     if on_result is not None:
@@ -242,7 +247,7 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
     else:
         result.last_accepted = (0.0, 0, dt)
         account.start(0.0)
-        result.probe_rows.append(probe_row(points, system, 0.0))
+        result.probe_rows.append(probe_row(points, system, 0.0, reactions))
         if watch is not None:
             watch.step(0.0)
         if on_frame:
@@ -259,7 +264,7 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
             account.advance(state["t"], t)
             system.state.commit()
             state["t"] = t
-            result.probe_rows.append(probe_row(points, system, t))
+            result.probe_rows.append(probe_row(points, system, t, reactions))
             result.last_accepted = (t, step, h)
             if watch is not None:
                 watch.step(t)
