@@ -19,7 +19,8 @@ from fem_forms.physics.contact.friction import LaggedFriction, tangent_basis
 from fem_forms.physics.contact.mesh_obstacle import FileObstacle
 from fem_forms.physics.contact.obstacles import make_obstacle
 from fem_forms.physics.contact.pressure import add_pressure_field
-from fem_forms.physics.array_term import ArrayTerm, add_entries
+from fem_forms.physics.array_term import ArrayTerm
+from fem_forms.physics.contact.hessian_blocks import add_node_blocks, add_triangle_hessian
 from fem_forms.physics.terms import Context
 
 if TYPE_CHECKING:
@@ -213,12 +214,12 @@ class ContactTerm(ArrayTerm):
         owned = np.zeros(self.surface.size, bool)
         owned[self.surface.owned] = True
         for c in self.ipc:
-            self._add_ipc_hessian(c, A, p, owned, constrained)
+            add_triangle_hessian(A, c.hessian(p), self.surface, owned, constrained)
         area = self.surface.area
         for (act, d, g, H, _), fr in zip(gaps, self.friction or [None] * len(gaps)):
             if fr is not None:
                 keep = owned[fr.nodes]
-                self._add_blocks(A, fr.nodes[keep], fr.hessian(p)[keep], constrained)
+                add_node_blocks(A, self.surface, fr.nodes[keep], fr.hessian(p)[keep], constrained)
             keep = owned[act]
             act, d, g, H = act[keep], d[keep], g[keep], H[keep]
             if not len(act):
@@ -226,39 +227,7 @@ class ContactTerm(ArrayTerm):
             w = self.kappa * area[act]
             blocks = (w * barrier_second(d, self.dhat))[:, None, None] * g[:, :, None] * g[:, None, :] \
                 + (w * barrier_first(d, self.dhat))[:, None, None] * H
-            self._add_blocks(A, act, psd_blocks(blocks), constrained)
-
-    def _add_ipc_hessian(self, c: IpcSurfaces, A: PETSc.Mat, p: np.ndarray, owned: np.ndarray,
-                         constrained: np.ndarray) -> None:
-        """Triangle contact's Hessian rows of the owned nodes. It couples nodes no element joins: it is assembled
-        into its own matrix and added with MatAXPY, which widens A's pattern (inserting new nonzeros into an
-        assembled parallel A crashed PETSc on 2 ranks)."""
-        H = c.hessian(p)
-        to_global = lambda i: 3 * self.surface.blocks[i // 3] + i % 3        # noqa: E731
-        rows, cols = to_global(H.row), to_global(H.col)
-        keep = owned[H.row // 3] & (H.data != 0.0) & ~np.isin(rows, constrained) & ~np.isin(cols, constrained)
-        if not A.comm.tompi4py().allreduce(bool(keep.any()), op=MPI.LOR):
-            return
-        lo, hi = A.getOwnershipRange()
-        rows, cols, vals = rows[keep] - lo, cols[keep], H.data[keep]
-        order = np.lexsort((cols, rows))
-        rows, cols, vals = rows[order], cols[order], vals[order]
-        indptr = np.searchsorted(rows, np.arange(hi - lo + 1)).astype(PETSc.IntType)
-        C = PETSc.Mat().createAIJ(A.getSizes(), csr=(indptr, cols.astype(PETSc.IntType), vals), comm=A.comm)
-        C.assemble()
-        A.axpy(1.0, C, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
-        C.destroy()
-        # the widening axpy (collective: every rank is here) resets A's options: new nonzeros allowed again on
-        # every rank, or the obstacle blocks that follow (add_entries) would allow them on some ranks only, and
-        # MatAssemblyEnd's collective steps then differ between ranks (2 ranks hung there)
-        A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
-
-    def _add_blocks(self, A: PETSc.Mat, nodes: np.ndarray, blocks: np.ndarray, constrained: np.ndarray) -> None:
-        """One 3x3 block per surface node on the diagonal of A (in every tangent's pattern)."""
-        base = 3 * self.surface.blocks[nodes]
-        rows = np.repeat(base[:, None] + np.arange(3), 3, axis=1).ravel()
-        cols = np.tile(base[:, None] + np.arange(3), (1, 3)).ravel()
-        add_entries(A, rows.astype(PETSc.IntType), cols.astype(PETSc.IntType), blocks.reshape(-1), constrained)
+            add_node_blocks(A, self.surface, act, psd_blocks(blocks), constrained)
 
     def settle(self, factor: float) -> float:
         """A body at rest inside the barrier's range at t = 0: kappa scaled so the barrier's push balances the
