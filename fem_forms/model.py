@@ -17,7 +17,8 @@ from fem_forms.physics.admissibility import SmallestValue
 from fem_forms.physics.assemble import equilibrium_forms, scene_physics
 from fem_forms.physics.parameters import Parameters
 from fem_forms.physics.supports import LoadFactor
-from fem_forms.physics.terms import Context, Load, Solid, SubProblem, TermList
+from fem_forms.physics.term_list import TermList
+from fem_forms.physics.terms import Context, Load, Solid, SubProblem
 from fem_forms.solvers.linear import rigid_body_modes
 from fem_forms.solvers.snes import NonlinearProblem
 from fem_forms.solvers.staggered import AlternateMinimization

@@ -29,7 +29,8 @@ from fem_forms.physics.regions import MaterialRegions
 from fem_forms.physics import quadrature
 from fem_forms.elements import check_degree
 from fem_forms.physics.supports import LoadFactor, body_regions, load_regions, supports
-from fem_forms.physics.terms import Context, LOAD_TERMS, SCENE_TERMS, SOLID_KINDS, Term, TermList
+from fem_forms.physics.term_list import TermList
+from fem_forms.physics.terms import Context, LOAD_TERMS, SCENE_TERMS, SOLID_KINDS, Term
 from fem_forms.scene import Scene
 
 

@@ -154,7 +154,8 @@ def test_a_long_flight_around_the_contact_only_delays_the_ring():
 def test_a_restarted_run_hears_the_whole_impact(tmp_path):
     """Stopped halfway through the impact (a checkpoint at step 30 of 60) and continued with --restart: the impact
     sound's contact history, and the wall time, cover the run from t = 0, as the uninterrupted run's do (issue 48
-    item 3; before: only the restarted part's contact was heard)."""
+    item 3; before: only the restarted part's contact was heard); the barrier's stiffness continues from the
+    checkpoint's (a raised one stays raised)."""
     whole_dir, half_dir = tmp_path / "whole", tmp_path / "half"
     whole_dir.mkdir()
     half_dir.mkdir()
@@ -170,3 +171,13 @@ def test_a_restarted_run_hears_the_whole_impact(tmp_path):
         assert cont["impact_sound"][key] == pytest.approx(whole["impact_sound"][key], rel=1e-6), key
     assert cont["impact_sound"]["peaks_hz"] == pytest.approx(whole["impact_sound"]["peaks_hz"], rel=1e-6)
     assert cont["wall_time_s"] > first["wall_time_s"]           # the first part's time counted too
+    assert cont["barrier_stiffness"] == pytest.approx(whole["barrier_stiffness"], rel=1e-12)
+    # the barrier's stiffness is the checkpoint's (Term.saved / restore), not the one a fresh start settles on
+    meta_path = out / "checkpoint" / "meta.json"
+    meta = json.loads(meta_path.read_text())
+    kept = next(t for t in meta["terms"] if "kappa" in t)
+    kept["kappa"] *= 4.0
+    meta_path.write_text(json.dumps(meta))
+    assert main(["run", str(whole_dir / "scene.toml"), "--out", str(out), "--restart", str(out), "-q"]) == 0
+    raised = json.loads((out / "results.json").read_text())
+    assert raised["barrier_stiffness"] >= 4.0 * whole["barrier_stiffness"] * (1 - 1e-12)

@@ -7,7 +7,8 @@ import ufl
 import fem_forms as ff
 from fem_forms.model import build_model
 from fem_forms.output.reactions import applied_load
-from fem_forms.physics.terms import Term, TermList
+from fem_forms.physics.term_list import TermList
+from fem_forms.physics.terms import Term
 from helpers import beam_scene
 
 

@@ -32,7 +32,8 @@ def save(folder: Path, result, t: float, step: int, dt: float) -> None:
                 "report": {"steps": r.steps, "time_reached": r.time_reached, "dt_min": r.dt_min,
                            "dt_max": r.dt_max, "newton_iterations": r.newton_iterations, "rejected": r.rejected},
                 "energies": [[tt, e.row()] for tt, e in result.energy.history],
-                "probe_rows": result.probe_rows, "wall_time_s": result.elapsed()}
+                "probe_rows": result.probe_rows, "wall_time_s": result.elapsed(),
+                "terms": system.model.terms.saved()}
         kept = {f"{i}/{k}": v for i, keeper in enumerate(result.keepers) for k, v in keeper.saved().items()}
         np.savez(folder / ".kept.npz", **kept)              # the keepers' histories (the same on every rank)
         os.replace(folder / ".kept.npz", folder / "kept.npz")
@@ -66,6 +67,7 @@ def load(out: Path, result) -> tuple[float, int, float]:
     result.energy.now = result.energy.history[-1][1]
     result.probe_rows = [list(r) for r in meta["probe_rows"]]
     result.wall_before = meta.get("wall_time_s", 0.0)
+    system.model.terms.restore(meta.get("terms", []))     # what the terms kept beside the fields (kappa)
     if result.keepers and (folder / "kept.npz").is_file():
         kept = np.load(folder / "kept.npz")
         for i, keeper in enumerate(result.keepers):

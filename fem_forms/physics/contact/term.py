@@ -151,9 +151,18 @@ class ContactTerm(ArrayTerm):
         """A new solve's pseudo-time (or time) starts at 0."""
         self.resume(0.0)
 
+    def saved(self) -> dict:
+        return {"kappa": self.kappa, "kappa0": self.kappa0, "ipc": [c.stiffness for c in self.ipc]}
+
+    def restore(self, values: dict) -> None:
+        """The barrier's stiffness where the checkpointed run had raised it (and its first value)."""
+        self.kappa, self.kappa0 = values["kappa"], values["kappa0"]
+        for c, k in zip(self.ipc, values["ipc"]):
+            c.stiffness = k
+
     def resume(self, t: float) -> None:
-        """Continue from a restored state at time t (a dynamic --restart): the next step starts there; kappa
-        starts again from its first value and the friction from no force at the start."""
+        """Continue from a restored state at time t (a dynamic --restart): the next step starts there, with the
+        barrier's stiffness the checkpoint restored and the friction from no force at the start."""
         self.time, self._lagged_at = t, None
         for ob in self.obstacles + self.files:
             ob.move_to(t)
