@@ -268,6 +268,8 @@ def test_history_and_keys():
         ff.Scene.from_dict(d)
     with pytest.raises(InputError, match="central-difference needs mass"):
         ff.Scene.from_dict(beam({"scheme": "central-difference"}))
+    with pytest.raises(InputError, match="backward-euler is first order"):      # its error is not the estimate's
+        ff.Scene.from_dict(beam({"scheme": "backward-euler", "adaptive": True}))
     s = ff.Scene.from_dict(beam({"initial_velocity": {"angular": [0.0, 1.0, 0.0]}}))
     assert s.dynamic.velocity == {"angular": [0.0, 1.0, 0.0], "about": [0.0, 0.0, 0.0]}
     with pytest.raises(InputError, match="dynamic: only for analysis"):

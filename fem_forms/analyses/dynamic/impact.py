@@ -7,7 +7,7 @@ six rigid-body modes near 0 Hz, split off by the modal solve, and modes below HE
 take the modal forces phi_i . f(t), ring as damped oscillators at the audio rate (output/impact_sound.py) and
 are heard at the `listener` (radiated pressure) or, without one, as the motion of the contact patch along the
 impulse (each node weighted by its share of the impulse). impact.wav and its spectrogram are written by rank 0.
-A run continued with --restart hears the contacts from the restart on (the oscillators start there at rest).
+A run continued with --restart hears the contacts from t = 0: the checkpoint carries the recorded forces.
 """
 from __future__ import annotations
 
@@ -104,6 +104,8 @@ def impact_entry(result, recorder: ImpactRecorder, spec, out: Path) -> dict:
     omega = 2 * math.pi * np.maximum(f_hz, 0.0)
     zeta = sound.damping_ratios(f_hz, spec)
     keep = np.flatnonzero((f_hz >= HEARING_FLOOR_HZ) & (f_hz < spec.sample_rate / 2) & (zeta < 1.0))
+    if recorder.surface is None:            # a restart that accepted no step: the surface from the contact term
+        recorder.surface = system.model.terms.surface_forces(spec.obstacle, system.u.vector)[2]
     surface = recorder.surface
     pos = np.full(surface.size, -1)
     pos[surface.owned] = np.arange(len(surface.owned))

@@ -126,6 +126,7 @@ def initial_acceleration(system: DynamicSystem, released: set, settle: bool = Fa
     b.scale(-1.0)
     settled = False
     system.model.terms.lag(0.0)
+    fpetsc.set_bc(b, system.model.bcs, scale=0.0)      # what the supports carry is no load on a barrier
     for term in system.model.terms.arrays:             # an array term's force at the start (a barrier pushing)
         push = b.duplicate()
         push.set(0.0)
@@ -137,7 +138,6 @@ def initial_acceleration(system: DynamicSystem, released: set, settle: bool = Fa
             settled = True
         b.axpy(-1.0, push)
         push.destroy()
-    fpetsc.set_bc(b, system.model.bcs, scale=0.0)
     a = system.a
     if system.lumped is not None:
         inv = system.lumped.copy()
@@ -158,13 +158,19 @@ def initial_acceleration(system: DynamicSystem, released: set, settle: bool = Fa
     return settled
 
 
+NO_NET_PUSH = 1e-8     # a net push below this share of the pushes' sizes is round-off: none to settle
+
+
 def settling_share(force: PETSc.Vec, push: PETSc.Vec) -> float | None:
     """s with the net force of s x push (a barrier's gradient) best balancing the net of `force` (the loads less
     the elastic forces) on the body: s = F.P / |P|^2 of the node sums; None when nothing pushes. Collective."""
     comm = force.comm.tompi4py()
     F, P = (comm.allreduce(v.array.reshape(-1, 3).sum(axis=0)) for v in (force, push))
+    pushes = comm.allreduce(float(np.linalg.norm(push.array.reshape(-1, 3), axis=1).sum()))
     size = float(P @ P)
-    return float(F @ P) / size if size > 0 else None
+    if size <= (NO_NET_PUSH * pushes) ** 2:       # pushes that cancel (self-contact alone): nothing net to settle
+        return None
+    return float(F @ P) / size
 
 
 def probe_row(points: probes.ProbeSet, system: DynamicSystem, t: float,

@@ -241,8 +241,9 @@ class ContactTerm(ArrayTerm):
     def settle(self, factor: float) -> float:
         """A body at rest inside the barrier's range at t = 0: kappa scaled so the barrier's push balances the
         loads there (IPC's initial barrier stiffness), not the launch a push of the elastic scale would give;
-        at least SETTLE_FLOOR x kappa (no load pressing: the push is all but gone)."""
-        factor = max(float(factor), SETTLE_FLOOR)
+        at least SETTLE_FLOOR x kappa (no load pressing: the push is all but gone), at most MAX_RAISE x (a gap at
+        the range's edge, where the push vanishes)."""
+        factor = min(max(float(factor), SETTLE_FLOOR), MAX_RAISE)
         self.kappa *= factor
         self.kappa0 = self.kappa
         for c in self.ipc:

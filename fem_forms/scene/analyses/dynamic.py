@@ -53,6 +53,9 @@ def _dynamic_rules(s: DynamicSpec, t: Table) -> None:
         raise InputError(f"{t.key('mass')} = {s.mass!r}: central-difference needs mass = \"lumped\"")
     if s.dt > s.duration:
         raise InputError(f"{t.key('dt')} = {s.dt}: longer than duration = {s.duration}")
+    if s.adaptive and s.scheme == "backward-euler":
+        raise InputError(f"{t.key('adaptive')} = true: the step's error estimate is second-order schemes' "
+                         "(newmark, generalized-alpha); backward-euler is first order")
     if s.initial_loads and s.initial != "static":
         raise InputError(f"{t.key('initial_loads')}: only with initial = \"static\"")
 
