@@ -59,6 +59,11 @@ def test_iterative_two_ranks_agree_with_one(tmp_path):
     assert all(o["linear_solver"] == "iterative" and o["preconditioner_builds"] < o["newton_iterations"]
                for o in outs)
     scale = np.abs(probes[0][:, 1:]).max(axis=0)
+    head = (tmp_path / "out" / "probes.csv").read_text().splitlines()[0].split(",")[1:]
+    # the clamp's force is the residual of terms that nearly cancel there (inertia, stress): CG's 1e-8 shows in it
+    # at 1e-5 of its size between 1 and 2 ranks (measured), so it is compared at 1e-4 of its largest component
+    forces = [i for i, name in enumerate(head) if name.startswith("fix0_F")]
+    scale[forces] = 100 * scale[forces].max()
     assert np.allclose(probes[1][:, 1:], probes[0][:, 1:], rtol=1e-6, atol=1e-6 * scale)
 
 
