@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 
-from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
 import numpy as np
 from petsc4py import PETSc
@@ -60,7 +59,7 @@ class ExplicitStepper:
         self.s, self.released = system, released
         system.model.only_ufl_terms("explicit dynamics")
         system.td.set_params(NEWMARK_AVERAGE)          # loads at t_{n+1} (alpha_f = 0)
-        self.L = fem.form(system.explicit_residual)
+        self.L = system.explicit_form()
         self.b = fpetsc.create_vector(self.L)
         self.inv = inverse_mass(system)
         self.n = self.inv.local_size

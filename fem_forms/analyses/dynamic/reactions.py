@@ -4,7 +4,6 @@ the support exerts on the body (the inertia of what it holds included); at a fre
 balance (exactly for Newmark and backward Euler, at the generalized midpoints for generalized-alpha)."""
 from __future__ import annotations
 
-from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
 import numpy as np
 from petsc4py import PETSc
@@ -17,7 +16,7 @@ class DynamicReactions:
 
     def __init__(self, system):
         self.s = system
-        self.rest = fem.form(system.explicit_residual)      # f_int - f_ext + C v_h (the explicit step's form)
+        self.rest = system.explicit_form()                # f_int - f_ext + C v_h (the explicit step's form)
         if system.lumped is not None:
             self.M = None
         else:

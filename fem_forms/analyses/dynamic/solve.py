@@ -7,7 +7,6 @@ from dataclasses import dataclass, field
 import time
 from pathlib import Path
 
-from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
 import numpy as np
 from petsc4py import PETSc
@@ -120,7 +119,7 @@ def initial_acceleration(system: DynamicSystem, released: set, settle: bool = Fa
     Returns whether it was: the part starts in contact, undeformed."""
     system.set_load_time(0.0, 0.0, released)
     system.v_h.x.array[:] = system.v.x.array
-    L = fem.form(system.explicit_residual)
+    L = system.explicit_form()
     b = fpetsc.assemble_vector(L)
     b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
     b.scale(-1.0)

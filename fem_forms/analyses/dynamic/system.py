@@ -79,10 +79,17 @@ class DynamicSystem:
     loads: list                   # the model's load terms (each with its factor Constant)
     mass: fem.Form                # the consistent mass form, compiled once
     start_warnings: list = field(default_factory=list)     # what the start found (printed before the march)
+    _explicit_form: fem.Form | None = field(default=None, repr=False)
 
     @property
     def u(self) -> fem.Function:
         return self.model.u
+
+    def explicit_form(self) -> fem.Form:
+        """explicit_residual compiled once (the initial acceleration, the explicit step and the support forces)."""
+        if self._explicit_form is None:
+            self._explicit_form = fem.form(self.explicit_residual)
+        return self._explicit_form
 
     def set_load_time(self, t_new: float, t_old: float, released: set) -> None:
         """Each load's factor at the force midpoint: (1 - alpha_f) h(t_new) + alpha_f h(t_old);
