@@ -43,6 +43,17 @@ class ArcLength:
                                    slope=derivative_wrt_constant(equation, lam))
         self._inner = fem.form(ufl.dot(self._a, self._b) * dx)
         self.U = 1.0
+        self._load_rate = fem.form(self.scalar.coupling)                # dR/dlambda: minus the full load
+
+    def load_work(self, step: np.ndarray) -> float:
+        """The full load's work over an increment of the unknown (its local array, ghosts included):
+        -<dR/dlambda, step>, the same on every rank. Positive while the path moves along the loads, rising or
+        falling; negative where it turns back (a snap-back: the loaded points move against their load)."""
+        b = fem.petsc.assemble_vector(self._load_rate)
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        local = -float(np.dot(b.array, step[: b.getLocalSize()]))
+        b.destroy()
+        return self.model.mesh.comm.allreduce(local, op=MPI.SUM)
 
     def inner(self, a: np.ndarray, b: np.ndarray) -> float:
         """<a, b> of two displacement arrays (local, ghosts included), the same on every rank."""
@@ -56,7 +67,7 @@ class ArcLength:
 
     def along(self, u_k: np.ndarray, lam_k: float, du: np.ndarray, dlam: float, ds: float) -> None:
         """The next step goes ds from (u_k, lam_k) along the direction of the increment (du, dlam)."""
-        norm = np.sqrt(self.inner(du, du) / self.U**2 + dlam**2)
+        norm = self.length(du, dlam)
         self.u_k.x.array[:] = u_k
         self.t_u.x.array[:] = du / (self.U * norm)
         self.lam_k.value, self.t_lam.value, self.ds.value = lam_k, dlam / norm, ds
@@ -72,4 +83,8 @@ class ArcLength:
         size = np.sqrt(self.inner(du, du))
         self.U = size / dlam if size > 0 and dlam > 0 else 1.0
         self.per_u.value = 1.0 / self.U
+        return self.length(du, dlam)
+
+    def length(self, du: np.ndarray, dlam: float) -> float:
+        """The arc length of an increment (du, dlam), in the path's weighting."""
         return float(np.sqrt(self.inner(du, du) / self.U**2 + dlam**2))

@@ -214,7 +214,7 @@ def viscoelastic_rules(scene) -> None:
     if scene.discretization.formulation != "displacement":
         raise InputError(f"{key}: the mixed formulation is not implemented with viscoelasticity; use "
                          "formulation = 'displacement'")
-    if scene.solver.control != "load":
+    if scene.solver.control == "arc-length":
         raise InputError(f"{key}: not with solver.control = {scene.solver.control!r} (its path parameter is no "
                          "time); use control = 'load'")
     if scene.analysis == "static" and not (any(ld.history for ld in scene.load)

@@ -282,9 +282,14 @@ SOLVER_KEYS = (
         maximum=1),
     Key("linear", "string", "linear solver: auto, direct (MUMPS) or iterative (CG + GAMG)", default="auto",
         choices=("auto", "direct", "iterative")),
-    Key("control", "string", "what the continuation steps: the load factor (load), or the arc length along "
-        "the load-displacement path (arc-length: passes limit points, the load factor may fall)", default="load",
-        choices=("load", "arc-length")),
+    Key("control", "string", "what the continuation steps: the load factor (load), the arc length along "
+        "the load-displacement path (arc-length: passes limit points, the load factor may fall), or the load "
+        "factor until a step fails near a limit point, then the arc length on from there (auto; where arc length "
+        "cannot follow the loads, load control throughout)", default="auto",
+        choices=("auto", "load", "arc-length")),
+    Key("load_drop", "number", "arc length past a limit point ends once the load factor has dropped by this "
+        "fraction of its peak (as a test machine stops at a load drop; 1: followed down to zero load, and up "
+        "again where the path rises: a snap-through)", default=1.0, exclusive_minimum=0, maximum=1),
     Key("petsc", "options", "PETSc options (name without dash = value), applied last", default={}),
 )
 

@@ -39,6 +39,16 @@ class SolveReport:
     load_scale: float = 0.0         # the residual of the starting state under the full load (tolerances' scale)
     peak_load_factor: float | None = None   # arc length: the largest load factor on the path followed
     stability_checked: bool | None = None   # volume control: the tangent's inertia was counted (None: no check)
+    arc_length_from: float | None = None    # control = "auto": the load factor where arc length took over
+
+    def then(self, later: SolveReport) -> SolveReport:
+        """This continuation followed by `later`, which went on from its last accepted state: the steps and
+        counts of both, the outcome and the peak of the later (at least this one's load reached)."""
+        peak = max(self.load_reached, later.peak_load_factor or later.load_reached)
+        return SolveReport(later.converged, later.load_reached, self.newton_iterations + later.newton_iterations,
+                           later.residual_norm, self.steps + later.steps, later.linear_solver,
+                           self.assembly_time + later.assembly_time, self.solve_time + later.solve_time,
+                           later.message, self.load_scale, peak, later.stability_checked)
 
     def add_step(self, rec: StepRecord, why: str | None) -> None:
         """Book a finished step: accepted when `why` (the reason to reject it) is None; progress reported."""

@@ -68,11 +68,37 @@ def test_pressure_control_follows_ogden_below_the_limit(sphere_mesh, tmp_path, c
 
 
 def test_pressure_past_the_maximum_stops_at_the_limit_point(sphere_mesh, tmp_path, capsys):
-    code, res, err, _ = run_scene(tmp_path, sphere_scene(sphere_mesh, steps=5, pressure=1.0 * MU), capsys)
+    """control = "load": the pressure is stepped until the steps fail at the maximum, and the run stops there."""
+    d = sphere_scene(sphere_mesh, steps=5, pressure=1.0 * MU)
+    d["solver"].update(control="load", max_cutbacks=6)       # stops within 1 / 5 / 2^6 of the limit: 0.4 %
+    code, res, err, _ = run_scene(tmp_path, d, capsys)
     assert code == 3, err
     assert res["converged"] is False
     assert res["message"].startswith("limit point")
     assert res["load_reached"] == pytest.approx(P_MAX, rel=0.02)
+    assert "arc_length_from" not in res
+
+
+def test_pressure_past_the_maximum_follows_the_falling_branch(sphere_mesh, tmp_path, capsys):
+    """The default control (auto) steps the pressure up to the maximum; where a step fails there, arc length
+    goes on along the falling branch: every accepted state lies on Ogden's curve, rising then falling, the cavity
+    growing all the way (no turning back), until the pressure has dropped by 0.3 of its peak (solver.load_drop)."""
+    d = sphere_scene(sphere_mesh, steps=5, pressure=1.0 * MU)
+    d["solver"]["load_drop"] = 0.3
+    code, res, err, out = run_scene(tmp_path, d, capsys)
+    assert code == 3, err
+    assert res["converged"] is False and res["message"].startswith("limit point"), res["message"]
+    assert res["peak_load_factor"] == pytest.approx(P_MAX, rel=0.01)
+    assert 0.9 * P_MAX < res["arc_length_from"] <= res["peak_load_factor"]
+    assert 0.65 * res["peak_load_factor"] < res["load_reached"] < 0.7 * res["peak_load_factor"]
+    rows = np.genfromtxt(out / "probes.csv", delimiter=",", names=True)
+    cav = res["cavities"]["inside"]
+    stretch = (rows["inside_volume"] / (cav["volume"] - cav["volume_change"])) ** (1 / 3)
+    assert np.all(np.diff(stretch) > 0)
+    pressure = np.array([ogden_pressure(s) for s in stretch])
+    np.testing.assert_allclose(rows["load_factor"], pressure, rtol=0.02)
+    peak = int(np.argmax(rows["load_factor"]))
+    assert stretch[peak] == pytest.approx(1.83, rel=0.05) and len(stretch) - peak > 5     # on, past the limit
 
 
 def test_volume_control_reaches_the_falling_branch(sphere_mesh, tmp_path, capsys):

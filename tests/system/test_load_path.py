@@ -141,14 +141,41 @@ def test_plastic_bar_past_collapse_stops_at_a_limit_point_with_its_last_state(tm
     assert {"fields", "probes", "load_path_picture", "newton_history"} <= set(res["files"])
 
 
-def test_crushed_stvk_block_stops_at_its_limit_load(tmp_path, capsys):
-    """StVK in uniaxial compression (nu = 0) carries at most E / (3 sqrt 3); asked for 2 E it stops there."""
+def crushed_stvk_block(control: str) -> dict:
     d = bar(steps=1, material={"model": "stvk", "E": E, "nu": 0.0},
             mesh={"generator": "box", "size": [1.0, 1.0, 1.0], "cells": [2, 2, 2]},
             load=[{"type": "traction", "where": {"axis": "x", "at": 1.0}, "value": [-2 * E, 0.0, 0.0]}],
             output={"probes": {"corner": [1.0, 1.0, 1.0]}, "fields": ["displacement"], "picture": False})
-    d["solver"]["max_cutbacks"] = 8
-    code, res, err, out = run_scene(tmp_path, d, capsys)
+    d["solver"].update(max_cutbacks=8, control=control)
+    return d
+
+
+def test_crushed_stvk_block_passes_its_limit_load_with_the_default_control(tmp_path, capsys):
+    """StVK in uniaxial compression (nu = 0) carries at most |P| = E / (3 sqrt 3), at stretch 1/sqrt 3; asked for
+    2 E, the default control (auto) steps the load until a step fails there, then arc length follows the load
+    down past that stretch to zero (solver.load_drop = 1): a limit point with its peak, exit 3."""
+    code, res, err, out = run_scene(tmp_path, crushed_stvk_block("auto"), capsys)
+    assert code == 3 and res["message"].startswith("limit point"), err
+    limit = E / (3 * math.sqrt(3))
+    assert res["peak_load_factor"] * 2 * E == pytest.approx(limit, rel=0.005)
+    assert 0.9 * res["peak_load_factor"] < res["arc_length_from"] < res["peak_load_factor"]
+    _, rows = table(out / "probes.csv")
+    stretch = 1 + rows[:, 2]
+    assert np.all(np.diff(stretch) < 1e-12)                   # crushed on, step after step (no turning back)
+    assert stretch[-1] < 1 / math.sqrt(3) < stretch[int(np.argmax(rows[:, 0]))] + 0.05
+    assert res["load_reached"] < 0.05 * res["peak_load_factor"]
+    p = mpirun(["-m", "fem_forms", "run", str(tmp_path / "scene.toml"), "--out", str(tmp_path / "two"), "-q"])
+    assert p.returncode == 3, p.stderr[-2000:]
+    two = json.loads((tmp_path / "two" / "results.json").read_text())
+    assert two["mpi_ranks"] == 2 and two["load_steps"] == res["load_steps"]
+    for key in ("peak_load_factor", "arc_length_from", "load_reached"):
+        assert two[key] == pytest.approx(res[key], rel=1e-6, abs=1e-12), key
+
+
+def test_crushed_stvk_block_stops_at_its_limit_load(tmp_path, capsys):
+    """StVK in uniaxial compression (nu = 0) carries at most E / (3 sqrt 3); asked for 2 E under load control, it
+    stops there."""
+    code, res, err, out = run_scene(tmp_path, crushed_stvk_block("load"), capsys)
     last = err.strip().splitlines()[-1]                               # after the progress lines
     assert code == 3 and last.startswith("fem-forms: error: bar: limit point: "), err
     assert res["message"].startswith("limit point") and "collapse" not in res

@@ -88,12 +88,13 @@ def test_cantilever_under_gravity_matches_euler_bernoulli_with_p2():
 
 def test_crushing_a_stvk_block_past_its_limit_load_is_reported_at_its_last_accepted_state():
     """StVK in uniaxial compression (nu = 0) carries at most |P| = E / (3 sqrt 3) (at stretch 1/sqrt 3).
-    Asking for twice E must fail (inverted elements seen, not converged), having reached the limit load; the
-    numbers reported are those of the last accepted state, on StVK's uniaxial curve P = E/2 l (1 - l^2)."""
+    Asking for twice E under load control must fail (inverted elements seen, not converged), having reached the
+    limit load; the numbers reported are those of the last accepted state, on StVK's uniaxial curve
+    P = E/2 l (1 - l^2)."""
     scene = block_scene("tetrahedron", 1, [{"type": "traction", "where": {"axis": "x", "at": 1.0},
                                             "value": [-2 * E, 0.0, 0.0]}])
     scene.material.model, scene.material.nu = "stvk", 0.0
-    scene.solver.max_cutbacks = 8
+    scene.solver.max_cutbacks, scene.solver.control = 8, "load"
     res = ff.solve_static(scene)
     assert not res.report.converged
     assert "inverted elements" in res.report.message

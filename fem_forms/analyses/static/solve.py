@@ -11,7 +11,6 @@ from mpi4py import MPI
 import numpy as np
 
 from fem_forms.analyses.static.heat import solve_temperature
-from fem_forms.errors import InputError
 from fem_forms.model import Model, build_model
 from fem_forms.solvers.thermal_step import max_value
 from fem_forms.output.histories import step_histories
@@ -22,8 +21,8 @@ from fem_forms.output.summary import header
 from fem_forms.physics import rigid_motion
 from fem_forms.physics.histories import piecewise_linear
 from fem_forms.scene import Scene
-from fem_forms.physics.path_constraint import ArcLength
-from fem_forms.solvers import arc_length, continuation, snes
+from fem_forms.analyses.static.path import LIMIT, PathEnds, arc_length_fits, follow_path, then_arc_length
+from fem_forms.solvers import continuation, snes
 from fem_forms.solvers.linear import rigid_body_modes
 
 
@@ -60,6 +59,7 @@ class StaticResult:
             "load_steps": r.load_steps,
             "load_reached": r.load_reached,
             **({"peak_load_factor": r.peak_load_factor} if r.peak_load_factor is not None else {}),
+            **({"arc_length_from": r.arc_length_from} if r.arc_length_from is not None else {}),
             "residual_norm": r.residual_norm,
             "energy": self.energy,
             "max_displacement": self.max_displacement,
@@ -166,32 +166,6 @@ def min_load_step(model: Model) -> float:
     return 1.0 / solver.steps / 2**solver.max_cutbacks
 
 
-def follow_path(model: Model, load_scale: float, linear_kind: str,
-                on_step: Callable[[float], None]) -> snes.SolveReport:
-    """Arc-length continuation of the model's loads (solver.control = "arc-length"): the load factor solved
-    with the displacement, limit points passed. Loads must scale with one factor: no histories, no prescribed
-    displacement (InputError)."""
-    scene = model.scene
-    if any(t.history for t in model.loads) or rigid_motion.prescribes_motion(scene):
-        raise InputError("solver.control = 'arc-length': the loads must scale with one load factor (no [[load]] "
-                         "history, no prescribed displacement in [[fix]] value); use control = 'load'")
-    constraint = ArcLength(model)
-    problem = model.problem()
-    problem.scalars = problem.scalars + [constraint.scalar]
-    problem.set_load = None
-
-    def displacement():
-        model.sync_displacement()
-        return model.u.x.array.copy()
-    moves = model.unknown is model.u                     # the predictor moves u in the displacement formulation
-
-    def set_displacement(a):
-        model.u.x.array[:] = a
-    return arc_length.solve(problem, constraint, displacement, set_displacement if moves else None, load_scale,
-                            scene.solver.petsc, scene.solver.steps, scene.solver.max_cutbacks, linear_kind,
-                            near_nullspace=lambda: rigid_body_modes(model.V), on_step=on_step)
-
-
 def chain(first: Callable[[float], None], then: Callable[[float], None] | None) -> Callable[[float], None]:
     """One on_step hook calling `first`, then `then` (if any)."""
     def both(lam: float) -> None:
@@ -236,21 +210,28 @@ def solve_static(scene: Scene, material=None, model: Model | None = None,
         if scene.solver.control == "arc-length":
             report = follow_path(model, r0.norm(), linear_kind, on_step or (lambda lam: None))
         else:
+            auto = scene.solver.control == "auto" and arc_length_fits(model) is None
+            ends = PathEnds(model) if auto else None
             driver = model.staggered_driver(problem, scene.solver.petsc, linear_kind)
             histories = step_histories(model, load_span(model))
             for h in histories:
                 on_step = chain(h, on_step)
+            later = on_step or (lambda lam: None)
+            on_step = chain(ends, on_step) if auto else on_step
             try:
                 report = continuation.solve(problem, scene.solver.petsc, steps=scene.solver.steps,
                                             max_cutbacks=scene.solver.max_cutbacks, linear_kind=linear_kind,
                                             near_nullspace=lambda: rigid_body_modes(model.V), stops=stops,
                                             min_step=min_load_step(model) if model.solid.is_plastic else 0.0,
-                                            limit_step=min_load_step(model), on_step=on_step or (lambda lam: None),
+                                            limit_step=1.0 if auto else min_load_step(model),
+                                            on_step=on_step or (lambda lam: None),
                                             max_step=scene.solver.max_step, driver=driver)
             finally:
                 if driver is not None:
                     sweeps = driver.sweeps
                     driver.destroy()
+            if auto:
+                report = then_arc_length(model, report, ends, r0.norm(), linear_kind, later)
     r0.destroy()
     result = StaticResult(model, report, histories=histories, sweeps=sweeps)
     if report.converged:
@@ -263,7 +244,6 @@ def solve_static(scene: Scene, material=None, model: Model | None = None,
 
 
 GAVE_UP = "no convergence: "        # how continuation._gave_up starts the message of a continuation that stopped
-LIMIT = "limit point: "             # ... or, once the path had flattened (and arc length's end), this
 
 
 def limit_point(result: StaticResult) -> bool:

@@ -64,7 +64,7 @@ def fracture_scene_rules(scene) -> None:
     if scene.analysis == "dynamic" and scene.dynamic.scheme == "central-difference":
         raise InputError("fracture: not with the explicit central-difference scheme (its steps solve nothing: no "
                          "step for the damage to minimize with); use newmark, generalized-alpha or backward-euler")
-    if scene.solver.control != "load":
+    if scene.solver.control == "arc-length":
         raise InputError("fracture: not with solver.control = 'arc-length' (the staggered damage solve steps the "
                          "load factor); use control = 'load' with a prescribed displacement")
     if scene.discretization.formulation != "displacement":
