@@ -186,7 +186,7 @@ def probe_row(points: probes.ProbeSet, system: DynamicSystem, t: float,
             T = points.evaluate(system.model.temperature)
             row += [T[n][0] for n in points.names]
     if reactions is not None:
-        row += reactions().ravel().tolist()
+        row += reactions(t).ravel().tolist()
     return row + list(records(system.model).values())
 
 
@@ -236,7 +236,7 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
     dyn = scene.dynamic
     system, stepper, released, dt_stable = start_system(scene)
     points = system.model.probes
-    reactions = DynamicReactions(system) if scene.fix else None     # probes.csv's support forces every step
+    reactions = DynamicReactions(system, released) if scene.fix else None     # probes.csv's support forces every step
     account = EnergyAccount(system, released)
     result = DynamicResult(system, MarchReport(), account, dt_stable=dt_stable, keepers=tuple(keepers), started=t0)
     if on_result is not None:

@@ -80,6 +80,7 @@ class DynamicSystem:
     mass: fem.Form                # the consistent mass form, compiled once
     start_warnings: list = field(default_factory=list)     # what the start found (printed before the march)
     _explicit_form: fem.Form | None = field(default=None, repr=False)
+    _reaction_form: fem.Form | None = field(default=None, repr=False)
 
     @property
     def u(self) -> fem.Function:
@@ -90,6 +91,22 @@ class DynamicSystem:
         if self._explicit_form is None:
             self._explicit_form = fem.form(self.explicit_residual)
         return self._explicit_form
+
+    def lumped_alpha(self) -> float:
+        """Rayleigh's alpha where the implicit step applies it through the HRZ diagonal (lumped mass), else 0."""
+        return float(self.scene.damping.alpha) if self.lumped is not None else 0.0
+
+    def reaction_form(self) -> fem.Form:
+        """f_int(u) - f_ext(t) + C v_h with the damping the implicit step applies: with the lumped mass Rayleigh's
+        alpha part acts through the HRZ diagonal (the caller adds alpha D v_h), so it is left out here; without it
+        the explicit form itself (compiled once, no second form)."""
+        if not self.lumped_alpha():
+            return self.explicit_form()
+        if self._reaction_form is None:
+            ctx, test = self.model.context, ufl.TestFunction(self.model.V)
+            wd = virtual_work(damping_terms(self.scene, self.model, ctx, self.v_h, False), ctx, test)
+            self._reaction_form = fem.form(self.model.residual + wd if wd is not None else self.model.residual)
+        return self._reaction_form
 
     def set_load_time(self, t_new: float, t_old: float, released: set) -> None:
         """Each load's factor at the force midpoint: (1 - alpha_f) h(t_new) + alpha_f h(t_old);
