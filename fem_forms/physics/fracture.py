@@ -48,6 +48,8 @@ class PhaseField(Term):
         self.Gc, self.ell, self.k = const(spec.toughness), const(spec.length), const(spec.residual_stiffness)
         self.model, self.split = spec.model, spec.split
         self.integral = Integrals(mesh.comm)
+        self.stable_path: bool | None = None   # static runs: whether only stable states were accepted
+        self.bifurcations: list = []           # where a saddle was left: load factor, eigenvalue, at (stable_path.py)
 
     def set_values(self, scene) -> None:
         fr = scene.fracture
@@ -82,7 +84,9 @@ class PhaseField(Term):
         self.surface0 = self._scalar("surface", self.crack_density())   # the notches' own surface energy
 
     def report(self, x) -> dict:
-        return {**self.record(), "crack_center": self.crack_center()}
+        checked = {} if self.stable_path is None else {"stable_path": self.stable_path}
+        return {**self.record(), "crack_center": self.crack_center(), **checked,
+                **({"bifurcations": self.bifurcations} if self.bifurcations else {})}
 
     def stored_energies(self, x) -> dict[str, float]:
         """The crack's surface energy beyond the notches' (what cracking dissipated)."""

@@ -95,7 +95,7 @@ def solve(problem: NonlinearProblem, path_constraint, displacement: Callable, se
         ds_first = pc.first_step_done(*start.first)
         rate_first = abs(pc.load_work(start.first_unknown)) / ds_first
         path.du, path.dlam = start.last
-        ds = pc.length(*start.last)
+        ds = min(pc.length(*start.last), MAX_GROWTH * ds_first)
     while len(report.steps) < MAX_STEPS + steps:
         if path.du is None or final:
             pc.load_control(path.lam, (1.0 - path.lam) if final else ds)
@@ -106,6 +106,7 @@ def solve(problem: NonlinearProblem, path_constraint, displacement: Callable, se
         if set_displacement is not None and path.du is not None and not final:
             set_displacement(u_pred)
             if problem.inadmissible is not None and problem.inadmissible():   # the prediction inverts cells:
+                state.rollback()                               # back to the last accepted state
                 cuts, ds = cuts + 1, 0.5 * ds                  # a shorter one, without a Newton solve from there
                 if cuts > max_cutbacks:
                     report.message = _ended(report, path, "the step could not be made smaller", ds)

@@ -45,8 +45,9 @@ class SolveReport:
         """This continuation followed by `later`, which went on from its last accepted state: the steps and
         counts of both, the outcome and the peak of the later (at least this one's load reached)."""
         peak = max(self.load_reached, later.peak_load_factor or later.load_reached)
+        residual = later.residual_norm if later.load_steps else self.residual_norm     # none accepted: this one's
         return SolveReport(later.converged, later.load_reached, self.newton_iterations + later.newton_iterations,
-                           later.residual_norm, self.steps + later.steps, later.linear_solver,
+                           residual, self.steps + later.steps, later.linear_solver,
                            self.assembly_time + later.assembly_time, self.solve_time + later.solve_time,
                            later.message, self.load_scale, peak, later.stability_checked)
 

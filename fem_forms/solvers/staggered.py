@@ -20,6 +20,8 @@ from fem_forms.solvers import acceptance
 from fem_forms.solvers.reports import StepRecord
 from fem_forms.solvers.snes import NonlinearProblem, SNESDriver
 
+MAX_PUSHES = 3           # pushes off a saddle per load step, each followed by another alternate minimization
+
 
 @dataclass
 class StaggeredReport:
@@ -88,8 +90,11 @@ class AlternateMinimization(SNESDriver):
     continuation it is the displacement's driver (its forms, acceptance and cut-backs), its steps staggered."""
 
     def __init__(self, problem: NonlinearProblem, others: Sequence[NonlinearProblem], rtol: float,
-                 max_iterations: int, options: dict | None = None, **kwargs):
+                 max_iterations: int, options: dict | None = None, stability=None, **kwargs):
         super().__init__(problem, options, **kwargs)
+        # `stability.push(load_factor)`: pushes a converged saddle along its unstable mode (True) or finds the state
+        # stable (False); each push is followed by another alternate minimization (the stable path)
+        self.stability = stability
         # the other fields' energies are quadratic in their own field with this one frozen (the phase field's
         # for a frozen u): full Newton steps are exact, and an energy line search only met round-off near the
         # answer (DIVERGED_LINE_SEARCH on a tearing silicone strip's damage, every few steps)
@@ -105,13 +110,27 @@ class AlternateMinimization(SNESDriver):
             return first
         scale = self.known_load_scale
         self._inner = True
+        records = [first]
         try:
             report = solve([*self.others, self], self.rtol, self.max_iterations)
+            for _ in range(MAX_PUSHES if self.stability is not None else 0):
+                kept = [drv.p.u.x.array.copy() for drv in (*self.others, self)]
+                if not report.converged or not self.stability.push(self.load_factor):
+                    break
+                trial = solve([self, *self.others], self.rtol, self.max_iterations)   # the displacement first
+                if not trial.converged:            # no equilibrium found off the saddle: keep the one converged to
+                    for drv, x in zip((*self.others, self), kept):
+                        drv.p.u.x.array[:] = x
+                        drv.p.u.x.scatter_forward()
+                    self.stability.gave_up(self.load_factor, trial.reason)
+                    break
+                records += [r for sweep in report.records for r in sweep]
+                report = trial
         finally:
             self._inner = False
             self._load_scale = scale               # staggered sub-solves refreshed it at this step's load
         self.sweeps.append(report.iterations)
-        records = [first] + [r for sweep in report.records for r in sweep]
+        records += [r for sweep in report.records for r in sweep]
         last = report.records[-1][-1] if report.records else first
         iterations = sum(r.iterations for r in records)
         if not report.converged:

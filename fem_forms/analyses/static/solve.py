@@ -21,6 +21,7 @@ from fem_forms.output.summary import header
 from fem_forms.physics import rigid_motion
 from fem_forms.physics.histories import piecewise_linear
 from fem_forms.scene import Scene
+from fem_forms.analyses.static.stable_path import stable_path
 from fem_forms.analyses.static.path import LIMIT, PathEnds, arc_length_fits, follow_path, then_arc_length
 from fem_forms.solvers import continuation, snes
 from fem_forms.solvers.linear import rigid_body_modes
@@ -212,7 +213,7 @@ def solve_static(scene: Scene, material=None, model: Model | None = None,
         else:
             auto = scene.solver.control == "auto" and arc_length_fits(model) is None
             ends = PathEnds(model) if auto else None
-            driver = model.staggered_driver(problem, scene.solver.petsc, linear_kind)
+            driver = model.staggered_driver(problem, scene.solver.petsc, linear_kind, stability=stable_path(model))
             histories = step_histories(model, load_span(model))
             for h in histories:
                 on_step = chain(h, on_step)
@@ -250,7 +251,8 @@ def limit_point(result: StaticResult) -> bool:
     """The continuation stopped past an accepted step because its cut-backs reached their floor (or an arc-
     length path ended short of full load)."""
     r = result.report
-    return not r.converged and r.load_reached > 0 and r.message.startswith((GAVE_UP, LIMIT))
+    went = r.load_reached > 0 or (r.peak_load_factor or 0.0) > 0    # arc length may end at load factor <= 0
+    return not r.converged and went and r.message.startswith((GAVE_UP, LIMIT))
 
 
 def post_process(result: StaticResult) -> None:

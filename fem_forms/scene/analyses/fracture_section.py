@@ -35,6 +35,11 @@ FRACTURE_KEYS = (
         exclusive_maximum=1),
     Key("max_iterations", "integer", "sweeps of the alternate minimization per load step before the step is "
         "cut back", default=500, minimum=1),
+    Key("stable_path", "boolean", "static runs: accept only stable states (after each converged step, the "
+        "energy's Hessian on the damaging set is checked with SLEPc and a saddle is pushed along its unstable "
+        "mode: a homogeneous bar cracks in one band, a symmetric part on one side); false keeps what the alternate "
+        "minimization converged to (the homogeneous solution past its peak; the default until notched parts take "
+        "the check as bars do)", default=False),
     Key("notch", "tables", "initial cracks [[fracture.notch]]: where", default=[], keys=NOTCH_KEYS),
 )
 
@@ -49,6 +54,7 @@ class FractureSpec:
     residual_stiffness: float = 1.0e-6
     tolerance: float = 1.0e-4
     max_iterations: int = 500
+    stable_path: bool = False
     notch: list = field(default_factory=list)       # [{"where": Selector}, ...]
 
 
