@@ -117,15 +117,18 @@ class AlternateMinimization(SNESDriver):
                 kept = [drv.p.u.x.array.copy() for drv in (*self.others, self)]
                 if not report.converged or not self.stability.push(self.load_factor):
                     break
-                trial = solve([self, *self.others], self.rtol, self.max_iterations)   # the displacement first
+                moved = self.solve_step()          # the displacement first (inner: one SNES step), then sweeps
+                trial = solve([*self.others, self], self.rtol, self.max_iterations) if moved.accepted else \
+                    StaggeredReport(False, 0, reason=f"displacement after the push: {moved.reason}")
                 if not trial.converged:            # no equilibrium found off the saddle: keep the one converged to
                     for drv, x in zip((*self.others, self), kept):
                         drv.p.u.x.array[:] = x
                         drv.p.u.x.scatter_forward()
                     self.stability.gave_up(self.load_factor, trial.reason)
                     break
-                records += [r for sweep in report.records for r in sweep]
+                records += [r for sweep in report.records for r in sweep] + [moved]
                 report = trial
+                self.stability.kept()
         finally:
             self._inner = False
             self._load_scale = scale               # staggered sub-solves refreshed it at this step's load

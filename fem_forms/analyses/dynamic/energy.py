@@ -119,7 +119,7 @@ class EnergyAccount:
         # diagonal (counted with the consistent M it left 3.9e-2 of the balance of a test beam, measured)
         dterms = damping_terms(s.scene, m, ctx, self.vm, s.lumped is None)
         self.dissipation = fem.form(virtual_work(dterms, ctx, self.w)) if dterms else None
-        self.lumped_alpha = s.lumped_alpha()
+        self.lumped_alpha = s.scene.damping.alpha if s.lumped is not None else 0.0
         self.u0 = fem.Function(V) if plastic else None            # the step's start for the plastic work
         start = replace(m.context, u=self.u0)
         if plastic and self.thermal:

@@ -93,8 +93,10 @@ class DynamicSystem:
         return self._explicit_form
 
     def lumped_alpha(self) -> float:
-        """Rayleigh's alpha where the implicit step applies it through the HRZ diagonal (lumped mass), else 0."""
-        return float(self.scene.damping.alpha) if self.lumped is not None else 0.0
+        """Rayleigh's alpha where the implicit step applies it through the HRZ diagonal (lumped mass), else 0 (the
+        explicit step applies alpha M v with the consistent M, in the explicit form)."""
+        implicit = self.scene.dynamic.scheme != "central-difference"
+        return float(self.scene.damping.alpha) if self.lumped is not None and implicit else 0.0
 
     def reaction_form(self) -> fem.Form:
         """f_int(u) - f_ext(t) + C v_h with the damping the implicit step applies: with the lumped mass Rayleigh's

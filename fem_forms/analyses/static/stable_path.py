@@ -15,6 +15,7 @@ import numpy as np
 from petsc4py import PETSc
 import ufl
 
+from fem_forms.errors import SolveError
 from fem_forms.model import Model
 from fem_forms.solvers.slicing import eigensolve_interval, inertia_below
 
@@ -139,7 +140,11 @@ class StablePath:
         """Push an unstable state's damage along its mode (growing where the mode is largest, within its bounds)
         and return True; the caller solves the displacement, then the damage, from there. False where the state
         is stable on its active set (or the mode moves no damage)."""
-        mode = self.unstable_mode()
+        try:
+            mode = self.unstable_mode()
+        except SolveError as e:                        # SLEPc found no eigenpair: the state is kept unchecked
+            self.gave_up(load_factor, str(e))
+            return False
         if mode is None:
             return False
         value, _, vd = mode
@@ -153,9 +158,12 @@ class StablePath:
         up = self.upper.x.array if isinstance(self.upper, fem.Function) else self.upper
         self.d.x.array[:] = np.clip(self.d.x.array + sign * PUSH / max(top, -bottom) * vd, lo, up)
         self.d.x.scatter_forward()
-        self.term.bifurcations.append({"load_factor": load_factor, "eigenvalue": value,
-                                       "at": self._where(sign * vd)})
+        self.pending = {"load_factor": load_factor, "eigenvalue": value, "at": self._where(sign * vd)}
         return True
+
+    def kept(self) -> None:
+        """The step solved from the last push converged: that push is a bifurcation the run took."""
+        self.term.bifurcations.append(self.pending)
 
     def gave_up(self, load_factor: float, why: str) -> None:
         """No equilibrium was found off the saddle at `load_factor`: the run keeps the unstable state, and says so."""
