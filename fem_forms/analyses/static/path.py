@@ -31,6 +31,12 @@ def arc_length_fits(model: Model) -> str | None:
     return None
 
 
+def synced_displacement(model: Model) -> np.ndarray:
+    """A copy of the displacement's local array, synced from the unknown (the mixed formulation's u part)."""
+    model.sync_displacement()
+    return model.u.x.array.copy()
+
+
 def follow_path(model: Model, load_scale: float, linear_kind: str, on_step: Callable[[float], None],
                 start: arc_length.Handoff | None = None) -> snes.SolveReport:
     """Arc-length continuation of the model's loads, the load factor solved with the displacement, limit points
@@ -45,8 +51,7 @@ def follow_path(model: Model, load_scale: float, linear_kind: str, on_step: Call
     problem.set_load = None
 
     def displacement():
-        model.sync_displacement()
-        return model.u.x.array.copy()
+        return synced_displacement(model)
     moves = model.unknown is model.u                     # the predictor moves u in the displacement formulation
 
     def set_displacement(a):
@@ -68,8 +73,7 @@ class PathEnds:
         self.first = self.before = self.last = None
 
     def _now(self, lam: float) -> tuple[np.ndarray, float, np.ndarray]:
-        self.model.sync_displacement()
-        u = self.model.u.x.array.copy()
+        u = synced_displacement(self.model)
         return u, lam, (u if self.model.unknown is self.model.u else self.model.unknown.x.array.copy())
 
     def __call__(self, lam: float) -> None:
