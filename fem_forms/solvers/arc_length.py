@@ -91,23 +91,14 @@ def solve(problem: NonlinearProblem, path_constraint, displacement: Callable, se
     ds, ds_first, cuts, final, recent = 1.0 / steps, None, 0, False, []
     unknown = problem.u.x.array.copy()           # the unknown at the last accepted point
     rate_first = None                            # the loads' work per arc length of the first step
-    if start is not None:                        # on along load control's last step, at its length
-        ds_first = pc.first_step_done(*start.first)
-        rate_first = abs(pc.load_work(start.first_unknown)) / ds_first
-        path.du, path.dlam = start.last
-        ds = min(pc.length(*start.last), MAX_GROWTH * ds_first)
+    if start is not None:
+        ds, ds_first, rate_first = _resume(pc, path, start)
     while len(report.steps) < MAX_STEPS + steps:
-        if path.du is None or final:
-            pc.load_control(path.lam, (1.0 - path.lam) if final else ds)
-        else:
-            pc.along(path.u, path.lam, path.du, path.dlam, ds)
-        u_pred, lam_pred = pc.predictor()
+        u_pred, lam_pred = _predict(pc, path, ds, final)
         lam_const.value = lam_pred
         if set_displacement is not None and path.du is not None and not final:
-            set_displacement(u_pred)
-            if problem.inadmissible is not None and problem.inadmissible():   # the prediction inverts cells:
-                state.rollback()                               # back to the last accepted state
-                cuts, ds = cuts + 1, 0.5 * ds                  # a shorter one, without a Newton solve from there
+            if _inverts_cells(problem, set_displacement, u_pred):   # a shorter one, without a Newton solve from there
+                cuts, ds = cuts + 1, 0.5 * ds
                 if cuts > max_cutbacks:
                     report.message = _ended(report, path, "the step could not be made smaller", ds)
                     break
@@ -119,11 +110,9 @@ def solve(problem: NonlinearProblem, path_constraint, displacement: Callable, se
         rec.load = lam
         why = acceptance.why_rejected(drv, rec, load_scale=load_scale)
         work = pc.load_work(problem.u.x.array - unknown) if why is None else 0.0
-        if why is None and rate_first is not None and not final and work < -TURN * rate_first * ds:
-            why = f"{TURNS} (the loads' work over the step {work:.3g} J)"
-        if why is None and lam > 1.0 + 1e-9 and not final:
-            why = "passes full load: a load-controlled step onto it instead"
-            final = True
+        if why is None and not final:
+            why = _along_the_path(work, rate_first, ds, lam)
+            final = why is not None and why.startswith("passes")
         report.add_step(rec, why)
         if not rec.accepted:
             state.rollback()
@@ -142,32 +131,80 @@ def solve(problem: NonlinearProblem, path_constraint, displacement: Callable, se
         report.load_reached = lam
         if on_step is not None:
             on_step(lam)
-        if ds_first is None:
+        if ds_first is None:                     # the first, load-controlled step sets the path's scales
             ds_first = ds = pc.first_step_done(path.du, path.dlam)
-            path.points[-1] = (ds, lam)
-            rate_first = abs(work) / ds_first
+            path.points[-1], rate_first = (ds, lam), abs(work) / ds_first
         if work >= ALONG * rate_first * (path.points[-1][0] - path.points[-2][0]):
             cuts = 0                             # cut-backs count on while the path goes across the loads
         ds = min(ds * (1.5 if rec.iterations <= 5 else 1.0), MAX_GROWTH * ds_first)
         recent = recent[-(RECENT - 1):] + [rec.iterations]
-        drv.newton_cap = max(ARC_MIN_CAP, RETRY_FACTOR * max(recent))
+        drv.newton_cap = max(ARC_MIN_CAP, RETRY_FACTOR * max(recent))   # no step worth 50 Newton iterations
         if final or abs(lam - 1.0) < 1e-12:
             report.converged, report.message = True, "converged"
             break
-        if ds < ds_first / 2**max_cutbacks:      # creeping on (a fold, a part crushed flat): no progress
-            report.message = _ended(report, path, "its steps shrank below 2^-max_cutbacks of the first", ds)
-            break
-        if lam <= (1.0 - load_drop) * path.peak and path.peak > 0.0:
-            report.message = _ended(report, path, f"the load factor fell to {lam / path.peak:.3g} of its peak", ds)
+        if (end := _path_ends(path, lam, ds, ds_first, max_cutbacks, load_drop)) is not None:
+            report.message = _ended(report, path, end, ds)
             break
     else:
         report.message = _ended(report, path, f"{len(report.steps)} steps taken", ds)
+    return _finish(report, path, drv, t0)
+
+
+def _finish(report: SolveReport, path: _Path, drv: SNESDriver, t0: float) -> SolveReport:
+    """The peak and the timings into the report; the driver destroyed."""
     report.peak_load_factor = path.peak
     report.assembly_time = drv.assembly_time
     report.solve_time = time.perf_counter() - t0 - report.assembly_time
     drv.destroy()
     progress.report("solve_done", converged=report.converged)
     return report
+
+
+def _inverts_cells(problem: NonlinearProblem, set_displacement: Callable, u_pred: np.ndarray) -> bool:
+    """Set the predicted displacement; True (and the state back at the last accepted one) where it inverts cells."""
+    set_displacement(u_pred)
+    if problem.inadmissible is not None and problem.inadmissible():
+        problem.state.rollback()
+        return True
+    return False
+
+
+def _predict(pc, path: _Path, ds: float, final: bool) -> tuple[np.ndarray, float]:
+    """The next step's constraint set up and its Newton start (u, lambda): load control for the first step and
+    the step onto full load, else ds along the last step."""
+    if path.du is None or final:
+        pc.load_control(path.lam, (1.0 - path.lam) if final else ds)
+    else:
+        pc.along(path.u, path.lam, path.du, path.dlam, ds)
+    return pc.predictor()
+
+
+def _resume(pc, path: _Path, start: Handoff) -> tuple[float, float, float]:
+    """On along load control's last step, at its length (at most MAX_GROWTH first steps): (ds, the first step's
+    arc length, the loads' work per arc length of the first step)."""
+    ds_first = pc.first_step_done(*start.first)
+    rate_first = abs(pc.load_work(start.first_unknown)) / ds_first
+    path.du, path.dlam = start.last
+    return min(pc.length(*start.last), MAX_GROWTH * ds_first), ds_first, rate_first
+
+
+def _along_the_path(work: float, rate_first: float | None, ds: float, lam: float) -> str | None:
+    """Why a converged arc-length step is not taken as it is: it turns back (the loads do negative work over it), or
+    it passes full load (a load-controlled step onto 1 follows); None: it is."""
+    if rate_first is not None and work < -TURN * rate_first * ds:
+        return f"{TURNS} (the loads' work over the step {work:.3g} J)"
+    if lam > 1.0 + 1e-9:
+        return "passes full load: a load-controlled step onto it instead"
+    return None
+
+
+def _path_ends(path: _Path, lam: float, ds: float, ds_first: float, max_cutbacks: int, load_drop: float) -> str | None:
+    """Why the path is followed no further after an accepted step at `lam`, or None."""
+    if ds < ds_first / 2**max_cutbacks:          # creeping on (a fold, a part crushed flat): no progress
+        return "its steps shrank below 2^-max_cutbacks of the first"
+    if lam <= (1.0 - load_drop) * path.peak and path.peak > 0.0:
+        return f"the load factor fell to {lam / path.peak:.3g} of its peak"
+    return None
 
 
 def _ended(report: SolveReport, path: _Path, why: str, ds: float) -> str:
