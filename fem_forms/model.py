@@ -14,7 +14,7 @@ from fem_forms.materials import Material
 from fem_forms.meshes import LoadedMesh, load_mesh
 from fem_forms.output.probes import ProbeSet
 from fem_forms.physics.admissibility import SmallestValue
-from fem_forms.physics.assemble import equilibrium_forms, scene_physics
+from fem_forms.physics.assemble import equilibrium_forms, inverse_forms, scene_physics
 from fem_forms.physics.parameters import Parameters
 from fem_forms.physics.supports import LoadFactor
 from fem_forms.physics.term_list import TermList
@@ -56,6 +56,7 @@ class Model:
     warnings: list = field(default_factory=list)
     support_owners: list = field(default_factory=list)   # (fix index, component) of each of bcs
     temperature: fem.Function | None = None               # the coupled temperature ([thermal]), else None
+    rest_offset: fem.Function | None = None               # rest shape minus mesh (a designed rest shape), else None
 
     def __post_init__(self):
         self._det_F: SmallestValue | None = None
@@ -215,12 +216,21 @@ class Model:
 NEARLY_INCOMPRESSIBLE_NU = 0.49
 
 
+REST_SHAPES = (None, "designed", "unknown")
+
+
 def build_model(scene: Scene, material=None, comm: MPI.Comm = MPI.COMM_WORLD,
                 loaded: LoadedMesh | None = None, extra: dict | None = None,
-                more_fields: Callable[[fem.FunctionSpace], dict] | None = None) -> Model:
+                more_fields: Callable[[fem.FunctionSpace], dict] | None = None, rest: str | None = None) -> Model:
     """Mesh (the scene's, or `loaded`), spaces, supports and the forms of the scene's terms
     (displacement or mixed u-p); `extra` enters the Context (a cellwise `stiffness_factor`, say);
-    `more_fields(V)` adds fields on the displacement space to the State (dynamics: velocity, acceleration)."""
+    `more_fields(V)` adds fields on the displacement space to the State (dynamics: velocity, acceleration).
+    `rest`: where the rest shape is not the mesh (inverse design, on the target mesh): "designed", the rest shape is
+    mesh + `rest_offset` d (a Function the design sets) and the unknown the displacement; "unknown", the unknown is
+    the rest offset v itself and equilibrium is written on the mesh (inverse elastostatics, u = -v). Both in the
+    displacement formulation (the scene refuses analysis = "inverse" with the mixed one)."""
+    if rest not in REST_SHAPES:
+        raise ValueError(f"rest = {rest!r}: one of {REST_SHAPES}")
     loaded = loaded or load_mesh(scene.mesh, comm, degree=scene.discretization.degree)
     mesh = loaded.mesh
     disc = scene.discretization
@@ -245,7 +255,16 @@ def build_model(scene: Scene, material=None, comm: MPI.Comm = MPI.COMM_WORLD,
         if material is None and nu is not None and nu >= NEARLY_INCOMPRESSIBLE_NU:
             warnings.append(f"{soft.key}.nu = {nu}: nearly incompressible in the displacement formulation "
                             "locks (too stiff); set [discretization] formulation = \"mixed\"")
-    physics = scene_physics(scene, loaded, u_form, bc_space, material, pressure=pressure, extra=extra)
+    rest_offset = rest_map = variation = None
+    if rest is not None:
+        rest_offset = fem.Function(V, name="rest_minus_target")
+        rest_map = ufl.Identity(3) + ufl.grad(rest_offset)      # G = dX/dx: the mesh mapped to the rest shape
+    if rest == "unknown":
+        variation = fem.Function(V)                              # d/dw, then w = 0: u = -v (inverse_forms)
+        u = unknown = rest_offset
+        u_form = variation - rest_offset
+    physics = scene_physics(scene, loaded, u_form, bc_space, material, pressure=pressure, extra=extra,
+                            rest_map=rest_map, rest_offset=rest_offset, bc_sign=-1.0 if rest == "unknown" else 1.0)
     context, terms = physics.context, physics.terms
     fields = {"unknown": unknown}
     if scene.thermal is not None:
@@ -253,7 +272,11 @@ def build_model(scene: Scene, material=None, comm: MPI.Comm = MPI.COMM_WORLD,
     fields.update(terms.state_fields())                 # a term's own fields (the damage), committed with u
     fields.update(more_fields(V) if more_fields is not None else {})
     warnings += [w for t in terms for w in t.warnings()]
-    forms = equilibrium_forms(terms, context, unknown, v)
+    if rest == "unknown":
+        context.deformation = ufl.inv(rest_map) + ufl.grad(variation) * ufl.inv(rest_map)
+        forms = inverse_forms(terms, context, rest_offset, variation)
+    else:
+        forms = equilibrium_forms(terms, context, unknown, v)
     # the mixed energy is a saddle in (u, p): no line-search objective there
     conservative = forms.conservative and disc.formulation != "mixed"
     state = State(fields)
@@ -261,5 +284,5 @@ def build_model(scene: Scene, material=None, comm: MPI.Comm = MPI.COMM_WORLD,
     terms.start(state)                               # every term's start values, committed (the notches' damage)
     return Model(scene, loaded, V, u, terms.solid.material, context.dx, physics.load, physics.bcs, forms.energy,
                  forms.residual, forms.jacobian, conservative, unknown, u_form, context, terms,
-                 context.parameters, state, warnings, physics.support_owners, fields.get("temperature"))
+                 context.parameters, state, warnings, physics.support_owners, fields.get("temperature"), rest_offset)
 

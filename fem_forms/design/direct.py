@@ -3,14 +3,13 @@ from __future__ import annotations
 
 import time
 
-from dolfinx import fem
 import numpy as np
 import ufl
 
 from fem_forms.design.parameters import InverseResult, cellwise_exact, one_point_scene, target_scene
 from fem_forms.meshes import LoadedMesh, load_mesh
+from fem_forms.model import Model, build_model
 from fem_forms.physics.admissibility import SmallestValue
-from fem_forms.physics.assemble import inverse_forms, scene_physics
 from fem_forms.scene import Scene
 from fem_forms.solvers import continuation, snes
 from fem_forms.solvers.linear import rigid_body_modes
@@ -24,26 +23,22 @@ def solve_direct(scene: Scene, material=None, loaded: LoadedMesh | None = None, 
     t0 = time.perf_counter()
     loaded = loaded or load_mesh(target_scene(scene))
     mesh = loaded.mesh
-    V = fem.VectorFunctionSpace(mesh, ("Lagrange", scene.discretization.degree))
-    v = fem.Function(V, name="rest_minus_target")
-    G = ufl.Identity(3) + ufl.grad(v)                   # dX/dx: the target mesh mapped to the rest shape
-    w = fem.Function(V)                                  # the variation: d/dw, then w = 0 (u = -v)
 
-    def build(sc: Scene):
-        physics = scene_physics(sc, loaded, w - v, V, material, rest_map=G, bc_sign=-1.0, rest_offset=v,
-                                extra=extra)
+    def build(sc: Scene) -> Model:
+        model = build_model(sc, material, loaded=loaded, extra=extra, rest="unknown")
         if density is not None:
-            physics.context.parameters.set_density(density)
-        physics.terms.only_ufl("inverse design")
-        physics.context.deformation = ufl.inv(G) + ufl.grad(w) * ufl.inv(G)
-        return inverse_forms(physics.terms, physics.context, v, w), physics, sc.discretization.quadrature
+            model.parameters.set_density(density)
+        model.only_ufl_terms("inverse design")
+        return model
 
     one = one_point_scene(scene, mesh)
-    forms, physics, degree = build(one or scene)
-    if one is not None and not cellwise_exact(forms.residual, v):   # a field that varies inside cells
-        forms, physics, degree = build(scene)
-    load, bcs, terms = physics.load, physics.bcs, physics.terms
-    residual, jacobian = forms.residual, forms.jacobian
+    model = build(one or scene)
+    if one is not None and not cellwise_exact(model.residual, model.unknown):   # a field that varies inside cells
+        model = build(scene)
+    v, V, G = model.unknown, model.V, model.context.rest_map
+    load, bcs, terms = model.load, model.bcs, model.terms
+    residual, jacobian = model.residual, model.jacobian
+    degree = model.dx.metadata()["quadrature_degree"]
     rest_volume = SmallestValue(ufl.det(G), mesh, degree)
 
     def inadmissible():

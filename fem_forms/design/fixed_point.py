@@ -18,8 +18,8 @@ def solve_fixed_point(scene: Scene, material=None, loaded: LoadedMesh | None = N
     is below tolerance x mesh size."""
     t0 = time.perf_counter()
     loaded = loaded or load_mesh(target_scene(scene))
-    V = fem.VectorFunctionSpace(loaded.mesh, ("Lagrange", scene.discretization.degree))
-    fwd = ForwardOnRest(scene, material, loaded, V)
+    fwd = ForwardOnRest(scene, material, loaded)
+    V = fwd.V
     size = mesh_size(loaded.mesh)
     comm = loaded.mesh.comm
     history, ok, msg = [], False, ""

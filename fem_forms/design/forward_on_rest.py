@@ -1,13 +1,12 @@
 """Forward equilibrium of a body whose rest shape is the target mesh + d, written on the fixed target mesh."""
 from __future__ import annotations
 
-from dolfinx import fem
 import ufl
 
 from fem_forms.errors import InputError
 from fem_forms.meshes import LoadedMesh
 from fem_forms.physics.admissibility import SmallestValue
-from fem_forms.physics.assemble import equilibrium_forms, scene_physics
+from fem_forms.model import build_model
 from fem_forms.scene import Scene
 from fem_forms.solvers import continuation, snes
 
@@ -17,26 +16,21 @@ class ForwardOnRest:
     target mesh: X = x + d(x), G = dX/dx = I + grad d, F = I + grad u G^-1, dX = det G dx.
     Provides the energy, its derivatives in u and in d (ufl.derivative), and warm-started solves."""
 
-    def __init__(self, scene: Scene, material, loaded: LoadedMesh, V: fem.FunctionSpace):
-        self.scene, self.loaded, self.V = scene, loaded, V
-        mesh = loaded.mesh
-        self.mesh = mesh
-        self.d = fem.Function(V, name="rest_minus_target")
-        self.u = fem.Function(V, name="displacement")
-        G = ufl.Identity(3) + ufl.grad(self.d)
-        physics = scene_physics(scene, loaded, self.u, V, material, rest_map=G, rest_offset=self.d)
-        physics.terms.only_ufl("inverse design")
-        self.load, self.bcs = physics.load, physics.bcs
-        ctx, terms = physics.context, physics.terms
-        if not all(t.conservative for t in terms):
+    def __init__(self, scene: Scene, material, loaded: LoadedMesh):
+        model = build_model(scene, material, loaded=loaded, rest="designed")
+        model.only_ufl_terms("inverse design")
+        if not model.conservative:
             raise InputError(f"inverse.method = {scene.inverse.method!r}: follower pressure is supported "
                              "by the direct method only")
-        self.dx = ctx.dx
-        forms = equilibrium_forms(terms, ctx, self.u, ufl.TestFunction(V))
-        self.energy, self.residual, self.jacobian = forms.energy, forms.residual, forms.jacobian
-        self.dres_dd = ufl.derivative(self.residual, self.d, ufl.TrialFunction(V))
-        self.physics = [t.name for t in terms]
-        self._volume_ratio = SmallestValue(ufl.det(ctx.F) * ufl.det(G), mesh, scene.discretization.quadrature)
+        self.scene, self.loaded, self.V, self.mesh = scene, loaded, model.V, loaded.mesh
+        self.d, self.u = model.rest_offset, model.u
+        self.load, self.bcs, self.dx = model.load, model.bcs, model.dx
+        self.energy, self.residual, self.jacobian = model.energy, model.residual, model.jacobian
+        self.dres_dd = ufl.derivative(self.residual, self.d, ufl.TrialFunction(self.V))
+        self.physics = model.physics
+        G = model.context.rest_map
+        self._volume_ratio = SmallestValue(ufl.det(model.context.F) * ufl.det(G), self.mesh,
+                                           self.dx.metadata()["quadrature_degree"])
         self.solves = 0
         self._driver: snes.SNESDriver | None = None
         self._problem: snes.NonlinearProblem | None = None

@@ -157,8 +157,8 @@ def solve_adjoint(scene: Scene, material=None, loaded: LoadedMesh | None = None)
     mismatch J falls below 1/2 (tolerance x mesh size)^2, or the gradient below tolerance x J."""
     t0 = time.perf_counter()
     loaded = loaded or load_mesh(target_scene(scene))
-    V = fem.VectorFunctionSpace(loaded.mesh, ("Lagrange", scene.discretization.degree))
-    fwd = ForwardOnRest(scene, material, loaded, V)
+    fwd = ForwardOnRest(scene, material, loaded)
+    V = fwd.V
     design = AdjointDesign(fwd)
     spec = scene.inverse
     size = mesh_size(loaded.mesh)

@@ -4,7 +4,6 @@ gradient; continuation for soft materials; MPI parity; unusable designs refused 
 
 import numpy as np
 import pytest
-from dolfinx import fem
 from mpi4py import MPI
 
 import fem_forms as ff
@@ -119,8 +118,8 @@ def test_adjoint_gradient_passes_the_taylor_test():
                                             smoothness=1e-4, stay_close=1e-2))
     from fem_forms.meshes import load_mesh
     loaded = load_mesh(scene.mesh)
-    V = fem.VectorFunctionSpace(loaded.mesh, ("Lagrange", 1))
-    fwd = ForwardOnRest(scene, None, loaded, V)
+    fwd = ForwardOnRest(scene, None, loaded)
+    V = fwd.V
     design = AdjointDesign(fwd)
     rng = np.random.default_rng(3)
     X = V.tabulate_dof_coordinates()[: design.n // 3]
