@@ -67,7 +67,7 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
         rec = drv.solve_step()
         rec.load = trial
         why = acceptance.why_rejected(drv, rec, load_scale=r_full, stable_only=True)   # SNES, finite, admissible, ...
-        same_step = retry.after_failure(rec, report) if not rec.accepted else retry.after_rejection(why, trial)
+        same_step = why is not None and retry.same_size(rec, why, trial, report)
         if rec.accepted and why is None:
             report.residual_norm = rec.checked_residual     # the independently re-assembled residual
         report.add_step(rec, why)
@@ -82,7 +82,7 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
             dlam, hold = next_increment(lam, dlam, hold, max_step), False
             report.load_reached = lam
             on_step(lam)
-            retry.descend(False)
+            retry.accepted()
         else:
             state.rollback()                         # back to the last accepted state, history included
             cuts, dlam = (cuts, dlam) if same_step else (cuts + 1, 0.5 * dlam)

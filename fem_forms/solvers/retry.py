@@ -1,22 +1,91 @@
-"""What changes before a failed Newton solve is tried again: one policy for load continuation and implicit time
-steps. After SNES failed: a fresh preconditioner (a kept one failed), LU instead of an indefinite iterative solve,
-Newton instead of a stalled chord, a factor per iteration instead of a stale one. After a converged state that
-acceptance rejected as a saddle of a volume-controlled problem: a start pushed off it along its unstable mode. For
-the retries of a volume-controlled (bordered multiplier) solve: the descent of a merit, off again once a step is
-accepted."""
+"""What changes before a failed Newton solve is tried again: one ladder for load continuation and implicit time
+steps, each rung tried once per step size before the step is cut. After SNES failed: a fresh preconditioner (a kept
+one failed), LU instead of an indefinite iterative solve, Newton instead of a stalled chord, a factor per iteration
+instead of a stale one; after any failed attempt, the other line search where the caller gave two. After a
+converged state that acceptance rejected as a saddle of a volume-controlled problem: a start pushed off it along
+its unstable mode. For the retries of a volume-controlled (bordered multiplier) solve: the descent of a merit, off
+again once a step is accepted."""
 from __future__ import annotations
+
+from typing import Callable
 
 from fem_forms.solvers import acceptance, linear
 from fem_forms.solvers.reports import UNSTABLE
 
 
 class RetryPolicy:
-    """The retry ladder of one driver, whose scene asked for the linear solver `linear_kind`."""
+    """The retry ladder of one driver, whose scene asked for the linear solver `linear_kind`. `line_searches`:
+    (first, other), the line search of every attempt and the one a failed attempt is retried with (implicit time
+    steps: the energy line search and full Newton steps); `on_direct()`: what else the caller changes once LU
+    replaces CG (the time step keeps its tangent and factor from then on)."""
 
-    def __init__(self, drv, linear_kind: str):
+    def __init__(self, drv, linear_kind: str, line_searches: tuple[str, str] | None = None,
+                 on_direct: Callable[[], None] | None = None):
         self.drv, self.linear_kind = drv, linear_kind
+        self.line_searches, self.on_direct = line_searches, on_direct
+        self.tried: set[str] = set()                 # the rungs tried at this step size
 
-    def to_direct(self, rec, stale: bool) -> bool:
+    def same_size(self, rec, why: str | None, at: float, report=None) -> bool:
+        """After an attempt at load factor or time `at` failed (SNES: `rec.accepted` False) or was rejected (`why`):
+        climb the ladder (see the module) and return whether the step is retried at its size (False: cut it).
+        `report.linear_solver` records a switch to LU. The caller rebuilds the driver before the next attempt (as
+        after any failure), which puts the changes made here into effect."""
+        self._line_search(0)                         # the other line search served one attempt
+        if rec.accepted and self._escape(why, at):
+            return True
+        if not rec.accepted and self._solver_change(rec, report):
+            return True
+        if self.line_searches is not None and self._once("line search"):
+            self._line_search(1)
+            return True
+        self.tried.clear()                           # cut: the smaller step may try every rung again
+        return False
+
+    def accepted(self) -> None:
+        """A step was accepted: the first line search, full Newton steps again (no merit), every rung available."""
+        if self._line_search(0):
+            self.drv.rebuild()
+        self.descend(False)
+        self.tried.clear()
+
+    def _once(self, rung: str) -> bool:
+        """Whether `rung` is still untried at this step size (and mark it tried)."""
+        if rung in self.tried:
+            return False
+        self.tried.add(rung)
+        return True
+
+    def _solver_change(self, rec, report) -> bool:
+        """After SNES failed: a fresh preconditioner, LU, Newton, or a factor per iteration (the first that
+        applies); whether one did."""
+        drv = self.drv
+        linear_failed = rec.reason == "DIVERGED_LINEAR_SOLVE"
+        stale = linear_failed and drv.stale_preconditioner_failed()
+        if stale:
+            return self._once("fresh preconditioner")    # the caller's rebuild builds it afresh
+        if self._to_direct(rec, stale):
+            if report is not None:
+                report.linear_solver = "iterative->direct"
+            if self.on_direct is not None:
+                self.on_direct()
+            return True
+        if drv.reuse_factor == "chord":
+            drv.reuse_factor = True                  # the chord stalled: Newton (the stale LU preconditions)
+            return True
+        if linear_failed and drv.reuse_factor:
+            drv.reuse_factor = False                 # stale LU too far off: factor every iteration
+            return True
+        return False
+
+    def _line_search(self, which: int) -> bool:
+        """Attempts from now on with the first (0) or the other (1) line search, once the driver is rebuilt;
+        whether that changed it."""
+        if self.line_searches is None or self.drv.user_options.get("snes_linesearch_type") == self.line_searches[which]:
+            return False
+        self.drv.user_options["snes_linesearch_type"] = self.line_searches[which]
+        return True
+
+    def _to_direct(self, rec, stale: bool) -> bool:
         """CG failed on a fresh preconditioner (an indefinite tangent) where the scene's choice allows LU: LU from
         now on. `stale`: the failed solve ran with a kept preconditioner (the retry builds a fresh one instead).
         Whether it switched."""
@@ -27,28 +96,12 @@ class RetryPolicy:
             return True
         return False
 
-    def after_failure(self, rec, report) -> bool:
-        """After SNES failed a load step: what the retry solves with (see the module). Returns whether the step is
-        retried at its size (the chord's fallback) rather than halved."""
-        drv = self.drv
-        stale = rec.reason == "DIVERGED_LINEAR_SOLVE" and drv.stale_preconditioner_failed()
-        if stale:
-            return False                             # the retry (fresh SNES) rebuilds the preconditioner
-        if self.to_direct(rec, stale):
-            report.linear_solver = "iterative->direct"
-        elif drv.reuse_factor == "chord":
-            drv.reuse_factor = True                  # the chord stalled: Newton (the stale LU preconditions)
-            return True                              # retries this step at its size
-        elif rec.reason == "DIVERGED_LINEAR_SOLVE" and drv.reuse_factor:
-            drv.reuse_factor = False                 # stale LU too far off: factor every iteration
-        return False
-
-    def after_rejection(self, why: str | None, trial: float) -> bool:
+    def _escape(self, why: str | None, at: float) -> bool:
         """After SNES converged but acceptance rejected: when it was a saddle of a volume-controlled problem, retry
         the same load from a start pushed off it along its unstable mode (constrained_stability.py); a symmetric
         state (two joined balloons inflated alike) never leaves its saddle otherwise. Once per load."""
         stability = acceptance.stability_check(self.drv)
-        return (why or "").startswith(UNSTABLE) and stability is not None and stability.escape(trial)
+        return (why or "").startswith(UNSTABLE) and stability is not None and stability.escape(at)
 
     def descend(self, on: bool) -> None:
         """Turn the merit line search of a volume-controlled (bordered multiplier) solve on for the retries after a

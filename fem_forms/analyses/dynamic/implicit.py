@@ -94,8 +94,10 @@ class ImplicitStepper:
         self.driver = m.staggered_driver(self.problem, self._options(), linear_kind, **kwargs) or \
             snes.SNESDriver(self.problem, self._options(), linear_kind,
                             near_nullspace=lambda: linear.rigid_body_modes(m.V), **kwargs)
-        self.retry = RetryPolicy(self.driver, linear_kind)     # the continuation's policy: LU after CG fails
-        self.line_search_retry = self.driver.E is not None and "snes_linesearch_type" not in self.user_options
+        # the continuation's ladder, and the other line search (where the scene chose none) before dt is cut
+        other = self.searches if self.driver.E is not None and "snes_linesearch_type" not in self.user_options \
+            else None
+        self.retry = RetryPolicy(self.driver, linear_kind, line_searches=other, on_direct=self._on_direct)
         self.may_unlag = "snes_lag_jacobian" not in self.user_options
         self.fresh = True                          # the next step starts from a freshly built tangent
         self.dt_factored = None
@@ -139,19 +141,17 @@ class ImplicitStepper:
         s.model.terms.lag(t + dt)                  # lagged terms (obstacles) where they are at the step's end
         s.model.solid.update(t + dt)               # a solid with time (viscoelastic): the step's dt
         rec, why = self._solve(dt)
-        if why is not None and self._fall_back(rec):        # CG failed on a fresh hierarchy: MUMPS, same dt
+        while why is not None:
+            same_dt = self.retry.same_size(rec, why, t + dt)     # LU, the other line search, ...
+            drv.rebuild()                                      # fresh solver state after a failure
+            if not same_dt:
+                break
             rec, why = self._again(rec, dt)
-        if why is not None and self.line_search_retry:
-            drv.user_options["snes_linesearch_type"] = self.searches[1]     # the other line search, same dt
-            drv.rebuild()
-            rec, why = self._again(rec, dt)
-            drv.user_options["snes_linesearch_type"] = self.searches[0]
-            drv.rebuild()
         if why is not None:
             self.last_why = why
             self.fresh = True
-            self._fall_back(rec)                             # the cut step's retry then runs on MUMPS
             return StepOutcome(False, rec.iterations, why)
+        self.retry.accepted()
         self._refresh(rec)
         old = s.state.old
         v, a = s.td.update(s.u.x.array, old["unknown"].x.array, old["velocity"].x.array,
@@ -169,18 +169,13 @@ class ImplicitStepper:
         rec2.krylov_iterations += rec.krylov_iterations
         return rec2, why
 
-    def _fall_back(self, rec) -> bool:
-        """CG failed on a fresh hierarchy (an indefinite tangent): MUMPS from now on, when the scene's
-        choice allows it (as the static continuation does); a kept hierarchy's failure is retried fresh.
-        Returns whether it switched."""
-        drv = self.driver
-        if not self.retry.to_direct(rec, self.stale_failed):
-            return False
+    def _on_direct(self) -> None:
+        """CG failed on a fresh hierarchy (an indefinite tangent) and LU replaced it (the retry policy): the tangent
+        and its factor kept across steps from now on, as a direct scene's are."""
         self.iterative = False
+        drv = self.driver
         drv.reuse_factor = True
         drv.user_options = self._options()
-        drv.rebuild()
-        return True
 
     def _refresh(self, rec) -> None:
         """A fresh tangent and factor for the next step when the kept ones cost too many iterations. If
@@ -224,9 +219,7 @@ class ImplicitStepper:
         # step's first residual (no load scale in dynamics: loads follow time, and may be none)
         why = acceptance.why_rejected(drv, rec, reassemble=False)
         if why is not None:
-            self.stale_failed = drv.stale_preconditioner_failed()
             s.state.rollback()
-            drv.rebuild()
         return rec, why
 
     def _filtered_predictor(self, start, step) -> None:

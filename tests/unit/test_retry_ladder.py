@@ -1,0 +1,72 @@
+"""The one retry ladder of load continuation and implicit time steps (solvers/retry.py): which change comes
+before the next attempt, each tried once per step size, and when the step is cut instead."""
+from types import SimpleNamespace
+
+from fem_forms.solvers.retry import RetryPolicy
+
+
+class Driver:
+    """What the ladder reads and changes of an SNES driver."""
+
+    def __init__(self, linear_kind="direct", reuse_factor=False, stale=False):
+        self.linear_kind, self.reuse_factor, self.stale = linear_kind, reuse_factor, stale
+        self.user_options, self.bordered, self.rebuilds = {}, None, 0
+
+    def stale_preconditioner_failed(self):
+        return self.stale
+
+    def rebuild(self):
+        self.rebuilds += 1
+
+
+def failed(reason):
+    return SimpleNamespace(accepted=False, reason=reason)
+
+
+def test_cg_failing_on_a_fresh_preconditioner_switches_to_lu_and_retries_the_same_step():
+    drv = Driver("iterative")
+    switched = []
+    policy = RetryPolicy(drv, "auto", on_direct=lambda: switched.append(True))
+    report = SimpleNamespace(linear_solver="iterative")
+    assert policy.same_size(failed("DIVERGED_LINEAR_SOLVE"), "SNES DIVERGED_LINEAR_SOLVE", 0.5, report)
+    assert drv.linear_kind == "direct" and report.linear_solver == "iterative->direct" and switched == [True]
+    # the scene asked for CG alone: no LU, the step is cut
+    drv = Driver("iterative")
+    assert not RetryPolicy(drv, "iterative").same_size(failed("DIVERGED_LINEAR_SOLVE"), "x", 0.5)
+    assert drv.linear_kind == "iterative"
+
+
+def test_a_kept_preconditioner_that_failed_is_rebuilt_once_per_step():
+    drv = Driver("iterative", stale=True)
+    policy = RetryPolicy(drv, "auto")
+    rec = failed("DIVERGED_LINEAR_SOLVE")
+    assert policy.same_size(rec, "x", 0.5)              # a fresh preconditioner, same step
+    assert drv.linear_kind == "iterative"
+    assert not policy.same_size(rec, "x", 0.5)          # stale again at the same size: cut
+    assert policy.same_size(rec, "x", 0.25)             # the cut step may try it again
+
+
+def test_a_stalled_chord_becomes_newton_then_a_stale_factor_a_fresh_one():
+    drv = Driver("direct", reuse_factor="chord")
+    policy = RetryPolicy(drv, "direct")
+    assert policy.same_size(failed("DIVERGED_MAX_IT"), "x", 0.5) and drv.reuse_factor is True
+    assert not policy.same_size(failed("DIVERGED_MAX_IT"), "x", 0.5)     # Newton failed too: cut
+    assert policy.same_size(failed("DIVERGED_LINEAR_SOLVE"), "x", 0.25) and drv.reuse_factor is False
+
+
+def test_the_other_line_search_serves_one_attempt_then_the_step_is_cut():
+    drv = Driver("direct")
+    drv.user_options["snes_linesearch_type"] = "bt"
+    policy = RetryPolicy(drv, "direct", line_searches=("bt", "basic"))
+    rec = failed("DIVERGED_LINE_SEARCH")
+    assert policy.same_size(rec, "x", 0.01) and drv.user_options["snes_linesearch_type"] == "basic"
+    assert not policy.same_size(rec, "x", 0.01)                          # cut, with the first line search
+    assert drv.user_options["snes_linesearch_type"] == "bt"
+    assert policy.same_size(rec, "x", 0.005)                            # the cut step may try it again
+    rebuilds = drv.rebuilds
+    policy.accepted()                                   # accepted with the other: back to the first, rebuilt
+    assert drv.user_options["snes_linesearch_type"] == "bt" and drv.rebuilds == rebuilds + 1
+    # a converged state rejected (not a saddle) is retried with the other line search too, where there is one
+    converged = SimpleNamespace(accepted=True, reason="CONVERGED_FNORM_RELATIVE")
+    assert policy.same_size(converged, "inverted elements", 0.02)
+    assert not RetryPolicy(Driver(), "direct").same_size(converged, "inverted elements", 0.02)
