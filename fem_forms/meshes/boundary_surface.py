@@ -60,11 +60,11 @@ def _pair(coords: np.ndarray, corners: list, k: int) -> tuple:
     return min(pairs, key=lambda ab: np.linalg.norm(coords[k] - (coords[ab[0]] + coords[ab[1]]) / 2))
 
 
-def _facet_triangles(nodes: np.ndarray, coords: np.ndarray, kinds: np.ndarray, inside: np.ndarray) -> list:
-    """One facet's triangles on its nodes: a triangle (3 corners) itself, a quadrilateral split along a
-    diagonal; degree 2 facets into 4 (triangle) or 8 (quadrilateral, around its centre node) triangles on the
-    corner, edge and centre nodes. All turned so that their normals point away from the cell centroid `inside`.
-    `kinds` holds each node's entity dimension (0 corner, 1 edge, 2 face)."""
+def _pattern(coords: np.ndarray, kinds: np.ndarray) -> tuple[list, list]:
+    """One facet's corners and its triangles, as positions among its nodes: a triangle (3 corners) itself, a
+    quadrilateral split along a diagonal; degree 2 facets into 4 (triangle) or 8 (quadrilateral, around its
+    centre node) triangles on the corner, edge and centre nodes. `kinds` holds each node's entity dimension (0
+    corner, 1 edge, 2 face). The same for every facet at the same place in its cell (the dof layout's)."""
     corners = [int(i) for i in np.flatnonzero(kinds == 0)]
     edge = {_pair(coords, corners, int(k)): int(k) for k in np.flatnonzero(kinds == 1)}
     local = []
@@ -83,15 +83,20 @@ def _facet_triangles(nodes: np.ndarray, coords: np.ndarray, kinds: np.ndarray, i
         for v in corners:
             ea, eb = [k for pair, k in edge.items() if v in pair]
             local += [[v, ea, centre], [v, centre, eb]]
-    p = coords[corners]
-    normal = np.cross(p[1] - p[0], p[2] - p[0])
-    if normal @ (p.mean(axis=0) - inside) < 0:
-        normal = -normal
-    out = []
-    for tri in local:
-        q = coords[tri]
-        flip = np.cross(q[1] - q[0], q[2] - q[0]) @ normal < 0
-        out.append(nodes[[tri[0], tri[2], tri[1]]] if flip else nodes[tri])
+    return corners, local
+
+
+def _outward(nodes: np.ndarray, coords: np.ndarray, corners: list, local: list, inside: np.ndarray) -> np.ndarray:
+    """(facets, triangles, 3) the triangles `local` of facets whose nodes are `nodes` (facets, k) at `coords`
+    (facets, k, 3), each turned so that its normal points away from its cell's centroid `inside` (facets, 3)."""
+    p = coords[:, corners]
+    normal = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    normal[np.einsum("ij,ij->i", normal, p.mean(axis=1) - inside) < 0] *= -1.0
+    tri = np.asarray(local)
+    q = coords[:, tri]                                   # (facets, triangles, 3 corners, 3)
+    flip = np.einsum("fti,fi->ft", np.cross(q[:, :, 1] - q[:, :, 0], q[:, :, 2] - q[:, :, 0]), normal) < 0
+    out = nodes[:, tri]
+    out[flip] = out[flip][:, [0, 2, 1]]
     return out
 
 
@@ -115,20 +120,26 @@ def boundary_surface(V: fem.FunctionSpace) -> BoundarySurface:
     cell = mesh.topology.cell_name()
     if cell not in ("tetrahedron", "hexahedron"):
         raise InputError(f"contact: tetrahedra or hexahedra only (this mesh has {cell} cells)")
-    n_corners, n_edges = {"tetrahedron": (4, 6), "hexahedron": (8, 12)}[cell]
-    tris, coords = [], {}
-    for f in owned_facets:
-        c = f2c.links(f)[0]
-        local = int(np.flatnonzero(c2f.links(c) == f)[0])
-        cell_dofs = V.dofmap.cell_dofs(c)
-        closure = np.asarray(layout.entity_closure_dofs(fdim, local))
-        nodes = cell_dofs[closure]
-        glob = imap.local_to_global(nodes.astype(np.int32)).astype(np.int64)
-        kinds = (closure >= n_corners).astype(int) + (closure >= n_corners + n_edges)
-        tris.extend(_facet_triangles(glob, xyz[nodes], kinds, xyz[cell_dofs[:n_corners]].mean(axis=0)))
-        coords.update(zip(glob.tolist(), xyz[nodes]))
-    gathered = mesh.comm.allgather((np.array(tris, dtype=np.int64).reshape(-1, 3),
-                                    np.array(list(coords), dtype=np.int64), np.array(list(coords.values()))))
+    n_corners, n_edges, per_cell = {"tetrahedron": (4, 6, 4), "hexahedron": (8, 12, 6)}[cell]   # per_cell: facets
+    cells = f2c.array[f2c.offsets[owned_facets]]                      # an exterior facet's one cell
+    place = np.argmax(c2f.array.reshape(-1, per_cell)[cells] == owned_facets[:, None], axis=1)
+    cell_dofs = V.dofmap.list.array.reshape(-1, layout.num_dofs)[cells]
+    closures = np.array([layout.entity_closure_dofs(fdim, j) for j in range(per_cell)])
+    nodes = np.take_along_axis(cell_dofs, closures[place], axis=1)   # (facets, nodes of a facet), local
+    glob = imap.local_to_global(nodes.ravel()).astype(np.int64).reshape(nodes.shape)
+    inside = xyz[cell_dofs[:, :n_corners]].mean(axis=1)
+    tris = None
+    for j in np.unique(place):                          # facets at the same place in their cells: one pattern
+        at = np.flatnonzero(place == j)
+        kinds = (closures[j] >= n_corners).astype(int) + (closures[j] >= n_corners + n_edges)
+        corners, local = _pattern(xyz[nodes[at[0]]], kinds)
+        if tris is None:
+            tris = np.empty((len(place), len(local), 3), dtype=np.int64)
+        tris[at] = _outward(glob[at], xyz[nodes[at]], corners, local, inside[at])
+    tris = np.zeros((0, 3), dtype=np.int64) if tris is None else tris.reshape(-1, 3)
+    blocks_local, first = np.unique(glob.ravel(), return_index=True)
+    coords = xyz[nodes.ravel()[first]]
+    gathered = mesh.comm.allgather((tris, blocks_local, coords))
     faces = np.concatenate([g[0] for g in gathered])
     blocks = np.concatenate([g[1] for g in gathered])
     rest_all = np.concatenate([g[2].reshape(-1, 3) for g in gathered])
