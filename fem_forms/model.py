@@ -169,7 +169,8 @@ class Model:
             return None
         return AlternateMinimization(problem, [p for p, _ in subs], min(s.tolerance for _, s in subs),
                                      max(s.max_iterations for _, s in subs), options, linear_kind=linear_kind,
-                                     near_nullspace=lambda: rigid_body_modes(self.V), **kwargs)
+                                     near_nullspace=lambda: rigid_body_modes(self.V),
+                                     relaxation=[s.relaxation for _, s in subs], **kwargs)
 
     def global_scalars(self) -> list:
         """The scalar unknowns the terms add to the Newton solve (a volume-controlled cavity's pressure), made

@@ -73,7 +73,7 @@ class PhaseField(Term):
     def sub_problem(self, solid, ctx: Context) -> SubProblem:
         """The damage with u frozen: E(u, d) minimised over d_old <= d <= 1 (irreversibility)."""
         return SubProblem(self.d, self.damage_energy(solid, ctx), 1.0, True, self.spec.tolerance,
-                          self.spec.max_iterations)
+                          self.spec.max_iterations, self.spec.over_relaxation)
 
     def start(self, state) -> None:
         """Intact but for the notches (d = 1 there), committed: a new solve starts from the scene's cracks."""

@@ -162,13 +162,14 @@ class Term:
 class SubProblem:
     """A term's own field and its energy with u frozen, minimised between `lower` (the committed field,
     with `irreversible`) and `upper`; alternated with the displacement until both change less than
-    `tolerance` (at most `max_iterations` sweeps)."""
+    `tolerance` (at most `max_iterations` sweeps), each sweep's step over-relaxed by `relaxation`."""
     field: fem.Function
     energy: ufl.Form
     upper: float
     irreversible: bool
     tolerance: float
     max_iterations: int
+    relaxation: float = 1.0
 
 
 class Solid(Term):

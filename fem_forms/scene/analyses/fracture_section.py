@@ -35,6 +35,9 @@ FRACTURE_KEYS = (
         exclusive_maximum=1),
     Key("max_iterations", "integer", "sweeps of the alternate minimization per load step before the step is "
         "cut back", default=500, minimum=1),
+    Key("over_relaxation", "number", "the alternate minimization's over-relaxation omega: each sweep moves the "
+        "damage omega times its step, within its bounds (Farrell & Maurini 2017; 1: plain alternate minimization; "
+        "the fixed point is the same)", default=1.0, minimum=1, exclusive_maximum=2),
     Key("stable_path", "boolean", "static runs: accept only stable states (after each converged step, the "
         "energy's Hessian on the damaging set is checked with SLEPc and a saddle is pushed along its unstable "
         "mode: a homogeneous bar cracks in one band, a symmetric part on one side); false keeps what the alternate "
@@ -54,6 +57,7 @@ class FractureSpec:
     residual_stiffness: float = 1.0e-6
     tolerance: float = 1.0e-4
     max_iterations: int = 500
+    over_relaxation: float = 1.0
     stable_path: bool = False
     notch: list = field(default_factory=list)       # [{"where": Selector}, ...]
 
