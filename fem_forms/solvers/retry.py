@@ -3,7 +3,8 @@ steps, each rung tried once per step size before the step is cut. After SNES fai
 one failed), LU instead of an indefinite iterative solve, Newton instead of a stalled chord, a factor per iteration
 instead of a stale one; after any failed attempt, the other line search where the caller gave two. After a
 converged state that acceptance rejected as a saddle of a volume-controlled problem: a start pushed off it along
-its unstable mode. For the retries of a volume-controlled (bordered multiplier) solve: the descent of a merit, off
+its unstable mode. Before all of these, where the caller extrapolates its start (a time step's predictor) and that
+start already left the domain (a NaN before the first iteration): the last accepted state as the start. For the retries of a volume-controlled (bordered multiplier) solve: the descent of a merit, off
 again once a step is accepted."""
 from __future__ import annotations
 
@@ -17,12 +18,13 @@ class RetryPolicy:
     """The retry ladder of one driver, whose scene asked for the linear solver `linear_kind`. `line_searches`:
     (first, other), the line search of every attempt and the one a failed attempt is retried with (implicit time
     steps: the energy line search and full Newton steps); `on_direct()`: what else the caller changes once LU
-    replaces CG (the time step keeps its tangent and factor from then on)."""
+    replaces CG (the time step keeps its tangent and factor from then on); `plain_start()`: the next attempt starts
+    from the last accepted state instead of the caller's extrapolation. Both in effect at the caller's rebuild."""
 
     def __init__(self, drv, linear_kind: str, line_searches: tuple[str, str] | None = None,
-                 on_direct: Callable[[], None] | None = None):
+                 on_direct: Callable[[], None] | None = None, plain_start: Callable[[], None] | None = None):
         self.drv, self.linear_kind = drv, linear_kind
-        self.line_searches, self.on_direct = line_searches, on_direct
+        self.line_searches, self.on_direct, self.plain_start = line_searches, on_direct, plain_start
         self.tried: set[str] = set()                 # the rungs tried at this step size
 
     def same_size(self, rec, why: str | None, at: float, report=None) -> bool:
@@ -31,6 +33,10 @@ class RetryPolicy:
         `report.linear_solver` records a switch to LU. The caller rebuilds the driver before the next attempt (as
         after any failure), which puts the changes made here into effect."""
         self._line_search(0)                         # the other line search served one attempt
+        if (self.plain_start is not None and rec.iterations == 0 and acceptance.left_the_domain(rec, why)
+                and self._once("plain start")):
+            self.plain_start()
+            return True
         if rec.accepted and self._escape(why, at):
             return True
         if not rec.accepted and self._solver_change(rec, report):

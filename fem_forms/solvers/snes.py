@@ -207,6 +207,10 @@ class SNESDriver:
         copy in the format the preconditioner needs (pc_matrix.py); a solver outside SNES (bordered.py)."""
         return A if self.P is None else self.P.refresh(A)[0]
 
+    def energy(self, x: PETSc.Vec) -> float:
+        """The energy the line search minimises (UFL forms and array terms) at x; 1e300 where it is not finite."""
+        return self._objective(None, x)
+
     def _objective(self, snes, x) -> float:
         t = time.perf_counter()
         self.set_state(x)

@@ -70,3 +70,15 @@ def test_the_other_line_search_serves_one_attempt_then_the_step_is_cut():
     converged = SimpleNamespace(accepted=True, reason="CONVERGED_FNORM_RELATIVE")
     assert policy.same_size(converged, "inverted elements", 0.02)
     assert not RetryPolicy(Driver(), "direct").same_size(converged, "inverted elements", 0.02)
+
+
+def test_a_start_that_left_the_domain_is_replaced_by_the_last_state_once_per_step_size():
+    starts = []
+    policy = RetryPolicy(Driver(), "direct", plain_start=lambda: starts.append(True))
+    nan_at_start = SimpleNamespace(accepted=False, reason="DIVERGED_FNORM_NAN", iterations=0)
+    assert policy.same_size(nan_at_start, "SNES DIVERGED_FNORM_NAN", 0.01) and starts == [True]
+    assert not policy.same_size(nan_at_start, "SNES DIVERGED_FNORM_NAN", 0.01)      # from there too: cut
+    assert policy.same_size(nan_at_start, "SNES DIVERGED_FNORM_NAN", 0.005) and len(starts) == 2
+    # a NaN met after some iterations is Newton's, not the start's: no plain start
+    later = SimpleNamespace(accepted=False, reason="DIVERGED_FNORM_NAN", iterations=3)
+    assert not RetryPolicy(Driver(), "direct", plain_start=lambda: starts.append(True)).same_size(later, "x", 0.01)

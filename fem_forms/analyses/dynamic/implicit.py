@@ -97,7 +97,9 @@ class ImplicitStepper:
         # the continuation's ladder, and the other line search (where the scene chose none) before dt is cut
         other = self.searches if self.driver.E is not None and "snes_linesearch_type" not in self.user_options \
             else None
-        self.retry = RetryPolicy(self.driver, linear_kind, line_searches=other, on_direct=self._on_direct)
+        self.retry = RetryPolicy(self.driver, linear_kind, line_searches=other, on_direct=self._on_direct,
+                                 plain_start=self._plain_start)
+        self.predict = True                        # the next attempt starts from the predictor (else from u_n)
         self.may_unlag = "snes_lag_jacobian" not in self.user_options
         self.fresh = True                          # the next step starts from a freshly built tangent
         self.dt_factored = None
@@ -169,6 +171,11 @@ class ImplicitStepper:
         rec2.krylov_iterations += rec.krylov_iterations
         return rec2, why
 
+    def _plain_start(self) -> None:
+        """The predictor itself left the domain (a NaN before the first iteration: a contact's chatter left a
+        velocity that inverts cells within dt): the retry starts from the last accepted displacement."""
+        self.predict = False
+
     def _on_direct(self) -> None:
         """CG failed on a fresh hierarchy (an indefinite tangent) and LU replaced it (the retry policy): the tangent
         and its factor kept across steps from now on, as a direct scene's are."""
@@ -204,10 +211,13 @@ class ImplicitStepper:
         # constant-velocity predictor: a_n carries the undamped high modes Newmark keeps (an impulsive
         # load or release), and the constant-acceleration guess u_n + dt v_n + dt^2/2 a_n then inverted
         # cells (measured: a released silicone beam, Q2, 30 of 43 steps rejected; this way 0 of 20)
-        u.x.array[:] = old["unknown"].x.array + dt * old["velocity"].x.array
+        move, self.predict = (dt if self.predict else 0.0) * old["velocity"].x.array, True
+        u.x.array[:] = old["unknown"].x.array + move
         if drv.arrays.caps:                        # a contact's step filter: the guess stays intersection-free
-            self._filtered_predictor(old["unknown"], dt * old["velocity"].x.array)
+            self._filtered_predictor(old["unknown"], move)
         u.x.scatter_forward()
+        if drv.arrays.caps and drv.E is not None and move.any():
+            self._lower_start(old["unknown"])
         # supports hold still in dynamics (the scene refuses moving ones): no start check needed, and the
         # residual at the predictor is SNES's first residual (no separate assembly)
         rec = drv.solve_step(check_start=False)
@@ -221,6 +231,21 @@ class ImplicitStepper:
         if why is not None:
             s.state.rollback()
         return rec, why
+
+    def _lower_start(self, last) -> None:
+        """In contact, start where the step's energy is lower: at the predictor or at the last accepted state. The
+        predictor can carry contact nodes toward the obstacle (a rocking hemisphere's chatter under Newmark), where
+        the barrier makes Newton crawl: measured on the hemisphere, 0.1 s with Newmark, 1,100 Newton iterations
+        from the predictor, 341 from the last state; a block sliding down a slope needs the predictor (653 against
+        1,154). Two energy evaluations a step."""
+        u = self.s.u
+        at_predictor = self.driver.energy(u.vector)
+        kept = u.x.array.copy()
+        u.x.array[:] = last.x.array
+        u.x.scatter_forward()
+        if self.driver.energy(u.vector) >= at_predictor:
+            u.x.array[:] = kept
+            u.x.scatter_forward()
 
     def _filtered_predictor(self, start, step) -> None:
         """u = u_n + s dt v_n with s the largest safe fraction of that move (1 without a contact in the way)."""
