@@ -38,7 +38,7 @@ class Model:
     scene: Scene
     loaded: LoadedMesh
     V: fem.FunctionSpace           # displacement space
-    u: fem.Function                # displacement (for output, probes, pictures)
+    u: fem.Function                # displacement (for output, probes, pictures); rest = "unknown": the rest offset
     material: Material             # parameters as Constants (bind_constants)
     dx: ufl.Measure
     load: LoadFactor

@@ -71,9 +71,8 @@ def _pattern(coords: np.ndarray, kinds: np.ndarray) -> tuple[list, list]:
     if len(corners) == 3 and not edge:
         local = [corners]
     elif len(corners) == 4 and not edge:       # along the diagonal from corner 0 to its opposite corner
-        opp = max(corners[1:], key=lambda k: np.linalg.norm(coords[k] - coords[corners[0]]))
-        i, j = [k for k in corners[1:] if k != opp]
-        local = [[corners[0], i, opp], [corners[0], opp, j]]
+        a, i, j, opp = corners                     # a quadrilateral's corners in tensor order: 3 faces 0
+        local = [[a, i, opp], [a, opp, j]]
     elif len(corners) == 3:
         a, b, c = corners
         ab, bc, ca = (edge[tuple(sorted(p, key=corners.index))] for p in ((a, b), (b, c), (a, c)))

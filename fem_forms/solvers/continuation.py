@@ -150,7 +150,7 @@ def predicted_move(t: float, recent: list) -> np.ndarray:
 
 def _start(drv: SNESDriver, retry: RetryPolicy, old, recent: list, t: float) -> bool:
     """Where the attempt's Newton starts: off the saddle the last attempt converged to, along its unstable mode
-    (RetryPolicy.after_rejection); for another descent of the merit the last accepted state (from an extrapolation
+    (the saddle-escape rung of RetryPolicy.same_size); for another descent of the merit the last accepted state (from an extrapolation
     a descent can fall into another branch's basin: the PneuNet's tip angle dropped 88 -> 78 deg); else that state
     moved by predicted_move over the load increment t, when `recent` has accepted steps to extrapolate. Returns
     whether it starts off a saddle (accepted, that step is a snap)."""

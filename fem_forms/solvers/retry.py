@@ -1,11 +1,12 @@
 """What changes before a failed Newton solve is tried again: one ladder for load continuation and implicit time
-steps, each rung tried once per step size before the step is cut. After SNES failed: a fresh preconditioner (a kept
-one failed), LU instead of an indefinite iterative solve, Newton instead of a stalled chord, a factor per iteration
-instead of a stale one; after any failed attempt, the other line search where the caller gave two. After a
-converged state that acceptance rejected as a saddle of a volume-controlled problem: a start pushed off it along
-its unstable mode. Before all of these, where the caller extrapolates its start (a time step's predictor) and that
-start already left the domain (a NaN before the first iteration): the last accepted state as the start. For the retries of a volume-controlled (bordered multiplier) solve: the descent of a merit, off
-again once a step is accepted."""
+steps, each rung tried once per step size before the step is cut. First, where the caller extrapolates its start (a
+time step's predictor) and that start already left the domain (a NaN before the first iteration): the last accepted
+state as the start. After SNES failed: a fresh preconditioner or factor (where one kept across time steps failed),
+LU instead of an indefinite iterative solve, Newton instead of a stalled chord, a factor per iteration instead of a
+load step's stale one. After a converged state that acceptance rejected as a saddle of a volume-controlled problem: a
+start pushed off it along its unstable mode. Last, after any failed attempt, the other line search where the caller
+gave two. For the retries of a volume-controlled (bordered multiplier) solve: the descent of a merit, off again once
+a step is accepted."""
 from __future__ import annotations
 
 from typing import Callable
@@ -19,7 +20,7 @@ class RetryPolicy:
     (first, other), the line search of every attempt and the one a failed attempt is retried with (implicit time
     steps: the energy line search and full Newton steps); `on_direct()`: what else the caller changes once LU
     replaces CG (the time step keeps its tangent and factor from then on); `plain_start()`: the next attempt starts
-    from the last accepted state instead of the caller's extrapolation. Both in effect at the caller's rebuild."""
+    from the last accepted state instead of the caller's extrapolation. All in effect at the caller's rebuild."""
 
     def __init__(self, drv, linear_kind: str, line_searches: tuple[str, str] | None = None,
                  on_direct: Callable[[], None] | None = None, plain_start: Callable[[], None] | None = None):
@@ -62,13 +63,13 @@ class RetryPolicy:
         return True
 
     def _solver_change(self, rec, report) -> bool:
-        """After SNES failed: a fresh preconditioner, LU, Newton, or a factor per iteration (the first that
-        applies); whether one did."""
+        """After SNES failed: a fresh preconditioner (kept across time steps), LU, Newton, a fresh factor (kept
+        across time steps) or a factor per iteration (a load step's), the first that applies; whether one did."""
         drv = self.drv
         linear_failed = rec.reason == "DIVERGED_LINEAR_SOLVE"
         stale = linear_failed and drv.stale_preconditioner_failed()
-        if stale:
-            return self._once("fresh preconditioner")    # the caller's rebuild builds it afresh
+        if stale:                                    # kept across solves (a time step's): the rebuild renews it;
+            return drv.keep_preconditioner and self._once("fresh preconditioner")   # else a solve's own: cut
         if self._to_direct(rec, stale):
             if report is not None:
                 report.linear_solver = "iterative->direct"
@@ -79,7 +80,9 @@ class RetryPolicy:
             drv.reuse_factor = True                  # the chord stalled: Newton (the stale LU preconditions)
             return True
         if linear_failed and drv.reuse_factor:
-            drv.reuse_factor = False                 # stale LU too far off: factor every iteration
+            if drv.keep_preconditioner:              # a factor kept across time steps: the rebuild factors afresh
+                return self._once("fresh factor")
+            drv.reuse_factor = False                 # a load step's LU too far off: factor every iteration
             return True
         return False
 

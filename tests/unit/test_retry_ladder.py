@@ -8,8 +8,9 @@ from fem_forms.solvers.retry import RetryPolicy
 class Driver:
     """What the ladder reads and changes of an SNES driver."""
 
-    def __init__(self, linear_kind="direct", reuse_factor=False, stale=False):
+    def __init__(self, linear_kind="direct", reuse_factor=False, stale=False, keep=False):
         self.linear_kind, self.reuse_factor, self.stale = linear_kind, reuse_factor, stale
+        self.keep_preconditioner = keep             # kept across solves (a time step's), else each solve's own
         self.user_options, self.bordered, self.rebuilds = {}, None, 0
 
     def stale_preconditioner_failed(self):
@@ -36,14 +37,16 @@ def test_cg_failing_on_a_fresh_preconditioner_switches_to_lu_and_retries_the_sam
     assert drv.linear_kind == "iterative"
 
 
-def test_a_kept_preconditioner_that_failed_is_rebuilt_once_per_step():
-    drv = Driver("iterative", stale=True)
+def test_a_preconditioner_kept_across_time_steps_that_failed_is_rebuilt_once_per_step():
+    drv = Driver("iterative", stale=True, keep=True)
     policy = RetryPolicy(drv, "auto")
     rec = failed("DIVERGED_LINEAR_SOLVE")
     assert policy.same_size(rec, "x", 0.5)              # a fresh preconditioner, same step
     assert drv.linear_kind == "iterative"
     assert not policy.same_size(rec, "x", 0.5)          # stale again at the same size: cut
     assert policy.same_size(rec, "x", 0.25)             # the cut step may try it again
+    # a load step's own kept preconditioner (renewed at every solve's start anyway): the step is cut
+    assert not RetryPolicy(Driver("iterative", stale=True), "auto").same_size(rec, "x", 0.5)
 
 
 def test_a_stalled_chord_becomes_newton_then_a_stale_factor_a_fresh_one():
@@ -52,6 +55,11 @@ def test_a_stalled_chord_becomes_newton_then_a_stale_factor_a_fresh_one():
     assert policy.same_size(failed("DIVERGED_MAX_IT"), "x", 0.5) and drv.reuse_factor is True
     assert not policy.same_size(failed("DIVERGED_MAX_IT"), "x", 0.5)     # Newton failed too: cut
     assert policy.same_size(failed("DIVERGED_LINEAR_SOLVE"), "x", 0.25) and drv.reuse_factor is False
+    # a factor kept across time steps: one retry on the rebuild's fresh factor, the reuse itself kept
+    drv = Driver("direct", reuse_factor=True, keep=True)
+    policy = RetryPolicy(drv, "direct")
+    assert policy.same_size(failed("DIVERGED_LINEAR_SOLVE"), "x", 0.01) and drv.reuse_factor is True
+    assert not policy.same_size(failed("DIVERGED_LINEAR_SOLVE"), "x", 0.01)
 
 
 def test_the_other_line_search_serves_one_attempt_then_the_step_is_cut():

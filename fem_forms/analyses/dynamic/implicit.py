@@ -143,12 +143,16 @@ class ImplicitStepper:
         s.model.terms.lag(t + dt)                  # lagged terms (obstacles) where they are at the step's end
         s.model.solid.update(t + dt)               # a solid with time (viscoelastic): the step's dt
         rec, why = self._solve(dt)
+        newton = krylov = 0                        # the attempts' before the last
         while why is not None:
             same_dt = self.retry.same_size(rec, why, t + dt)     # LU, the other line search, ...
             drv.rebuild()                                      # fresh solver state after a failure
             if not same_dt:
                 break
-            rec, why = self._again(rec, dt)
+            newton, krylov = newton + rec.iterations, krylov + rec.krylov_iterations
+            rec, why = self._solve(dt)
+        rec.iterations += newton                   # the step's record counts every attempt
+        rec.krylov_iterations += krylov
         if why is not None:
             self.last_why = why
             self.fresh = True
@@ -163,13 +167,6 @@ class ImplicitStepper:
         # the error estimate (two reductions over ranks) only where the march uses it
         return StepOutcome(True, rec.iterations,
                            error=self.error_estimate(dt) if s.scene.dynamic.adaptive else math.nan)
-
-    def _again(self, rec, dt: float):
-        """Solve the step once more (after a change of solver); the record counts both attempts."""
-        rec2, why = self._solve(dt)
-        rec2.iterations += rec.iterations
-        rec2.krylov_iterations += rec.krylov_iterations
-        return rec2, why
 
     def _plain_start(self) -> None:
         """The predictor itself left the domain (a NaN before the first iteration: a contact's chatter left a
@@ -203,8 +200,9 @@ class ImplicitStepper:
             self.fresh = False
 
     def _solve(self, dt: float):
-        """One SNES solve from the constant-acceleration predictor; (record, why rejected or None).
-        A rejected solve leaves the State rolled back and the driver rebuilt."""
+        """One SNES solve from the constant-velocity predictor (or the last state: _plain_start, _lower_start);
+        (record, why rejected or None). A rejected solve leaves the State rolled back (the caller rebuilds the
+        driver)."""
         s, drv = self.s, self.driver
         old = s.state.old
         u = s.u
@@ -216,7 +214,7 @@ class ImplicitStepper:
         if drv.arrays.caps:                        # a contact's step filter: the guess stays intersection-free
             self._filtered_predictor(old["unknown"], move)
         u.x.scatter_forward()
-        if drv.arrays.caps and drv.E is not None and move.any():
+        if drv.arrays.caps and drv.E is not None and s.model.mesh.comm.allreduce(bool(move.any()), op=MPI.LOR):
             self._lower_start(old["unknown"])
         # supports hold still in dynamics (the scene refuses moving ones): no start check needed, and the
         # residual at the predictor is SNES's first residual (no separate assembly)
