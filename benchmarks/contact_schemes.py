@@ -12,7 +12,8 @@
 - Where the hemisphere's time goes (backward Euler, 0.3 s, in this process under cProfile): tangent assembly, the
   linear solves inside SNES, residuals, line-search energies, the contact term, the rest.
 
-Run: `.venv/bin/python benchmarks/contact_schemes.py` (about 25 minutes, alone on the machine). Writes benchmarks/contact_schemes.md.
+Run: `.venv/bin/python benchmarks/contact_schemes.py` (about 25 minutes, alone on the machine). Writes
+benchmarks/contact_schemes.md.
 """
 from __future__ import annotations
 
@@ -174,7 +175,8 @@ def main() -> None:
     T = rolling_period()
     lines += ["", f"| rocking hemisphere (600 steps) | steps | rejected | Newton iterations | wall | period against "
               f"rolling {T:.3f} s |", "|---|---|---|---|---|---|"]
-    for scheme, initial, limit in [("backward-euler", "rest", 4 * LIMIT_S), ("generalized-alpha", "rest", 2.4 * LIMIT_S),
+    for scheme, initial, limit in [("backward-euler", "rest", 4 * LIMIT_S),
+                                   ("generalized-alpha", "rest", 2.4 * LIMIT_S),
                                    ("newmark", "rest", 2.4 * LIMIT_S), ("newmark", "static", 2.4 * LIMIT_S)]:
         r, out, wall = run(hemisphere(mesh, scheme, initial), work / f"dome-{scheme}-{initial}", limit)
         period = rocking_period(out) if (out / "probes.csv").exists() else None

@@ -150,8 +150,9 @@ def predicted_move(t: float, recent: list) -> np.ndarray:
 
 def _start(drv: SNESDriver, retry: RetryPolicy, old, recent: list, t: float) -> bool:
     """Where the attempt's Newton starts: off the saddle the last attempt converged to, along its unstable mode
-    (the saddle-escape rung of RetryPolicy.same_size); for another descent of the merit the last accepted state (from an extrapolation
-    a descent can fall into another branch's basin: the PneuNet's tip angle dropped 88 -> 78 deg); else that state
+    (the saddle-escape rung of RetryPolicy.same_size); for another descent of the merit the last accepted state
+    (from an extrapolation a descent can fall into another branch's basin: the PneuNet's tip angle dropped
+    88 -> 78 deg); else that state
     moved by predicted_move over the load increment t, when `recent` has accepted steps to extrapolate. Returns
     whether it starts off a saddle (accepted, that step is a snap)."""
     u, merit, stability = drv.p.u, retry.merit, acceptance.stability_check(drv)
