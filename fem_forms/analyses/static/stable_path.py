@@ -51,6 +51,7 @@ class StablePath:
         self.a_uu = model.compiled("jacobian")
         self.a_ud = fem.form(ufl.derivative(model.residual, self.d, ufl.TrialFunction(Vd)))
         self.a_dd = problem.jacobian
+        self._blocks = None                # the three blocks' matrices, made once, refilled at every check
         V = model.u.function_space
         self.n_u = V.dofmap.index_map.size_local * V.dofmap.index_map_bs
         self.n_d = Vd.dofmap.index_map.size_local
@@ -68,16 +69,19 @@ class StablePath:
 
     def _hessian(self, comm) -> PETSc.Mat:
         """The energy's Hessian in (u, d) as one AIJ matrix (nest layout: each rank's u rows, then its d rows)."""
-        A_uu = fpetsc.assemble_matrix(self.a_uu)
-        A_ud = fpetsc.assemble_matrix(self.a_ud)
-        A_dd = fpetsc.assemble_matrix(self.a_dd)
-        for A in (A_uu, A_ud, A_dd):
+        forms = (self.a_uu, self.a_ud, self.a_dd)
+        if self._blocks is None:
+            self._blocks = [fpetsc.create_matrix(a) for a in forms]
+        for A, a in zip(self._blocks, forms):
+            A.zeroEntries()
+            fpetsc.assemble_matrix(A, a)
             A.assemble()
+        A_uu, A_ud, A_dd = self._blocks
         A_du = A_ud.transpose(PETSc.Mat())
         nest = PETSc.Mat().createNest([[A_uu, A_ud], [A_du, A_dd]], comm=comm)
         H = nest.convert("aij", PETSc.Mat())
         self._is = nest.getNestISs()[0]
-        for A in (A_uu, A_ud, A_du, A_dd, nest):
+        for A in (A_du, nest):
             A.destroy()
         return H
 
