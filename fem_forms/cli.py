@@ -1,4 +1,5 @@
 """Command line: `fem-forms run SCENE.toml [--out DIR] [-q] [-snes_monitor ...]`, `fem-forms study SCENE.toml`,
+`fem-forms fit TEST.csv ... --model M [--terms N] [--mode uniaxial|biaxial|shear] [--out DIR]`,
 `fem-forms schema [--out FILE]`.
 
 Exit status: 0 solved, 2 bad input (one line on stderr naming the key), 3 no convergence (a static limit
@@ -22,6 +23,9 @@ from mpi4py import MPI
 from fem_forms.analyses import run_analysis
 from fem_forms.errors import InputError, SolveError
 from fem_forms.logs import quiet_jit, stale_compile_lock
+from fem_forms.materials.fitting import FIT_MODELS, RESIDUALS, fit as fit_model, read_test
+from fem_forms.materials.homogeneous import MODES
+from fem_forms.output.fit_report import fit_text, write_fit
 from fem_forms.output.interrupts import Terminated
 from fem_forms.output.progress_line import show_progress
 from fem_forms.output.results import forget_results
@@ -78,6 +82,16 @@ def _parser() -> argparse.ArgumentParser:
     study.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override a scene key")
     study.add_argument("-v", "--verbose", action="store_true", help="show FFCx/UFL compilation logs")
     study.add_argument("-q", "--quiet", action="store_true", help="show no progress (the per-run lines)")
+    fit = sub.add_parser("fit", help="fit a rubber model to lab tests (CSV: stretch,nominal_stress in Pa); prints "
+                         "the parameters as TOML, writes fit.json and fit.png to --out (default out/<stem>_fit/)")
+    fit.add_argument("tests", nargs="+", help="CSV files with a header naming stretch and nominal_stress (Pa)")
+    fit.add_argument("--model", required=True, choices=FIT_MODELS, help="the model to fit")
+    fit.add_argument("--terms", type=int, help="terms of ogden (1-3, default 2) or yeoh (1-3, default 3)")
+    fit.add_argument("--mode", action="append", choices=MODES, help="each file's test (default uniaxial): once "
+                     "for all files, or once per file in order")
+    fit.add_argument("--residual", choices=RESIDUALS, default="relative", help="fit relative or absolute errors")
+    fit.add_argument("--out", help="output folder (created)")
+    fit.set_defaults(verbose=False, quiet=True)
     schema = sub.add_parser("schema", help="print the JSON Schema of scene files (for editors: Taplo, "
                             "Even Better TOML); the same keys, explained: the manual's scene reference",
                             epilog=f"The manual's scene reference explains every key: {built('reference/index.html')}")
@@ -92,7 +106,27 @@ def default_out(command: str, scene: str) -> Path:
     return Path("out") / (f"{stem}_study" if command == "study" else stem)
 
 
+def _fit(args) -> int:
+    """`fem-forms fit`: the fit printed, fit.json and fit.png written."""
+    modes = args.mode or ["uniaxial"]
+    if len(modes) not in (1, len(args.tests)):
+        raise InputError(f"--mode: give it once (all files) or once per file ({len(args.tests)} files, "
+                         f"{len(modes)} modes)")
+    modes = modes * len(args.tests) if len(modes) == 1 else modes
+    tests = [read_test(path, mode, path) for path, mode in zip(args.tests, modes)]
+    f = fit_model(args.model, tests, args.terms, args.residual)
+    out = Path(args.out) if args.out else Path("out") / f"{Path(args.tests[0]).stem}_fit"
+    if MPI.COMM_WORLD.rank == 0:
+        write_fit(f, out)
+        print(fit_text(f) + f"\n-> {out / 'fit.json'}, {out / 'fit.png'}")
+    return 0
+
+
 def _run(args, petsc: dict) -> int:
+    if args.command == "fit":
+        if petsc:
+            raise InputError(f"fit: no PETSc options ({next(iter(petsc))!r})")
+        return _fit(args)
     if args.command == "schema":
         if not args.out:
             print(schema_json(), end="")

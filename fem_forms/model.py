@@ -24,6 +24,7 @@ from fem_forms.solvers.snes import NonlinearProblem
 from fem_forms.solvers.staggered import AlternateMinimization
 from fem_forms.physics.thermoelastic import couple_temperature
 from fem_forms.scene import Scene
+from fem_forms.scene.material_sources import describe
 from fem_forms.state import State
 
 
@@ -185,8 +186,10 @@ class Model:
         self.terms.only_ufl(analysis)
 
     def materials_report(self) -> list[dict]:
-        """results.json "materials": name, cells, volume (m^3) and mass (kg) of each material."""
-        return self.context.materials.summary(self.parameters.density, self.dx.metadata()["quadrature_degree"])
+        """results.json "materials": name, cells, volume (m^3) and mass (kg) of each material, its model and
+        parameters (and the library entry or the fit they came from)."""
+        sizes = self.context.materials.summary(self.parameters.density, self.dx.metadata()["quadrature_degree"])
+        return [{**size, **describe(spec)} for size, spec in zip(sizes, self.scene.materials)]
 
     def probe_materials(self) -> dict[str, str]:
         """The material each probe lies in (by name): on an interface, the first listed of those whose cells

@@ -26,6 +26,8 @@ def bind_constants(material: Material, mesh) -> Material:
             object.__setattr__(bound, f.name, fem.Constant(mesh, PETSc.ScalarType(value)))
         elif isinstance(value, tuple) and len(value) == 36:            # a 6 x 6 stiffness (orthotropic)
             object.__setattr__(bound, f.name, fem.Constant(mesh, np.reshape(value, (6, 6)).astype(PETSc.ScalarType)))
+        elif isinstance(value, tuple) and value:                       # a list of terms (Ogden's mu_i, alpha_i)
+            object.__setattr__(bound, f.name, fem.Constant(mesh, np.asarray(value, dtype=PETSc.ScalarType)))
     return bound
 
 
@@ -46,9 +48,12 @@ def parameter_value(x) -> float:
 
 
 def parameter_values(x):
-    """A material parameter as a float, or as the array of a DG0 parameter field's local values."""
+    """A material parameter as a float, or as the array of a DG0 parameter field's local values (or of a
+    list parameter's terms)."""
     if isinstance(x, fem.Function):
         return np.asarray(x.x.array, dtype=float)
     if isinstance(x, fem.Constant) and np.ndim(x.value):
         return np.asarray(x.value, dtype=float)
+    if isinstance(x, (tuple, list)):
+        return np.asarray(x, dtype=float)
     return parameter_value(x)

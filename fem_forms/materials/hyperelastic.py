@@ -9,6 +9,7 @@ import ufl
 
 from fem_forms.errors import InputError
 from fem_forms.materials.anisotropic import Orthotropic, make_orthotropic
+from fem_forms.materials.isochoric import ISOCHORIC_MODELS, ISOCHORIC_PARAMETERS, make_isochoric
 from fem_forms.keys import Key, check_range
 from fem_forms.kinematics import (biot_from_invariants, biot_invariants, green_strain, invariants, small_invariants,
                                   small_strain)
@@ -224,6 +225,7 @@ MODELS = {
     "mooney-rivlin": MooneyRivlin,
     "corotated": Corotated,
     "orthotropic": Orthotropic,
+    **ISOCHORIC_MODELS,
 }
 
 
@@ -231,28 +233,59 @@ MODELS = {
 # (type only) and their ranges are checked once, against these declarations: E and nu by make_material
 # (they are not kept), mu, C10 and C01 by the model that holds them (its __post_init__, so a model built
 # directly in Python is checked the same way); lambda's rule involves mu (a positive bulk modulus)
+_MU = Key("mu", "number", "shear modulus (with lambda); gent, arruda-boyce: their mu", unit="Pa",
+          exclusive_minimum=0, checked_by="material")
 PARAMETER_KEYS = (
     Key("E", "number", "Young's modulus (with nu)", unit="Pa", exclusive_minimum=0,
         note="Young's modulus must be positive", checked_by="material"),
-    Key("nu", "number", "Poisson's ratio (with E)", exclusive_minimum=-1.0, exclusive_maximum=0.5,
+    Key("nu", "number", "Poisson's ratio (with E; or alone for the rubber models: their bulk modulus at small "
+        "strain)", exclusive_minimum=-1.0, exclusive_maximum=0.5,
         note="Poisson's ratio must lie in (-1, 0.5) for a compressible model", checked_by="material"),
-    Key("mu", "number", "shear modulus (with lambda)", unit="Pa", exclusive_minimum=0, checked_by="material"),
+    Key("mu", "either", "shear modulus (with lambda); gent, arruda-boyce: their mu; ogden: the list mu_i",
+        unit="Pa", keys=(_MU, Key("mu", "vector", "ogden: mu_i (sum mu_i alpha_i / 2 is the shear modulus)",
+                                  unit="Pa", min_items=1))),
     Key("lambda", "number", "Lame's first parameter (with mu)", unit="Pa", attr="lmbda", checked_by="material"),
-    Key("C10", "number", "Mooney-Rivlin C10 (default 3 mu / 8)", unit="Pa", minimum=0, checked_by="material"),
+    Key("C10", "number", "Mooney-Rivlin C10 (default 3 mu / 8); yeoh: C10 (half the shear modulus)", unit="Pa",
+        minimum=0, checked_by="material"),
     Key("C01", "number", "Mooney-Rivlin C01 (default mu / 8)", unit="Pa", minimum=0, checked_by="material"),
+    Key("C20", "number", "yeoh: C20, the (I1 - 3)^2 coefficient", unit="Pa", checked_by="material"),
+    Key("C30", "number", "yeoh: C30, the (I1 - 3)^3 coefficient", unit="Pa", checked_by="material"),
+    Key("alpha", "vector", "ogden: the exponents alpha_i, one per mu_i", min_items=1, checked_by="material"),
+    Key("Jm", "number", "gent: the locking limit of I1 - 3", exclusive_minimum=0, checked_by="material"),
+    Key("lambda_m", "number", "arruda-boyce: the chains' locking stretch", exclusive_minimum=0,
+        checked_by="material"),
+    Key("bulk", "number", "the rubber models' bulk modulus K (or nu): psi = W(J^(-1/3) F) + K/2 (ln J)^2",
+        unit="Pa", exclusive_minimum=0, checked_by="material"),
 )
-_PARAMETER = {k.name: k for k in PARAMETER_KEYS}
+_PARAMETER = {k.name: k for k in PARAMETER_KEYS if k.kind != "either"} | {"mu": _MU}
 
 
 def make_material(model: str, *, E: float | None = None, nu: float | None = None,
-                  mu: float | None = None, lmbda: float | None = None,
+                  mu: float | list | None = None, lmbda: float | None = None,
                   C10: float | None = None, C01: float | None = None, orthotropic: dict | None = None,
-                  axis1=None, axis2=None) -> Material:
+                  axis1=None, axis2=None, **rubber) -> Material:
     """Build a named model from (E, nu) or (mu, lambda); Mooney-Rivlin also takes C10, C01
     (default split C01 = mu/8, C10 = 3 mu/8 of mu = 2 (C10 + C01) when only E, nu are given); orthotropic
-    its nine constants (`orthotropic`, by name) in the axes axis1, axis2."""
+    its nine constants (`orthotropic`, by name) in the axes axis1, axis2; the rubber models of isochoric.py
+    their own parameters (`rubber`: alpha, C20, C30, Jm, lambda_m) with mu or C10, and bulk or nu."""
     if model not in MODELS:
         raise InputError(f"material.model = {model!r}: unknown model (choose from {', '.join(MODELS)})")
+    if model in ISOCHORIC_MODELS:
+        for name, value in (("E", E), ("lambda", lmbda), ("C01", C01), *(orthotropic or {}).items(),
+                            ("axis1", axis1), ("axis2", axis2)):
+            if value is not None:
+                raise InputError(f"material.{name}: not for model = {model!r} (it takes "
+                                 f"{', '.join(ISOCHORIC_PARAMETERS[model])} and bulk or nu)")
+        if nu is not None:
+            check_range(_PARAMETER["nu"], nu, "material.nu")
+        return make_isochoric(model, {"mu": mu, "C10": C10, **rubber}, nu)
+    extra = next((k for k, v in rubber.items() if v is not None), None)
+    if extra is not None:
+        raise InputError(f"material.{extra}: only for model = "
+                         f"{' or '.join(repr(m) for m, ps in ISOCHORIC_PARAMETERS.items() if extra in ps)} "
+                         f"(model is {model!r})")
+    if isinstance(mu, (list, tuple)):
+        raise InputError(f"material.mu = {list(mu)}: a list only for model = 'ogden' (model is {model!r})")
     given = {k: v for k, v in (orthotropic or {}).items() if v is not None}
     if model == "orthotropic":
         extra = next((n for n, v in (("E", E), ("nu", nu), ("mu", mu), ("lambda", lmbda), ("C10", C10),

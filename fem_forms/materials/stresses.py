@@ -40,16 +40,18 @@ def _smallest(value) -> float:
 
 
 def mixed_energy(material: Material, F, p):
-    """Perturbed-Lagrangian energy of the u-p formulation: psi|_(lambda=0)(F) + p theta(F) - p^2/(2 lambda).
-    Stationary in p at p = lambda theta, where it equals psi(F); finite as lambda grows (nu -> 1/2),
-    so nearly incompressible parts neither lock nor fail."""
-    if not hasattr(material, "volumetric") or not hasattr(material, "lmbda"):
+    """Perturbed-Lagrangian energy of the u-p formulation: psi|_(k=0)(F) + p theta(F) - p^2/(2 k), k the
+    modulus of the volumetric part (lambda, or the rubber models' bulk modulus). Stationary in p at
+    p = k theta, where it equals psi(F); finite as k grows (nu -> 1/2), so nearly incompressible parts
+    neither lock nor fail."""
+    name = getattr(material, "VOLUMETRIC_MODULUS", "lmbda")
+    if not hasattr(material, "volumetric") or not hasattr(material, name):
         raise InputError("discretization.formulation = 'mixed': needs a built-in material model "
                          "(a user psi(F) has no volumetric part to split off)")
-    if _smallest(material.lmbda) <= 0:
+    modulus = getattr(material, name)
+    if _smallest(modulus) <= 0:
         raise InputError("discretization.formulation = 'mixed': needs lambda > 0 (nu > 0); it is meant "
                          "for nearly incompressible materials")
-    deviatoric = copy.copy(material)                 # lambda = 0, without re-validating Constants
-    object.__setattr__(deviatoric, "lmbda", 0.0)
-    return deviatoric.psi(F) + p * material.volumetric(F) - p**2 / (2 * material.lmbda)
-
+    deviatoric = copy.copy(material)                 # k = 0, without re-validating Constants
+    object.__setattr__(deviatoric, name, 0.0)
+    return deviatoric.psi(F) + p * material.volumetric(F) - p**2 / (2 * modulus)

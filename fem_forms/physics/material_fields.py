@@ -29,6 +29,12 @@ def _numeric_fields(material) -> list[str]:
     return [f.name for f in dataclasses.fields(material) if numeric(getattr(material, f.name))]
 
 
+def _kind(material) -> tuple:
+    """What materials must share to share one psi with DG0 parameters: the model, and the number of terms of
+    its list parameters (two Ogden materials of 2 and 3 terms are two parts)."""
+    return (type(material), *(np.shape(getattr(material, n)) for n in _numeric_fields(material)))
+
+
 @dataclass
 class MaterialPart:
     """The materials (scene indices) sharing one model, its psi with DG0 parameters, and its cells."""
@@ -65,7 +71,7 @@ class MaterialBinding:
         built = [s.material for s in specs]
         kinds: dict = {}
         for i, m in enumerate(built):
-            kinds.setdefault(type(m), []).append(i)
+            kinds.setdefault(_kind(m), []).append(i)
         self.parts = []
         for members in kinds.values():
             first = built[members[0]]
@@ -81,7 +87,7 @@ class MaterialBinding:
                 if is_small_strain(p.material):
                     p.material = GreenStrainForm(p.material)
         self.material = self.parts[0].material if len(self.parts) == 1 else MaterialMix(self.parts)
-        self.layout = [(s.model, s.where) for s in specs]           # what new values may not change
+        self.layout = [(s.model, s.where, _kind(m)) for s, m in zip(specs, built)]   # what new values may not change
 
     @staticmethod
     def _values(built: list, members: list[int], name: str) -> list:
@@ -92,9 +98,9 @@ class MaterialBinding:
 
     def update(self, specs: list) -> None:
         """New parameter values (the same models on the same cells; anything else needs a new model)."""
-        if [(s.model, s.where) for s in specs] != self.layout:
-            raise InputError("material: a material's model or cells changed: that needs a new model (new values "
-                             "of its constants do not)")
+        if [(s.model, s.where, _kind(s.material)) for s in specs] != self.layout:
+            raise InputError("material: a material's model, number of terms or cells changed: that needs a new "
+                             "model (new values of its constants do not)")
         built = [s.material for s in specs]
         for part in self.parts:
             for name, f in part.fields.items():

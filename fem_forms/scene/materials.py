@@ -11,12 +11,17 @@ from fem_forms.errors import InputError
 from fem_forms.materials import MODELS, Material, make_material
 from fem_forms.materials.anisotropic import FIBER_MODELS, ORTHOTROPIC_CONSTANTS
 from fem_forms.materials.hyperelastic import PARAMETER_KEYS, SMALL_STRAIN_MODELS
+from fem_forms.materials.fitting import RESIDUALS
+from fem_forms.materials.isochoric import ISOCHORIC_MODELS
+from fem_forms.materials.library import LIBRARY
 from fem_forms.materials.plasticity import make_plasticity
+from fem_forms.scene.material_sources import from_fit, from_library
 from fem_forms.scene.plasticity import PLASTICITY, material_plasticity_rules
 from fem_forms.scene.reader import Key, Section, Table
 from fem_forms.scene.selectors import Selector, where
 
 REGION_KINDS = ("box", "group")
+RUBBER_PARAMETERS = ("C20", "C30", "alpha", "Jm", "lambda_m", "bulk")     # the isochoric models' own keys
 ORTHOTROPIC_DOCS = {"E": "Young's modulus", "G": "shear modulus", "n": "Poisson's ratio"}
 THERMAL_CONSTANTS = ("conductivity", "specific_heat", "expansion")   # per material, else [thermal]'s
 MATERIAL_KEYS = (
@@ -27,6 +32,18 @@ MATERIAL_KEYS = (
     Key("model", "string", "hyperelastic energy density", default="neo-hookean", choices=tuple(MODELS),
         note=f"unknown model (choose from {', '.join(MODELS)})"),
     *PARAMETER_KEYS,
+    Key("library", "string", "a named material of the library (its model, parameters, density and source; the "
+        "manual's materials page lists them)", choices=tuple(LIBRARY), note=f"unknown material (the library has "
+        f"{', '.join(LIBRARY)})"),
+    Key("fit", "table", "fit the model (ogden, yeoh, gent, arruda-boyce) to lab tests before the analysis: CSV "
+        "files with the columns stretch, nominal_stress (Pa)", keys=(
+            Key("uniaxial", "file", "uniaxial tension test (a dog-bone)", attr="fit_uniaxial"),
+            Key("biaxial", "file", "equibiaxial tension test (a bulge or biaxial rig)", attr="fit_biaxial"),
+            Key("shear", "file", "pure shear test (a wide strip)", attr="fit_shear"),
+            Key("terms", "integer", "terms of ogden (default 2) or yeoh (default 3)", minimum=1, maximum=3,
+                attr="fit_terms"),
+            Key("residual", "string", "fit relative or absolute errors", default="relative", choices=RESIDUALS,
+                attr="fit_residual"))),
     Key("rho", "number", "mass density (gravity and modal analysis need it)", default=0.0, unit="kg/m^3",
         minimum=0),
     Key("conductivity", "number", "thermal conductivity k of this material (default: thermal.conductivity)",
@@ -77,6 +94,19 @@ class MaterialSpec:
     lmbda: float | None = None
     C10: float | None = None
     C01: float | None = None
+    C20: float | None = None
+    C30: float | None = None
+    alpha: list | None = None
+    Jm: float | None = None
+    lambda_m: float | None = None
+    bulk: float | None = None
+    library: str | None = None
+    fit_uniaxial: Path | None = None
+    fit_biaxial: Path | None = None
+    fit_shear: Path | None = None
+    fit_terms: int | None = None
+    fit_residual: str = "relative"
+    fitted: Any = None                         # the Fit (materials.fitting) the parameters came from
     rho: float = _MAT["rho"].field()
     conductivity: float | None = None
     specific_heat: float | None = None
@@ -113,13 +143,14 @@ class MaterialSpec:
         """The validated model, built once when the scene is read (again only if a value was changed
         since, so a changed E can never be silently ignored)."""
         ortho = {n: getattr(self, n) for n in ORTHOTROPIC_CONSTANTS}
+        rubber = {n: getattr(self, n) for n in RUBBER_PARAMETERS}
         values = (self.model, self.E, self.nu, self.mu, self.lmbda, self.C10, self.C01, tuple(ortho.values()),
-                  self.axis1, self.axis2)
+                  self.axis1, self.axis2, tuple(rubber.values()))
         if self._built is None or self._built[0] != values:
             try:
                 built = make_material(self.model, E=self.E, nu=self.nu, mu=self.mu, lmbda=self.lmbda,
                                       C10=self.C10, C01=self.C01, orthotropic=ortho, axis1=self.axis1,
-                                      axis2=self.axis2)
+                                      axis2=self.axis2, **rubber)
             except InputError as e:                    # the models name "material."; say which one
                 raise InputError(str(e).replace("material", self.key, 1)) from None
             self._built = (values, built)
@@ -134,7 +165,10 @@ class MaterialSpec:
 
 def _material_rules(s: MaterialSpec, t: Table) -> None:
     s.key = t.path
-    if (s.E is not None or s.nu is not None) and (s.mu is not None or s.lmbda is not None):
+    from_library(s, t)
+    from_fit(s, t)
+    if s.model not in ISOCHORIC_MODELS and (s.E is not None or s.nu is not None) and (s.mu is not None
+                                                                                      or s.lmbda is not None):
         raise InputError(f"{t.path}: give either E and nu or mu and lambda, not both")
     s.material                                           # builds and validates the model once, now
     _fiber_rules(s, t)

@@ -212,7 +212,7 @@ def read_value(k: Key, v: Any, key: str, base_dir: Path) -> Any:
         return read_selection(k, v, key)
     if k.kind == "either":
         for alt in k.keys:
-            if isinstance(v, dict) == (alt.kind == "table"):
+            if _shape(v) == _shape_of_kind(alt.kind):
                 if alt.kind != "table":
                     return read_value(alt, v, key, base_dir)
                 t = Table(v, key, base_dir)
@@ -221,6 +221,16 @@ def read_value(k: Key, v: Any, key: str, base_dir: Path) -> Any:
                 return out
         raise InputError(f"{key} = {v!r}: must be " + " or ".join(a.doc for a in k.keys))
     raise TypeError(f"{key}: no reader for kind {k.kind!r}")   # a declaration error, not user input
+
+
+def _shape(v: Any) -> str:
+    """What an `either` key's alternatives are told apart by: a table, a list or a single value."""
+    return "table" if isinstance(v, dict) else "list" if isinstance(v, list) else "value"
+
+
+def _shape_of_kind(kind: str) -> str:
+    return ("table" if kind == "table" else "list" if kind in ("vector", "points", "tables", "axes", "selection")
+            else "value")
 
 
 def read_selection(k: Key, v: Any, key: str) -> list:

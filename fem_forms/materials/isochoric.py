@@ -1,0 +1,193 @@
+"""Rubber models with an isochoric-volumetric split: psi(F) = W(C_bar) + K/2 (ln J)^2, C_bar = J^(-2/3) C the
+volume-preserving part of the deformation (Simo & Taylor 1991; FEBio's uncoupled materials, Abaqus' rubber
+models with ln J in place of J - 1). W is the incompressible energy the literature fits (Ogden, Yeoh, Gent,
+Arruda-Boyce), so published parameters carry over as printed; the bulk modulus K (`bulk`, or nu through the
+initial shear modulus) says how nearly incompressible the part is, and the mixed u-p formulation takes
+p = K ln J as its pressure."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+from typing import Callable, ClassVar
+
+import numpy as np
+import ufl
+
+from fem_forms.errors import InputError
+from fem_forms.physics.principal import principal_values
+
+# Arruda-Boyce's series of the inverse Langevin function (Arruda & Boyce 1993; Abaqus, FEBio): C_i / lambda_m^(2i-2)
+ARRUDA_BOYCE_SERIES = (1 / 2, 1 / 20, 11 / 1050, 19 / 7000, 519 / 673750)
+
+
+def items(x) -> list:
+    """The entries of a parameter list: a tuple of numbers, or a vector Constant / DG0 field (bound)."""
+    if isinstance(x, (tuple, list)):
+        return list(x)
+    return [x[i] for i in range(x.ufl_shape[0])]
+
+
+def isochoric_invariant(F):
+    """I1_bar = J^(-2/3) tr C, the first invariant of C_bar (3 for any pure dilatation)."""
+    return ufl.det(F) ** (-2.0 / 3.0) * ufl.tr(F.T * F)
+
+
+@dataclass(frozen=True)
+class Isochoric:
+    """psi = W(C_bar) + bulk/2 (ln J)^2; a subclass gives W (`isochoric`) and its initial shear modulus."""
+    bulk: float
+    VOLUMETRIC_MODULUS: ClassVar[str] = "bulk"      # the modulus the mixed u-p formulation splits off
+
+    def __post_init__(self):
+        if not (math.isfinite(self.bulk) and self.bulk > 0):
+            raise InputError(f"material.bulk = {self.bulk}: the bulk modulus must be positive")
+        mu0 = self.shear_modulus(np.asarray)
+        if not (np.all(np.isfinite(mu0)) and np.all(mu0 > 0)):
+            raise InputError(f"material: the initial shear modulus is {float(np.min(mu0)):.6g} Pa; it must be "
+                             "positive (a stable material at rest)")
+
+    def psi(self, F):
+        return self.isochoric(F) + 0.5 * self.bulk * ufl.ln(ufl.det(F)) ** 2
+
+    def volumetric(self, F):
+        """theta = ln J: psi = psi|_(bulk=0) + bulk/2 theta^2 (the mixed u-p formulation)."""
+        return ufl.ln(ufl.det(F))
+
+    def young_modulus(self, value: Callable):
+        """E = 9 K mu0 / (3 K + mu0) of the small-strain limit."""
+        mu0, K = self.shear_modulus(value), np.asarray(value(self.bulk))
+        return 9 * K * mu0 / (3 * K + mu0)
+
+    def isochoric(self, F):
+        raise NotImplementedError
+
+    def shear_modulus(self, value: Callable):
+        raise NotImplementedError
+
+
+def _rows(value: Callable, x, n: int) -> np.ndarray:
+    """A list parameter's values as rows of n (one row per cell of a DG0 field, one row for numbers)."""
+    return np.reshape(np.asarray(value(x), dtype=float), (-1, n))
+
+
+@dataclass(frozen=True)
+class Ogden(Isochoric):
+    """Ogden (1972): W = sum_i mu_i / alpha_i (l1^alpha_i + l2^alpha_i + l3^alpha_i - 3) of the isochoric
+    principal stretches (the closed-form eigenvalues of C_bar, physics/principal.py: a repeated stretch, as in
+    uniaxial tension, keeps the stress exact); initial shear modulus sum_i mu_i alpha_i / 2."""
+    mu: tuple = ()
+    alpha: tuple = ()
+
+    def __post_init__(self):
+        if not self.mu or len(self.mu) != len(self.alpha):
+            raise InputError(f"material.alpha: give one exponent per mu (mu has {len(self.mu)}, alpha "
+                             f"{len(self.alpha)})")
+        for i, a in enumerate(self.alpha):
+            if not (math.isfinite(a) and a != 0):
+                raise InputError(f"material.alpha[{i}] = {a}: must be a nonzero number")
+        super().__post_init__()
+
+    def shear_modulus(self, value: Callable):
+        n = len(self.mu) if isinstance(self.mu, tuple) else self.mu.ufl_shape[0]
+        return 0.5 * (_rows(value, self.mu, n) * _rows(value, self.alpha, n)).sum(axis=1)
+
+    def isochoric(self, F):
+        J = ufl.det(F)
+        squares = principal_values(J ** (-2.0 / 3.0) * F.T * F)     # l_a^2
+        return sum(m / a * (sum(s ** (a / 2) for s in squares) - 3)
+                   for m, a in zip(items(self.mu), items(self.alpha)))
+
+
+@dataclass(frozen=True)
+class Yeoh(Isochoric):
+    """Yeoh (1993): W = C10 (I1_bar - 3) + C20 (I1_bar - 3)^2 + C30 (I1_bar - 3)^3; shear modulus 2 C10."""
+    C10: float = 0.0
+    C20: float = 0.0
+    C30: float = 0.0
+
+    def shear_modulus(self, value: Callable):
+        return 2.0 * np.asarray(value(self.C10), dtype=float)
+
+    def isochoric(self, F):
+        x = isochoric_invariant(F) - 3
+        return self.C10 * x + self.C20 * x ** 2 + self.C30 * x ** 3
+
+
+@dataclass(frozen=True)
+class Gent(Isochoric):
+    """Gent (1996): W = -mu Jm / 2 ln(1 - (I1_bar - 3) / Jm); the chains lock as I1_bar - 3 reaches Jm (the
+    energy is infinite there: no state beyond it exists)."""
+    mu: float = 0.0
+    Jm: float = 0.0
+
+    def __post_init__(self):
+        if not (math.isfinite(self.Jm) and self.Jm > 0):
+            raise InputError(f"material.Jm = {self.Jm}: the locking limit Jm must be positive")
+        super().__post_init__()
+
+    def shear_modulus(self, value: Callable):
+        return np.asarray(value(self.mu), dtype=float)
+
+    def isochoric(self, F):
+        return -0.5 * self.mu * self.Jm * ufl.ln(1 - (isochoric_invariant(F) - 3) / self.Jm)
+
+    def locking(self, F):
+        """(I1_bar - 3) / Jm: 1 where the chains lock."""
+        return (isochoric_invariant(F) - 3) / self.Jm
+
+
+@dataclass(frozen=True)
+class ArrudaBoyce(Isochoric):
+    """Arruda & Boyce (1993), eight-chain: W = mu sum_i C_i / lambda_m^(2i - 2) (I1_bar^i - 3^i), the 5-term
+    series of Abaqus and FEBio; lambda_m the chains' locking stretch."""
+    mu: float = 0.0
+    lambda_m: float = 0.0
+
+    def __post_init__(self):
+        if not (math.isfinite(self.lambda_m) and self.lambda_m > 0):
+            raise InputError(f"material.lambda_m = {self.lambda_m}: the locking stretch must be positive")
+        super().__post_init__()
+
+    def shear_modulus(self, value: Callable):
+        """mu0 = 2 dW/dI1 at I1 = 3: mu (1 + 3/(5 lm^2) + 99/(175 lm^4) + ...)."""
+        lm2 = np.asarray(value(self.lambda_m), dtype=float) ** 2
+        return np.asarray(value(self.mu), dtype=float) * sum(
+            2 * i * c * 3.0 ** (i - 1) / lm2 ** (i - 1) for i, c in enumerate(ARRUDA_BOYCE_SERIES, start=1))
+
+    def isochoric(self, F):
+        I1 = isochoric_invariant(F)
+        return self.mu * sum(c / self.lambda_m ** (2 * i - 2) * (I1 ** i - 3 ** i)
+                             for i, c in enumerate(ARRUDA_BOYCE_SERIES, start=1))
+
+
+ISOCHORIC_MODELS = {"ogden": Ogden, "yeoh": Yeoh, "gent": Gent, "arruda-boyce": ArrudaBoyce}
+# each model's parameters (the scene keys), the required ones first; bulk or nu comes with all of them
+ISOCHORIC_PARAMETERS = {"ogden": ("mu", "alpha"), "yeoh": ("C10", "C20", "C30"), "gent": ("mu", "Jm"),
+                        "arruda-boyce": ("mu", "lambda_m")}
+_REQUIRED = {"ogden": ("mu", "alpha"), "yeoh": ("C10",), "gent": ("mu", "Jm"), "arruda-boyce": ("mu", "lambda_m")}
+
+
+def make_isochoric(model: str, given: dict, nu: float | None) -> Isochoric:
+    """A rubber model from its parameters (`given`: name -> value or None; `bulk` among them) and the bulk
+    modulus K, given as bulk or through Poisson's ratio nu at small strain: K = 2 mu0 (1 + nu) / (3 (1 - 2 nu))."""
+    own = ISOCHORIC_PARAMETERS[model]
+    values = {k: v for k, v in given.items() if v is not None and k != "bulk"}
+    for name in values:
+        if name not in own:
+            raise InputError(f"material.{name}: not for model = {model!r} (it takes {', '.join(own)} and bulk "
+                             "or nu)")
+    for name in _REQUIRED[model]:
+        if name not in values:
+            raise InputError(f"material.{name}: missing (model = {model!r} needs {' and '.join(_REQUIRED[model])})")
+    if model == "ogden":
+        values = {k: tuple(float(x) for x in (v if isinstance(v, (list, tuple)) else [v])) for k, v in values.items()}
+    elif isinstance(values.get("mu"), (list, tuple)):
+        raise InputError(f"material.mu = {list(values['mu'])}: a list only for model = 'ogden'")
+    bulk = given.get("bulk")
+    if (bulk is None) == (nu is None):
+        raise InputError(f"material: model = {model!r} needs bulk (the bulk modulus, Pa) or nu, one of the two")
+    cls = ISOCHORIC_MODELS[model]
+    if bulk is None:
+        mu0 = float(np.min(cls(bulk=1.0, **values).shear_modulus(np.asarray)))
+        bulk = 2 * mu0 * (1 + nu) / (3 * (1 - 2 * nu))
+    return cls(bulk=float(bulk), **values)

@@ -1,0 +1,125 @@
+"""The rubber models (Ogden, Yeoh, Gent, Arruda-Boyce; isochoric-volumetric split) in finite elements, against
+references computed apart from the UFL energies:
+- a cube held on rollers and stretched to an isochoric homogeneous state (uniaxial, equibiaxial, pure shear):
+  its support reactions give sigma_1 - sigma_3, which must equal the incompressible closed form of the
+  literature (homogeneous.py) to 1e-8;
+- a compressible cube under dead uniaxial tension (lateral faces free): its stretches against the stationary
+  point of psi(l1, l2, l2) = W(J^-1/3 l) + K/2 ln(J)^2 written with numpy and differentiated by complex steps,
+  in the displacement and the mixed u-p formulations;
+- one Ogden term with alpha = 2 is the (split) neo-Hookean solid, Yeoh with C10 alone: a bent beam agrees;
+- 2 ranks give the 1-rank answer."""
+import numpy as np
+import pytest
+from scipy.optimize import fsolve
+
+import fem_forms as ff
+from fem_forms.materials.homogeneous import mode_stretches, stress_difference
+from helpers import serial_and_two_ranks
+
+PARAMETERS = {"ogden": {"mu": [0.63e6, 0.0012e6, -0.01e6], "alpha": [1.3, 5.0, -2.0]},   # Ogden 1972, Treloar
+              "yeoh": {"C10": 1.0e5, "C20": -2.0e3, "C30": 50.0},
+              "gent": {"mu": 2.0e5, "Jm": 30.0},
+              "arruda-boyce": {"mu": 2.0e5, "lambda_m": 2.5}}
+TESTS = (("uniaxial", 2.0), ("biaxial", 1.8), ("shear", 2.5), ("uniaxial", 0.6))
+
+
+def rollered_cube(model: str, stretches, **material) -> dict:
+    """A unit cube, each face's normal displacement held: (l_a - 1) on the far faces, 0 on the near ones."""
+    fix = []
+    for a, ax in enumerate("xyz"):
+        fix.append({"name": f"{ax}0", "where": {"axis": ax, "at": 0.0}, "components": [ax]})
+        far = [0.0, 0.0, 0.0]
+        far[a] = float(stretches[a]) - 1.0
+        fix.append({"name": f"{ax}1", "where": {"axis": ax, "at": 1.0}, "components": [ax], "value": far})
+    return {"mesh": {"size": [1.0, 1.0, 1.0], "cells": [1, 1, 1]},
+            "material": {"model": model, **PARAMETERS[model], "bulk": 1.0e8, **material},
+            "fix": fix, "solver": {"steps": 4}, "output": {"picture": False, "fields": []}}
+
+
+@pytest.mark.parametrize("model", list(PARAMETERS))
+def test_homogeneous_stresses_equal_the_closed_forms(model):
+    p = {k: np.asarray(v) for k, v in PARAMETERS[model].items()}
+    for mode, lam in TESTS:
+        l = mode_stretches(mode, lam)                        # det = 1: the volumetric part carries nothing
+        s = ff.solve_static(ff.Scene.from_dict(rollered_cube(model, l))).summary()
+        assert s["converged"] and s.get("stable", True) is not False
+        sigma = [s["reactions"][f"{ax}1"][a] * l[a] for a, ax in enumerate("xyz")]    # J = 1, unit areas
+        closed = float(stress_difference(model, p, l[0], l[2], sum(x * x for x in l)))
+        assert sigma[0] - sigma[2] == pytest.approx(closed, rel=1e-8), (mode, lam)
+
+
+def complex_step_stretches(model: str, T: float, bulk: float) -> tuple[float, float]:
+    """(l1, l2) of the homogeneous state under dead uniaxial tension T with free lateral faces: dpsi/dl1 = T,
+    dpsi/dl2 = 0 for psi(l1, l2, l2) written with numpy from the models' textbook energies."""
+    p = PARAMETERS[model]
+
+    def psi(l1, l2, l3):
+        J = l1 * l2 * l3
+        b = [x * J ** (-1 / 3) for x in (l1, l2, l3)]
+        x = sum(v * v for v in b) - 3
+        if model == "ogden":
+            W = sum(m / a * (sum(v ** a for v in b) - 3) for m, a in zip(p["mu"], p["alpha"]))
+        elif model == "yeoh":
+            W = p["C10"] * x + p["C20"] * x ** 2 + p["C30"] * x ** 3
+        elif model == "gent":
+            W = -0.5 * p["mu"] * p["Jm"] * np.log(1 - x / p["Jm"])
+        else:
+            c = (1 / 2, 1 / 20, 11 / 1050, 19 / 7000, 519 / 673750)
+            W = p["mu"] * sum(ci / p["lambda_m"] ** (2 * i) * ((x + 3) ** (i + 1) - 3 ** (i + 1))
+                              for i, ci in enumerate(c))
+        return W + 0.5 * bulk * np.log(J) ** 2
+
+    h = 1e-30
+
+    def eqs(v):
+        l1, l2 = v
+        return [psi(l1 + 1j * h, l2, l2).imag / h - T, psi(l1, l2 + 1j * h, l2).imag / (2 * h)
+                + psi(l1, l2, l2 + 1j * h).imag / (2 * h)]
+    return tuple(fsolve(eqs, [1.2, 0.9], xtol=1e-12))
+
+
+@pytest.mark.parametrize("model, formulation", [("ogden", "displacement"), ("ogden", "mixed"), ("yeoh", "mixed"),
+                                                ("gent", "mixed"), ("arruda-boyce", "mixed")])
+def test_compressible_uniaxial_tension_matches_the_split_energy(model, formulation):
+    T, bulk = 1.5e5, 2.0e6                   # a compressible rubber: the volumetric part matters (J ~ 0.95)
+    l1, l2 = complex_step_stretches(model, T, bulk)
+    d = {"mesh": {"size": [1.0, 1.0, 1.0], "cells": [1, 1, 1]},
+         "material": {"model": model, **PARAMETERS[model], "bulk": bulk},
+         "discretization": {"degree": 2 if formulation == "mixed" else 1, "formulation": formulation},
+         "fix": [{"where": {"axis": a, "at": 0.0}, "components": [a]} for a in "xyz"],
+         "load": [{"type": "traction", "where": {"axis": "x", "at": 1.0}, "value": [T, 0.0, 0.0]}],
+         "solver": {"steps": 2}, "output": {"picture": False, "fields": [], "probes": {"corner": [1.0, 1.0, 1.0]}}}
+    res = ff.solve_static(ff.Scene.from_dict(d))
+    assert res.report.converged
+    assert abs(l1 * l2 * l2 - 1) > 1e-3                  # the volumetric part is exercised
+    np.testing.assert_allclose(res.probes["corner"], [l1 - 1, l2 - 1, l2 - 1], rtol=1e-8)
+
+
+def bent_beam(material: dict) -> dict:
+    return {"mesh": {"size": [0.2, 0.02, 0.02], "cells": [10, 2, 2]},
+            "material": {**material, "bulk": 5.0e6, "rho": 1100.0},
+            "fix": [{"where": {"axis": "x", "at": 0.0}}],
+            "load": [{"type": "gravity", "g": [0.0, 0.0, -9.81 * 20]}],
+            "output": {"picture": False, "fields": [], "probes": {"tip": [0.2, 0.01, 0.01]}}}
+
+
+def test_one_ogden_term_with_alpha_2_is_the_neo_hookean_solid():
+    """W = mu/2 (l1^2 + l2^2 + l3^2 - 3) = mu/2 (I1_bar - 3): Ogden (mu, alpha = 2) and Yeoh (C10 = mu/2) are
+    one energy; a beam bent well past small strain under 20 g deflects alike (eigenvalues against I1)."""
+    mu = 3.0e5
+    ogden = ff.solve_static(ff.Scene.from_dict(bent_beam({"model": "ogden", "mu": [mu], "alpha": [2.0]})))
+    yeoh = ff.solve_static(ff.Scene.from_dict(bent_beam({"model": "yeoh", "C10": mu / 2})))
+    assert ogden.report.converged and yeoh.report.converged
+    assert -yeoh.probes["tip"][2] > 0.02                            # large deflection: 10 % of the length
+    np.testing.assert_allclose(ogden.probes["tip"], yeoh.probes["tip"], rtol=1e-7)
+
+
+@pytest.mark.mpi
+def test_two_ranks_give_the_serial_answer(tmp_path):
+    d = bent_beam({"model": "ogden", **PARAMETERS["ogden"]})
+    d["output"]["probes"]["mid"] = [0.1, 0.01, 0.0]
+    one, two = serial_and_two_ranks(tmp_path, d)
+    for name in ("tip", "mid"):
+        np.testing.assert_allclose(two["probes"][name]["displacement"], one["probes"][name]["displacement"],
+                                   rtol=1e-9, atol=1e-12)
+    assert two["materials"][0]["model"] == one["materials"][0]["model"] == "ogden"
