@@ -20,8 +20,6 @@ and the solver follows the snap, the tip angle falling from 86.6 to 72.5 deg at 
 (measured, benchmarks/pneunet.md). A positive C01 stiffens the roofs as they stretch: the pressure rises
 all the way, every state is stable, and 26 ml curls the actuator past 90 deg.
 """
-import csv
-import math
 import sys
 from pathlib import Path
 
@@ -46,11 +44,6 @@ h = float(sys.argv[2]) if len(sys.argv) > 2 else 0.006
 comm = MPI.COMM_WORLD
 
 
-def tip_angle(top, bottom) -> float:
-    """Rotation (degrees) about y of the end face: the segment bottom -> top starts along +z."""
-    return math.degrees(math.atan2(top[0] - bottom[0], pneunet.H + top[2] - bottom[2]))
-
-
 def recorder(model, rows: list, frames: list):
     """A progress reporter appending (injected volume, pressure, tip angle) and the deformed boundary (rank 0)
     after each accepted step."""
@@ -59,20 +52,11 @@ def recorder(model, rows: list, frames: list):
             model.sync_displacement()
             cav = cavity_report(model.terms)["chambers"]
             u = model.probes.evaluate(model.u)
-            rows.append((cav["volume_change"], cav["pressure"], tip_angle(u["tip_top"], u["tip_bottom"])))
+            rows.append((cav["volume_change"], cav["pressure"], pneunet.tip_angle(u["tip_top"], u["tip_bottom"])))
             surface = boundary_surface(model.u)             # gathered on rank 0 for the GIF
             if surface is not None:
                 frames.append((cav["volume_change"] * 1e6, surface))
     return report
-
-
-def from_probes_csv(path: Path, v0: float) -> list:
-    """The same rows from the run's probes.csv (one per accepted load step), if it has the columns."""
-    with open(path) as f:
-        rows = list(csv.DictReader(f))
-    return [(float(r["chambers_volume"]) - v0, float(r["chambers_pressure"]),
-             tip_angle([float(r[f"tip_top_u{c}"]) for c in "xyz"], [float(r[f"tip_bottom_u{c}"]) for c in "xyz"]))
-            for r in rows]
 
 
 ff.quiet_jit()
@@ -90,7 +74,7 @@ s = write_static_outputs(result, out)
 if comm.rank == 0:
     cav = s.get("cavities", {}).get("chambers")
     try:
-        rows = from_probes_csv(out / "probes.csv", cav["volume"] - cav["volume_change"])
+        rows = pneunet.curve_from_probes(out / "probes.csv", cav["volume"] - cav["volume_change"])
         source = "probes.csv"
     except (OSError, KeyError, TypeError):
         source = "recorded per step"

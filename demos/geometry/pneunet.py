@@ -12,6 +12,8 @@ down towards its base. With `layer` > 0 the lowest `layer` metres of the base ar
     python demos/geometry/pneunet.py [--h 0.003] [--out pneunet.msh]
 """
 import argparse
+import csv
+import math
 from pathlib import Path
 
 import gmsh
@@ -24,8 +26,25 @@ CHAMBERS, CHAMBER_X, PITCH, FIRST_X = 6, 0.010, 0.014, 0.010
 SIDE, TOP, BASE = 0.003, 0.0025, 0.006
 # the strain-limiting layer of the demo: the lowest 2 mm of the base, a harder silicone
 LAYER = 0.002
+
 # channel joining the chambers: 4 mm wide, 2 mm high, on the chambers' floor, from the first to the last
 CHANNEL_W, CHANNEL_H = 0.004, 0.002
+
+
+def tip_angle(top, bottom) -> float:
+    """Rotation (degrees) about y of the end face, from the displacements of its top and bottom edge probes:
+    the segment bottom -> top starts along +z."""
+    return math.degrees(math.atan2(top[0] - bottom[0], H + top[2] - bottom[2]))
+
+
+def curve_from_probes(path: Path, v0: float, cavity: str = "chambers") -> list:
+    """(injected volume, pressure, tip angle) per accepted load step from a run's probes.csv (its columns
+    `<cavity>_volume`, `<cavity>_pressure`, tip_top_u[xyz], tip_bottom_u[xyz]); v0 the cavity's rest volume."""
+    with open(path) as f:
+        rows = list(csv.DictReader(f))
+    return [(float(r[f"{cavity}_volume"]) - v0, float(r[f"{cavity}_pressure"]),
+             tip_angle([float(r[f"tip_top_u{c}"]) for c in "xyz"], [float(r[f"tip_bottom_u{c}"]) for c in "xyz"]))
+            for r in rows]
 
 
 def chamber_boxes(occ, side: float = SIDE, top: float = TOP, base: float = BASE) -> list:
