@@ -14,7 +14,8 @@ import numpy as np
 import ufl
 
 from fem_forms.errors import InputError
-from fem_forms.physics.principal import principal_values
+from fem_forms.kinematics import invariants
+from fem_forms.materials.stretch_powers import power_sums
 
 # Arruda-Boyce's series of the inverse Langevin function (Arruda & Boyce 1993; Abaqus, FEBio): C_i / lambda_m^(2i-2)
 ARRUDA_BOYCE_SERIES = (1 / 2, 1 / 20, 11 / 1050, 19 / 7000, 519 / 673750)
@@ -27,14 +28,13 @@ def items(x) -> list:
     return [x[i] for i in range(x.ufl_shape[0])]
 
 
-def isochoric_invariant(F):
-    """I1_bar = J^(-2/3) tr C, the first invariant of C_bar (3 for any pure dilatation)."""
-    return ufl.det(F) ** (-2.0 / 3.0) * ufl.tr(F.T * F)
-
-
 @dataclass(frozen=True)
 class Isochoric:
-    """psi = W(C_bar) + bulk/2 (ln J)^2; a subclass gives W (`isochoric`) and its initial shear modulus."""
+    """psi = W(I1_bar, I2_bar) + bulk/2 (ln J)^2, written on the invariants (I1, I2, J) of C with I1_bar =
+    J^(-2/3) I1, I2_bar = J^(-4/3) I2; a subclass gives W (`isochoric`) and its initial shear modulus. `pk1`
+    is the same derivative taken by the chain rule through the three invariants (ufl.diff of psi with respect
+    to each, times ufl.diff of the invariant with respect to F): the tangent differentiates P on scalars, and
+    the P2 tangent assembles 1.1-2x neo-Hookean's time instead of 1.6-6x (benchmarks/rubber_cost.md)."""
     bulk: float
     VOLUMETRIC_MODULUS: ClassVar[str] = "bulk"      # the modulus the mixed u-p formulation splits off
 
@@ -47,7 +47,17 @@ class Isochoric:
                              "positive (a stable material at rest)")
 
     def psi(self, F):
-        return self.isochoric(F) + 0.5 * self.bulk * ufl.ln(ufl.det(F)) ** 2
+        return self.psi_of_invariants(*invariants(F))
+
+    def psi_of_invariants(self, I1, I2, J):
+        return self.isochoric(J ** (-2.0 / 3.0) * I1, J ** (-4.0 / 3.0) * I2) + 0.5 * self.bulk * ufl.ln(J) ** 2
+
+    def pk1(self, F):
+        """P = d psi / d F by the chain rule through (I1, I2, J)."""
+        F = ufl.variable(F)
+        xs = [ufl.variable(x) for x in invariants(F)]
+        psi = self.psi_of_invariants(*xs)
+        return sum(ufl.diff(psi, x) * ufl.diff(x, F) for x in xs)
 
     def volumetric(self, F):
         """theta = ln J: psi = psi|_(bulk=0) + bulk/2 theta^2 (the mixed u-p formulation)."""
@@ -58,7 +68,8 @@ class Isochoric:
         mu0, K = self.shear_modulus(value), np.asarray(value(self.bulk))
         return 9 * K * mu0 / (3 * K + mu0)
 
-    def isochoric(self, F):
+    def isochoric(self, I1, I2):
+        """W of the isochoric invariants I1_bar, I2_bar."""
         raise NotImplementedError
 
     def shear_modulus(self, value: Callable):
@@ -73,8 +84,8 @@ def _rows(value: Callable, x, n: int) -> np.ndarray:
 @dataclass(frozen=True)
 class Ogden(Isochoric):
     """Ogden (1972): W = sum_i mu_i / alpha_i (l1^alpha_i + l2^alpha_i + l3^alpha_i - 3) of the isochoric
-    principal stretches (the closed-form eigenvalues of C_bar, physics/principal.py: a repeated stretch, as in
-    uniaxial tension, keeps the stress exact); initial shear modulus sum_i mu_i alpha_i / 2."""
+    principal stretches (their powers' sums from I1_bar and I2_bar, stretch_powers.py: a repeated stretch, as
+    in uniaxial tension, keeps the stress exact); initial shear modulus sum_i mu_i alpha_i / 2."""
     mu: tuple = ()
     alpha: tuple = ()
 
@@ -91,11 +102,10 @@ class Ogden(Isochoric):
         n = len(self.mu) if isinstance(self.mu, tuple) else self.mu.ufl_shape[0]
         return 0.5 * (_rows(value, self.mu, n) * _rows(value, self.alpha, n)).sum(axis=1)
 
-    def isochoric(self, F):
-        J = ufl.det(F)
-        squares = principal_values(J ** (-2.0 / 3.0) * F.T * F)     # l_a^2
-        return sum(m / a * (sum(s ** (a / 2) for s in squares) - 3)
-                   for m, a in zip(items(self.mu), items(self.alpha)))
+    def isochoric(self, I1, I2):
+        mus, alphas = items(self.mu), items(self.alpha)
+        weights = [m / a for m, a in zip(mus, alphas)]
+        return power_sums(I1, I2, alphas, weights) - 3 * sum(weights)
 
 
 @dataclass(frozen=True)
@@ -108,8 +118,8 @@ class Yeoh(Isochoric):
     def shear_modulus(self, value: Callable):
         return 2.0 * np.asarray(value(self.C10), dtype=float)
 
-    def isochoric(self, F):
-        x = isochoric_invariant(F) - 3
+    def isochoric(self, I1, I2):
+        x = I1 - 3
         return self.C10 * x + self.C20 * x ** 2 + self.C30 * x ** 3
 
 
@@ -128,12 +138,13 @@ class Gent(Isochoric):
     def shear_modulus(self, value: Callable):
         return np.asarray(value(self.mu), dtype=float)
 
-    def isochoric(self, F):
-        return -0.5 * self.mu * self.Jm * ufl.ln(1 - (isochoric_invariant(F) - 3) / self.Jm)
+    def isochoric(self, I1, I2):
+        return -0.5 * self.mu * self.Jm * ufl.ln(1 - (I1 - 3) / self.Jm)
 
     def locking(self, F):
         """(I1_bar - 3) / Jm: 1 where the chains lock."""
-        return (isochoric_invariant(F) - 3) / self.Jm
+        I1, _, J = invariants(F)
+        return (J ** (-2.0 / 3.0) * I1 - 3) / self.Jm
 
 
 @dataclass(frozen=True)
@@ -154,10 +165,13 @@ class ArrudaBoyce(Isochoric):
         return np.asarray(value(self.mu), dtype=float) * sum(
             2 * i * c * 3.0 ** (i - 1) / lm2 ** (i - 1) for i, c in enumerate(ARRUDA_BOYCE_SERIES, start=1))
 
-    def isochoric(self, F):
-        I1 = isochoric_invariant(F)
-        return self.mu * sum(c / self.lambda_m ** (2 * i - 2) * (I1 ** i - 3 ** i)
-                             for i, c in enumerate(ARRUDA_BOYCE_SERIES, start=1))
+    def isochoric(self, I1, I2):
+        """Horner's form of the series in I1_bar (its powers one at a time: a quarter of the kernel's time)."""
+        w = 0
+        for i, c in reversed(list(enumerate(ARRUDA_BOYCE_SERIES, start=1))):
+            w = (w + c / self.lambda_m ** (2 * i - 2)) * I1
+        return self.mu * (w - sum(c / self.lambda_m ** (2 * i - 2) * 3.0 ** i
+                                  for i, c in enumerate(ARRUDA_BOYCE_SERIES, start=1)))
 
 
 ISOCHORIC_MODELS = {"ogden": Ogden, "yeoh": Yeoh, "gent": Gent, "arruda-boyce": ArrudaBoyce}

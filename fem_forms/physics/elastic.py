@@ -7,7 +7,12 @@ from fem_forms.materials import Material, mixed_energy
 from fem_forms.materials.hyperelastic import is_small_strain
 from fem_forms.materials.constants import set_parameters
 from fem_forms.materials.stresses import first_piola_kirchhoff
+from fem_forms.physics.admissibility import SmallestValue
 from fem_forms.physics.terms import Context, Solid, register_solid
+
+LOCKING_NEAR = 0.9          # a locking measure above this, when a solve stops short, is why
+LOCKED = ("the chains lock: (I1_bar - 3) / Jm reached {:.4g} (Gent's energy is infinite at 1, no state exists "
+          "beyond; raise Jm or lower the load)")
 from fem_forms.physics.thermoelastic import thermoelastic_density
 
 
@@ -18,6 +23,29 @@ class ElasticEnergy(Solid):
         self.material = material
         self.binding = binding                 # several materials: their DG0 parameter fields
         self.name = f"elastic ({model_name})"
+        self._locking = None
+
+    def _locking_reached(self, ctx: Context) -> float | None:
+        """The largest value over the quadrature points of the material's `locking(F)` measure (Gent: (I1_bar -
+        3) / Jm, 1 where the chains lock), or None for a material without one."""
+        locking = getattr(self.material, "locking", None)
+        if locking is None:
+            return None
+        if self._locking is None:                              # compiled once, on first use
+            self._locking = SmallestValue(1 - locking(ctx.F), ctx.mesh, ctx.dx.metadata()["quadrature_degree"])
+        return 1 - self._locking()
+
+    def outside_theory(self, ctx: Context) -> str | None:
+        """A state at or past the locking limit has no finite energy: rejected."""
+        reached = self._locking_reached(ctx)
+        return None if reached is None or reached < 1 else LOCKED.format(reached)
+
+    def near_limit(self, ctx: Context, said: str = "") -> str | None:
+        """Near the locking limit (LOCKING_NEAR of it) when a solve stops short: why (unless `said` says it)."""
+        reached = self._locking_reached(ctx)
+        if reached is None or not reached > LOCKING_NEAR or LOCKED.split(":")[0] in said:
+            return None
+        return LOCKED.format(reached)
 
     def set_values(self, scene) -> None:
         base = getattr(self.material, "base", self.material)       # without its fibres

@@ -192,6 +192,11 @@ class Solid(Term):
         """Why the state lies outside the model's theory, or None."""
         return None
 
+    def near_limit(self, ctx: Context, said: str = "") -> str | None:
+        """Why no state may exist much beyond the current one (a Gent solid whose chains nearly lock), or None
+        (also when `said`, the solve's message, says it already): said when a solve stops short of its load."""
+        return None
+
     def elastic_law_energy(self, ctx: Context) -> ufl.Form:
         """int psi dX of the elastic law alone (the stiffness at rest, for Rayleigh damping)."""
         return self.energy(ctx)

@@ -34,6 +34,7 @@ CHECKS = {"loaded_vs_unloaded_modes": "test_loaded_vs_unloaded_modes_demo",    #
           "struck_bar_in_time": "test_struck_bar_in_time_demo",
           "bent_spoon": "test_bent_spoon_demo",
           "pneunet_actuator": "test_pneunet_actuator_demo",
+          "fitted_actuator": "test_fitted_actuator_demo",
           "rocking_toy": "test_rocking_toy_demo",
           "finger_on_ball": "test_finger_on_ball_demo",
           "figure_on_table": "test_figure_on_table_demo",

@@ -14,7 +14,7 @@ from scipy.optimize import fsolve
 
 import fem_forms as ff
 from fem_forms.materials.homogeneous import mode_stretches, stress_difference
-from helpers import serial_and_two_ranks
+from helpers import ROOT, serial_and_two_ranks
 
 PARAMETERS = {"ogden": {"mu": [0.63e6, 0.0012e6, -0.01e6], "alpha": [1.3, 5.0, -2.0]},   # Ogden 1972, Treloar
               "yeoh": {"C10": 1.0e5, "C20": -2.0e3, "C30": 50.0},
@@ -111,7 +111,8 @@ def test_one_ogden_term_with_alpha_2_is_the_neo_hookean_solid():
     yeoh = ff.solve_static(ff.Scene.from_dict(bent_beam({"model": "yeoh", "C10": mu / 2})))
     assert ogden.report.converged and yeoh.report.converged
     assert -yeoh.probes["tip"][2] > 0.02                            # large deflection: 10 % of the length
-    np.testing.assert_allclose(ogden.probes["tip"], yeoh.probes["tip"], rtol=1e-7)
+    tip = np.asarray(yeoh.probes["tip"])
+    np.testing.assert_allclose(ogden.probes["tip"], tip, rtol=0, atol=1e-7 * np.linalg.norm(tip))
 
 
 @pytest.mark.mpi
@@ -119,7 +120,79 @@ def test_two_ranks_give_the_serial_answer(tmp_path):
     d = bent_beam({"model": "ogden", **PARAMETERS["ogden"]})
     d["output"]["probes"]["mid"] = [0.1, 0.01, 0.0]
     one, two = serial_and_two_ranks(tmp_path, d)
-    for name in ("tip", "mid"):
-        np.testing.assert_allclose(two["probes"][name]["displacement"], one["probes"][name]["displacement"],
-                                   rtol=1e-9, atol=1e-12)
+    for name in ("tip", "mid"):                 # the same within the Newton tolerance (measured 5e-8 of |u|)
+        ref = np.asarray(one["probes"][name]["displacement"])
+        np.testing.assert_allclose(two["probes"][name]["displacement"], ref, rtol=0,
+                                   atol=1e-6 * np.linalg.norm(ref))
     assert two["materials"][0]["model"] == one["materials"][0]["model"] == "ogden"
+
+
+def test_a_dog_bone_of_a_fitted_material_follows_its_own_fit(tmp_path):
+    """The demo's dog-bone test fitted in the scene (`fit = {...}`), a bar gripped at one end and pulled by a dead
+    load at the other: the gauge section's stretch (two probes at 40 and 60 % of the length, where the grip's
+    disturbance has died out) is the fit's uniaxial curve, nominal stress = load / rest section, to 2e-4
+    (nearly incompressible: K = 1e5 mu0, the mixed formulation). Measured: 1e-6. On 20 x 2 x 2 cells the
+    mixed solution at the larger load is a spurious one (the volume 28 % up, J oscillating inside the P2 cells
+    where the P1 pressure does not see it: the purely isochoric energy resists no such mode; neo-Hookean, whose
+    deviatoric part depends on J, does not show it), see docs/analyses/rubber.md."""
+    from scipy.optimize import brentq
+    from fem_forms.materials.homogeneous import nominal_stress
+    csv = ROOT / "demos" / "data" / "ecoflex_00_30_dogbone.csv"
+    length, side = 0.1, 0.01
+    for T in (5.0e3, 2.0e4):
+        d = {"mesh": {"size": [length, side, side], "cells": [40, 4, 4]},
+             "material": {"model": "yeoh", "fit": {"uniaxial": str(csv), "terms": 2}, "bulk": 1.5e9},
+             "discretization": {"degree": 2, "formulation": "mixed"},
+             "fix": [{"name": "grip", "where": {"axis": "x", "at": 0.0}}],
+             "load": [{"type": "traction", "where": {"axis": "x", "at": length}, "value": [T, 0.0, 0.0]}],
+             "solver": {"steps": 4},
+             "output": {"picture": False, "fields": [], "probes": {"a": [0.4 * length, side / 2, side / 2],
+                                                                 "b": [0.6 * length, side / 2, side / 2]}}}
+        scene = ff.Scene.from_dict(d)
+        fitted = {k: np.asarray(v) for k, v in scene.materials[0].fitted.parameters.items()}
+        res = ff.solve_static(scene)
+        assert res.report.converged
+        stretch = 1 + (res.probes["b"][0] - res.probes["a"][0]) / (0.2 * length)
+        expected = brentq(lambda lam: nominal_stress("yeoh", fitted, "uniaxial", lam) - T, 1.0, 10.0, xtol=1e-14)
+        assert stretch > 1.1 and stretch == pytest.approx(expected, rel=2e-4)
+
+
+def test_at_rest_every_model_vibrates_as_its_small_strain_moduli_say():
+    """Linearised at rest each model is isotropic linear elasticity with shear modulus mu0 and bulk modulus K
+    (where Ogden's stretches coincide, the series branch of stretch_powers.py): the modes of a cantilever equal
+    those of the package's neo-Hookean solid with mu = mu0, lambda = K - 2 mu0 / 3 to 1e-8."""
+    from fem_forms.analyses.modal import solve_modal
+    bulk = 4.0e6
+
+    def frequencies(material: dict) -> np.ndarray:
+        d = {"analysis": "modal", "mesh": {"size": [0.2, 0.02, 0.02], "cells": [8, 1, 1]},
+             "material": {**material, "rho": 1100.0}, "discretization": {"degree": 2},
+             "fix": [{"where": {"axis": "x", "at": 0.0}}], "modal": {"count": 4}}
+        return np.array(solve_modal(ff.Scene.from_dict(d)).frequencies_hz)
+    for model, p in PARAMETERS.items():
+        material = ff.make_material(model, **p, bulk=bulk)
+        mu0 = float(np.ravel(material.shear_modulus(np.asarray))[0])
+        reference = frequencies({"model": "neo-hookean", "mu": mu0, "lambda": bulk - 2 * mu0 / 3})
+        np.testing.assert_allclose(frequencies({"model": model, **p, "bulk": bulk}), reference, rtol=1e-8,
+                                   err_msg=model)
+
+
+def test_a_gent_solid_pulled_past_its_locking_stops_there_and_says_so(tmp_path):
+    """Gent's energy is infinite where I1_bar - 3 reaches Jm: a cube driven (all faces' normal displacements)
+    towards uniaxial stretch 2.6 with Jm = 3 stops at the load factor where the closed form I1_bar(load) says
+    the chains lock, exit status 3, one line naming the locking."""
+    from scipy.optimize import brentq
+    from helpers import run_scene
+    lam = 2.6
+    d = rollered_cube("gent", mode_stretches("uniaxial", lam), Jm=3.0)
+    d["discretization"] = {"degree": 2}                       # interior nodes: a state to solve for
+    d["solver"] = {"steps": 4, "max_cutbacks": 6}
+
+    def i1bar(load):                                          # the faces move linearly with the load factor
+        l1, l2 = 1 + load * (lam - 1), 1 + load * (lam ** -0.5 - 1)
+        return (l1 * l2 * l2) ** (-2 / 3) * (l1 * l1 + 2 * l2 * l2)
+    locks = brentq(lambda load: i1bar(load) - 3 - 3.0, 0.0, 1.0, xtol=1e-12)
+    code, s, err, _ = run_scene(tmp_path, d)
+    assert code == 3 and s is not None and not s["converged"]
+    assert "the chains lock: (I1_bar - 3) / Jm reached" in s["message"]
+    assert locks - 1 / 4 / 2 ** 6 <= s["load_reached"] < locks

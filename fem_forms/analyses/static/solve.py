@@ -234,6 +234,8 @@ def solve_static(scene: Scene, material=None, model: Model | None = None,
             if auto:
                 report = then_arc_length(model, report, ends, r0.norm(), linear_kind, later)
     r0.destroy()
+    if not report.converged and (why := model.solid.near_limit(model.context, report.message)):
+        report.message = f"{report.message}; {why}"
     result = StaticResult(model, report, histories=histories, sweeps=sweeps)
     if report.converged:
         post_process(result)
