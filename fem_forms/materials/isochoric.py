@@ -15,7 +15,7 @@ import ufl
 
 from fem_forms.errors import InputError
 from fem_forms.kinematics import invariants
-from fem_forms.materials.stretch_powers import power_sums
+from fem_forms.physics.principal import principal_values
 
 # Arruda-Boyce's series of the inverse Langevin function (Arruda & Boyce 1993; Abaqus, FEBio): C_i / lambda_m^(2i-2)
 ARRUDA_BOYCE_SERIES = (1 / 2, 1 / 20, 11 / 1050, 19 / 7000, 519 / 673750)
@@ -33,8 +33,9 @@ class Isochoric:
     """psi = W(I1_bar, I2_bar) + bulk/2 (ln J)^2, written on the invariants (I1, I2, J) of C with I1_bar =
     J^(-2/3) I1, I2_bar = J^(-4/3) I2; a subclass gives W (`isochoric`) and its initial shear modulus. `pk1`
     is the same derivative taken by the chain rule through the three invariants (ufl.diff of psi with respect
-    to each, times ufl.diff of the invariant with respect to F): the tangent differentiates P on scalars, and
-    the P2 tangent assembles 1.1-2x neo-Hookean's time instead of 1.6-6x (benchmarks/rubber_cost.md)."""
+    to each, times ufl.diff of the invariant with respect to F): the tangent differentiates P on scalars
+    (a P2 tangent measured: Yeoh 0.125 s, Arruda-Boyce 0.21 s against 0.16 s and 0.43 s by ufl.diff of psi(F)
+    with J^(-2/3) F^T F inside; neo-Hookean 0.10 s)."""
     bulk: float
     VOLUMETRIC_MODULUS: ClassVar[str] = "bulk"      # the modulus the mixed u-p formulation splits off
 
@@ -84,8 +85,12 @@ def _rows(value: Callable, x, n: int) -> np.ndarray:
 @dataclass(frozen=True)
 class Ogden(Isochoric):
     """Ogden (1972): W = sum_i mu_i / alpha_i (l1^alpha_i + l2^alpha_i + l3^alpha_i - 3) of the isochoric
-    principal stretches (their powers' sums from I1_bar and I2_bar, stretch_powers.py: a repeated stretch, as
-    in uniaxial tension, keeps the stress exact); initial shear modulus sum_i mu_i alpha_i / 2."""
+    principal stretches: the closed-form eigenvalues of C_bar (physics/principal.py: a repeated stretch, as in
+    uniaxial tension, keeps the stress exact). Its tangent assembles 10x neo-Hookean's (benchmarks/
+    rubber_cost.md). Tried and left: the stretch powers' sums as functions of I1_bar and I2_bar (Cardano on
+    two scalars, a Taylor series near isotropy): 0.33 s against 0.61 s for the P2 tangent, but the branches'
+    round-off (1/p near isotropy, 1/sqrt(1 - r^2) near a double stretch) left residuals of 1e-5 of the load's
+    that Newton could not reduce on a bent beam. Initial shear modulus sum_i mu_i alpha_i / 2."""
     mu: tuple = ()
     alpha: tuple = ()
 
@@ -102,10 +107,17 @@ class Ogden(Isochoric):
         n = len(self.mu) if isinstance(self.mu, tuple) else self.mu.ufl_shape[0]
         return 0.5 * (_rows(value, self.mu, n) * _rows(value, self.alpha, n)).sum(axis=1)
 
-    def isochoric(self, I1, I2):
-        mus, alphas = items(self.mu), items(self.alpha)
-        weights = [m / a for m, a in zip(mus, alphas)]
-        return power_sums(I1, I2, alphas, weights) - 3 * sum(weights)
+    def psi(self, F):
+        """W of the isochoric principal stretches: the closed-form eigenvalues of C_bar = J^(-2/3) C."""
+        J = ufl.det(F)
+        squares = principal_values(J ** (-2.0 / 3.0) * F.T * F, floor=1e-6)     # l_a^2 (the floor: principal.py)
+        W = sum(m / a * (sum(s ** (a / 2) for s in squares) - 3) for m, a in zip(items(self.mu), items(self.alpha)))
+        return W + 0.5 * self.bulk * ufl.ln(J) ** 2
+
+    def pk1(self, F):
+        """ufl.diff of psi (the eigenvalues are of the tensor: no invariants to go through)."""
+        F = ufl.variable(F)
+        return ufl.diff(self.psi(F), F)
 
 
 @dataclass(frozen=True)

@@ -18,12 +18,16 @@ FLOOR = 1.0e-12          # in the tensor's units (a strain): the eigenvalues are
 EDGE = 1.0e-15
 
 
-def principal_values(A) -> tuple:
-    """The eigenvalues (largest, middle, smallest) of the symmetric UFL tensor A."""
+def principal_values(A, floor: float = FLOOR) -> tuple:
+    """The eigenvalues (largest, middle, smallest) of the symmetric UFL tensor A, p floored at `floor`. The
+    floor's second derivative is 1/floor times a difference of g'(eigenvalue) across eigenvalues `floor` apart:
+    a tangent at an isotropic A is good to about eps/floor (FLOOR: 1e-4, the modes of an Ogden solid at rest
+    4e-5 off); the second and third moments of the eigenvalues (6 p^2 = |D|^2 + 6 floor^2, 6 p^3 r = 3 det D)
+    keep their derivatives exact whatever the floor, so a floor of 1e-6 of the values costs nothing."""
     I = ufl.Identity(3)
     q = ufl.tr(A) / 3
     D = A - q * I
-    p = ufl.sqrt(ufl.inner(D, D) / 6 + FLOOR ** 2)
+    p = ufl.sqrt(ufl.inner(D, D) / 6 + floor ** 2)
     r = ufl.max_value(ufl.min_value(ufl.det(D / p) / 2, 1 - EDGE), -1 + EDGE)
     phi = ufl.acos(r) / 3
     largest = q + 2 * p * ufl.cos(phi)

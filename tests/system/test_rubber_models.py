@@ -159,7 +159,7 @@ def test_a_dog_bone_of_a_fitted_material_follows_its_own_fit(tmp_path):
 
 def test_at_rest_every_model_vibrates_as_its_small_strain_moduli_say():
     """Linearised at rest each model is isotropic linear elasticity with shear modulus mu0 and bulk modulus K
-    (where Ogden's stretches coincide, the series branch of stretch_powers.py): the modes of a cantilever equal
+    (Ogden's three stretches coincide there: principal.py's floor): the modes of a cantilever equal
     those of the package's neo-Hookean solid with mu = mu0, lambda = K - 2 mu0 / 3 to 1e-8."""
     from fem_forms.analyses.modal import solve_modal
     bulk = 4.0e6
@@ -196,3 +196,28 @@ def test_a_gent_solid_pulled_past_its_locking_stops_there_and_says_so(tmp_path):
     assert code == 3 and s is not None and not s["converged"]
     assert "the chains lock: (I1_bar - 3) / Jm reached" in s["message"]
     assert locks - 1 / 4 / 2 ** 6 <= s["load_reached"] < locks
+
+
+def test_inverse_design_and_dynamics_take_the_rubber_models(tmp_path):
+    """The rest shape of a soft Ogden beam (Treloar's three terms scaled to 0.3 MPa) carries it onto the target
+    (the written rest mesh's forward solve, to 1e-8 of the design's offset); in time, one Ogden term with alpha 2
+    swings as Yeoh with C10 = mu/2 (one energy: the same motion)."""
+    from helpers import inverse_beam, run_scene
+    scale = 0.3e6 / 0.4225e6
+    d = inverse_beam(E=1e6, cells=(10, 2, 2))
+    d["material"] = {"model": "ogden", "mu": [m * scale for m in PARAMETERS["ogden"]["mu"]],
+                     "alpha": PARAMETERS["ogden"]["alpha"], "bulk": 3.0e6, "rho": 1100.0}
+    code, data, err, _ = run_scene(tmp_path, d)
+    assert code == 0 and data["usable"], err
+    assert data["max_rest_offset"] > 0.1 and data["target_mismatch_max"] <= 1e-8 * data["max_rest_offset"]
+    mu = 3.0e5
+    tips = []
+    for material in ({"model": "ogden", "mu": [mu], "alpha": [2.0]}, {"model": "yeoh", "C10": mu / 2}):
+        b = bent_beam(material)
+        b.update(analysis="dynamic", dynamic={"duration": 0.01, "dt": 0.002})
+        (tmp_path / material["model"]).mkdir()
+        code, data, err, _ = run_scene(tmp_path / material["model"], b)
+        assert code == 0, err
+        tips.append(np.asarray(data["probes"]["tip"]["displacement"]))
+    assert np.linalg.norm(tips[0]) > 1e-3
+    np.testing.assert_allclose(tips[0], tips[1], rtol=0, atol=1e-6 * np.linalg.norm(tips[1]))
