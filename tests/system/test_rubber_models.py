@@ -200,8 +200,8 @@ def test_a_gent_solid_pulled_past_its_locking_stops_there_and_says_so(tmp_path):
 
 def test_inverse_design_and_dynamics_take_the_rubber_models(tmp_path):
     """The rest shape of a soft Ogden beam (Treloar's three terms scaled to 0.3 MPa) carries it onto the target
-    (the written rest mesh's forward solve, to 1e-8 of the design's offset); in time, one Ogden term with alpha 2
-    swings as Yeoh with C10 = mu/2 (one energy: the same motion)."""
+    (the written rest mesh's forward solve, to 1e-8 of the design's offset); in time, Gent with Jm = 1e6 swings
+    as Yeoh with C10 = mu/2, the energy Gent's tends to as Jm grows (W differs by mu (I1_bar - 3)^2 / (4 Jm))."""
     from helpers import inverse_beam, run_scene
     scale = 0.3e6 / 0.4225e6
     d = inverse_beam(E=1e6, cells=(10, 2, 2))
@@ -212,7 +212,7 @@ def test_inverse_design_and_dynamics_take_the_rubber_models(tmp_path):
     assert data["max_rest_offset"] > 0.1 and data["target_mismatch_max"] <= 1e-8 * data["max_rest_offset"]
     mu = 3.0e5
     tips = []
-    for material in ({"model": "ogden", "mu": [mu], "alpha": [2.0]}, {"model": "yeoh", "C10": mu / 2}):
+    for material in ({"model": "gent", "mu": mu, "Jm": 1.0e6}, {"model": "yeoh", "C10": mu / 2}):
         b = bent_beam(material)
         b.update(analysis="dynamic", dynamic={"duration": 0.01, "dt": 0.002})
         (tmp_path / material["model"]).mkdir()
@@ -220,4 +220,4 @@ def test_inverse_design_and_dynamics_take_the_rubber_models(tmp_path):
         assert code == 0, err
         tips.append(np.asarray(data["probes"]["tip"]["displacement"]))
     assert np.linalg.norm(tips[0]) > 1e-3
-    np.testing.assert_allclose(tips[0], tips[1], rtol=0, atol=1e-6 * np.linalg.norm(tips[1]))
+    np.testing.assert_allclose(tips[0], tips[1], rtol=0, atol=1e-5 * np.linalg.norm(tips[1]))
