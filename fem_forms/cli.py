@@ -101,9 +101,10 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def default_out(command: str, scene: str) -> Path:
-    """out/<stem>/ for run, out/<stem>_study/ for study (a study's folders never mix with a run's files)."""
+    """out/<stem>/ for run, out/<stem>_study/ for study, out/<stem>_fit/ for fit (of the first test file): a
+    study's or a fit's folders never mix with a run's files."""
     stem = Path(scene).stem
-    return Path("out") / (f"{stem}_study" if command == "study" else stem)
+    return Path("out") / (f"{stem}_{command}" if command in ("study", "fit") else stem)
 
 
 def _fit(args) -> int:
@@ -115,7 +116,7 @@ def _fit(args) -> int:
     modes = modes * len(args.tests) if len(modes) == 1 else modes
     tests = [read_test(path, mode, path) for path, mode in zip(args.tests, modes)]
     f = fit_model(args.model, tests, args.terms, args.residual)
-    out = Path(args.out) if args.out else Path("out") / f"{Path(args.tests[0]).stem}_fit"
+    out = Path(args.out) if args.out else default_out("fit", args.tests[0])
     if MPI.COMM_WORLD.rank == 0:
         write_fit(f, out)
         print(fit_text(f) + f"\n-> {out / 'fit.json'}, {out / 'fit.png'}")

@@ -1,6 +1,8 @@
 """Kinematics of a displacement field: F, C, Green strain, invariants (UFL expressions)."""
 from __future__ import annotations
 
+import math
+
 import ufl
 
 
@@ -104,3 +106,31 @@ def polar_rotation(F) -> ufl.core.expr.Expr:
     ii = 0.5 * (i**2 - I1)
     U = (-C * C + (i**2 - ii) * C + i * J * I) / (i * ii - J)
     return F * (C - i * U + ii * I) / J
+
+
+# Principal values in closed form, the trigonometric (Cardano) solution: q = tr A / 3, p = |dev A| / sqrt(6), r =
+# det(dev A / p) / 2, lambda_k = q + 2 p cos(acos(r) / 3 + 2 pi k / 3). Two guards keep it and its UFL derivatives
+# finite where eigenvalues coincide: p is floored at FLOOR (an isotropic A: dev A / p would be 0/0) and r is kept
+# inside (-1, 1) by EDGE (acos has an infinite slope at +-1). A double eigenvalue is then split by about p
+# sqrt(EDGE), the accuracy the formula has there anyway (r carries round-off); sums over the eigenvalues are exact
+# to round-off; at a double eigenvalue r is stationary in A, so the gradient (the stress) stays exact and only the
+# tangent loses a term (Newton converges, linearly there).
+FLOOR = 1.0e-12          # in the tensor's units (a strain): the eigenvalues are exact to about this
+EDGE = 1.0e-15
+
+
+def principal_values(A, floor: float = FLOOR) -> tuple:
+    """The eigenvalues (largest, middle, smallest) of the symmetric UFL tensor A, p floored at `floor`. The
+    floor's second derivative is 1/floor times a difference of g'(eigenvalue) across eigenvalues `floor` apart:
+    a tangent at an isotropic A is good to about eps/floor (FLOOR: 1e-4, the modes of an Ogden solid at rest
+    4e-5 off); the second and third moments of the eigenvalues (6 p^2 = |D|^2 + 6 floor^2, 6 p^3 r = 3 det D)
+    keep their derivatives exact whatever the floor, so a floor of 1e-6 of the values costs nothing."""
+    I = ufl.Identity(3)
+    q = ufl.tr(A) / 3
+    D = A - q * I
+    p = ufl.sqrt(ufl.inner(D, D) / 6 + floor ** 2)
+    r = ufl.max_value(ufl.min_value(ufl.det(D / p) / 2, 1 - EDGE), -1 + EDGE)
+    phi = ufl.acos(r) / 3
+    largest = q + 2 * p * ufl.cos(phi)
+    smallest = q + 2 * p * ufl.cos(phi + 2 * math.pi / 3)
+    return largest, 3 * q - largest - smallest, smallest

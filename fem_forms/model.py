@@ -254,10 +254,11 @@ def build_model(scene: Scene, material=None, comm: MPI.Comm = MPI.COMM_WORLD,
         u = unknown = u_form = fem.Function(V, name="displacement")
         pressure, bc_space = None, V
         v = ufl.TestFunction(V)
-        soft = max(scene.materials, key=lambda m: m.nu if m.nu is not None else -1.0)
-        nu = soft.nu
+        soft = max(scene.materials, key=lambda m: m.poisson if m.poisson is not None else -1.0)
+        nu = soft.poisson
         if material is None and nu is not None and nu >= NEARLY_INCOMPRESSIBLE_NU:
-            warnings.append(f"{soft.key}.nu = {nu}: nearly incompressible in the displacement formulation "
+            said = f"nu = {nu}" if soft.nu is not None else f"bulk = {soft.bulk:g} (nu = {nu:.4g})"
+            warnings.append(f"{soft.key}.{said}: nearly incompressible in the displacement formulation "
                             "locks (too stiff); set [discretization] formulation = \"mixed\"")
     rest_offset = rest_map = variation = None
     if rest is not None:

@@ -34,7 +34,7 @@ def read_test(path: Path | str, mode: str, key: str = "fit") -> LabTest:
     if mode not in MODES:
         raise InputError(f"{key}: unknown test mode {mode!r} (one of {', '.join(MODES)})")
     try:
-        with open(path, newline="") as f:
+        with open(path, newline="", encoding="utf-8-sig") as f:      # a byte-order mark (Excel) is dropped
             rows = list(csv.reader(f))
     except (OSError, UnicodeDecodeError) as e:
         raise InputError(f"{key}: cannot read {path}: {e.strerror if isinstance(e, OSError) else 'not text'}")
@@ -53,6 +53,8 @@ def read_test(path: Path | str, mode: str, key: str = "fit") -> LabTest:
     data = np.array(values, dtype=float).reshape(-1, 2)
     if len(data) < 2 or not np.all(np.isfinite(data)):
         raise InputError(f"{key}: {path}: needs at least two finite points (found {len(data)})")
+    if not np.any(data[:, 1]):
+        raise InputError(f"{key}: {path}: every nominal_stress is zero (nothing to fit)")
     if np.any(data[:, 0] <= 0):
         raise InputError(f"{key}: {path}: a stretch must be positive (l = deformed length / rest length)")
     return LabTest(mode, data[:, 0], data[:, 1], str(path))
@@ -68,6 +70,7 @@ class Fit:
     relative_errors: list                 # per test: (model - data) / |data| at each point
     stable: dict = field(default_factory=dict)     # mode -> [smallest, largest] stable stretch
     unstable_in_data: list = field(default_factory=list)   # messages: data points outside the stable range
+    at_bound: list = field(default_factory=list)    # parameters the optimum left on a bound of the search
 
     def summary(self) -> dict:
         """What fit.json and results.json say."""
@@ -75,7 +78,7 @@ class Fit:
                 "tests": [{"mode": t.mode, "file": t.source, "stretch": t.stretch.tolist(),
                            "nominal_stress": t.stress.tolist(), "relative_error": e.tolist()}
                           for t, e in zip(self.tests, self.relative_errors)],
-                "stable_range": self.stable, "unstable_in_data": self.unstable_in_data}
+                "stable_range": self.stable, "unstable_in_data": self.unstable_in_data, "at_bound": self.at_bound}
 
     def toml(self) -> str:
         """The parameters as lines to paste into a [[material]] table."""
@@ -105,6 +108,16 @@ class _Parametrization:
         if m == "gent":
             return {"mu": x[0], "Jm": x[1]}
         return {"mu": x[0], "lambda_m": x[1]}
+
+    def at_bound(self, active) -> list[tuple[str, int]]:
+        """(parameter name, index) of the unknowns least_squares left on a bound (its active_mask)."""
+        n, out = self.terms, []
+        for j in np.flatnonzero(active):
+            if self.model == "ogden":
+                out.append(("mu" if j < n else "alpha", int(j % n)))
+            else:
+                out.append((list(self.params(np.zeros(len(active))))[j], 0))
+        return out
 
     def starts(self):
         """(x0, lower, upper) to try; Ogden's exponents start on each sign pattern (the best fit is kept)."""
@@ -146,7 +159,7 @@ def fit(model: str, tests: list, terms: int | None = None, residual: str = "rela
         raise InputError(f"fit.residual = {residual!r}: one of {', '.join(RESIDUALS)}")
     if terms is not None and model not in MAX_TERMS:
         raise InputError(f"fit.terms: only for ogden and yeoh (model is {model!r})")
-    n = terms or {"ogden": 2, "yeoh": 3}.get(model, 2)
+    n = terms if terms is not None else {"ogden": 2, "yeoh": 3}.get(model, 2)
     if model in MAX_TERMS and not 1 <= n <= MAX_TERMS[model]:
         raise InputError(f"fit.terms = {n}: {model} takes 1 to {MAX_TERMS[model]} terms")
     par = _Parametrization(model, n, tests)
@@ -165,10 +178,15 @@ def fit(model: str, tests: list, terms: int | None = None, residual: str = "rela
         raise InputError(f"fit: no {model} parameters fit these tests (the least squares found no finite start)")
     p = par.params(best.x)
     params = {k: (np.asarray(v).tolist() if np.ndim(v) else float(v)) for k, v in p.items()}
+    at_bound = par.at_bound(best.active_mask)
     errors = _standard_errors(model, tests, params, relative)
-    rel = [(nominal_stress(model, p, t.mode, t.stretch) - t.stress)
-           / np.maximum(np.abs(t.stress), 1e-3 * np.max(np.abs(t.stress))) for t in tests]
-    out = Fit(model, params, errors, tests, rel)
+    for name, i in at_bound:                            # on a bound: no standard error (not a free optimum)
+        if isinstance(errors[name], list):
+            errors[name][i] = float("nan")
+        else:
+            errors[name] = float("nan")
+    out = Fit(model, params, errors, tests, [_residual(model, [t], p, True) for t in tests],
+              at_bound=[f"{n}[{i}]" if isinstance(params[n], list) else n for n, i in at_bound])
     check_stability(out)
     return out
 
@@ -183,7 +201,7 @@ def _standard_errors(model: str, tests: list, params: dict, relative: bool) -> d
         parts = np.split(x, np.cumsum(sizes)[:-1])
         return {k: (v if np.ndim(params[k]) else v[0]) for k, v in zip(names, parts)}
     r0 = _residual(model, tests, unflat(flat), relative)
-    scale = np.maximum(np.abs(flat), 1e-300)           # columns of J x diag(scale): comparable, so pinv keeps them
+    scale = np.where(np.abs(flat) > 0, np.abs(flat), 1.0)   # columns of J x diag(scale): comparable
     Js = np.empty((r0.size, flat.size))
     for i in range(flat.size):
         h = 1e-6 * scale[i]
@@ -193,11 +211,12 @@ def _standard_errors(model: str, tests: list, params: dict, relative: bool) -> d
         Js[:, i] = scale[i] * (_residual(model, tests, unflat(xp), relative)
                                - _residual(model, tests, unflat(xm), relative)) / (2 * h)
     dof = max(r0.size - flat.size, 1)
-    JtJ = Js.T @ Js
-    if np.linalg.cond(JtJ) > 1e14:                     # a direction the data does not determine
-        se = np.full(flat.size, np.inf)
-    else:
-        se = scale * np.sqrt(np.clip(np.diag(np.linalg.inv(JtJ)), 0, None) * float(r0 @ r0) / dof)
+    _, S, Vt = np.linalg.svd(Js, full_matrices=False)
+    kept = S > 1e-7 * S[0]                             # directions the data determine
+    cov = (Vt[kept].T / S[kept] ** 2) @ Vt[kept] * float(r0 @ r0) / dof
+    se = scale * np.sqrt(np.clip(np.diag(cov), 0, None))
+    free = (Vt[~kept] ** 2).sum(axis=0) > 1e-2        # a parameter with a share in an undetermined direction
+    se[free] = np.inf
     parts = np.split(se, np.cumsum(sizes)[:-1])
     return {k: (v.tolist() if np.ndim(params[k]) else float(v[0])) for k, v in zip(names, parts)}
 

@@ -14,8 +14,7 @@ import numpy as np
 import ufl
 
 from fem_forms.errors import InputError
-from fem_forms.kinematics import invariants
-from fem_forms.physics.principal import principal_values
+from fem_forms.kinematics import invariants, principal_values
 
 # Arruda-Boyce's series of the inverse Langevin function (Arruda & Boyce 1993; Abaqus, FEBio): C_i / lambda_m^(2i-2)
 ARRUDA_BOYCE_SERIES = (1 / 2, 1 / 20, 11 / 1050, 19 / 7000, 519 / 673750)
@@ -85,9 +84,9 @@ def _rows(value: Callable, x, n: int) -> np.ndarray:
 @dataclass(frozen=True)
 class Ogden(Isochoric):
     """Ogden (1972): W = sum_i mu_i / alpha_i (l1^alpha_i + l2^alpha_i + l3^alpha_i - 3) of the isochoric
-    principal stretches: the closed-form eigenvalues of C_bar (physics/principal.py: a repeated stretch, as in
-    uniaxial tension, keeps the stress exact). Its tangent assembles 10x neo-Hookean's (benchmarks/
-    rubber_cost.md). Tried and left: the stretch powers' sums as functions of I1_bar and I2_bar (Cardano on
+    principal stretches: the closed-form eigenvalues of C_bar (kinematics.principal_values: a repeated stretch, as in
+    uniaxial tension, keeps the stress exact). Its residual and tangent assemble 9-10x neo-Hookean's
+    (benchmarks/rubber_cost.md). Tried and left: the stretch powers' sums as functions of I1_bar and I2_bar (Cardano on
     two scalars, a Taylor series near isotropy): 0.33 s against 0.61 s for the P2 tangent, but the branches'
     round-off (1/p near isotropy, 1/sqrt(1 - r^2) near a double stretch) left residuals of 1e-5 of the load's
     that Newton could not reduce on a bent beam. Initial shear modulus sum_i mu_i alpha_i / 2."""
@@ -95,6 +94,9 @@ class Ogden(Isochoric):
     alpha: tuple = ()
 
     def __post_init__(self):
+        for name in ("mu", "alpha"):                     # a number or a list, as a model built in Python may give
+            value = getattr(self, name)
+            object.__setattr__(self, name, tuple(float(x) for x in (value if np.ndim(value) else [value])))
         if not self.mu or len(self.mu) != len(self.alpha):
             raise InputError(f"material.alpha: give one exponent per mu (mu has {len(self.mu)}, alpha "
                              f"{len(self.alpha)})")

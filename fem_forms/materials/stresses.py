@@ -50,8 +50,8 @@ def mixed_energy(material: Material, F, p):
                          "(a user psi(F) has no volumetric part to split off)")
     modulus = getattr(material, name)
     if _smallest(modulus) <= 0:
-        raise InputError("discretization.formulation = 'mixed': needs lambda > 0 (nu > 0); it is meant "
-                         "for nearly incompressible materials")
+        raise InputError(f"discretization.formulation = 'mixed': needs {'lambda' if name == 'lmbda' else name} > 0 "
+                         "(nu > 0); it is meant for nearly incompressible materials")
     deviatoric = copy.copy(material)                 # k = 0, without re-validating Constants
     object.__setattr__(deviatoric, name, 0.0)
     return deviatoric.psi(F) + p * material.volumetric(F) - p**2 / (2 * modulus)

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fem_forms.errors import InputError
 from fem_forms.materials.fitting import Fit
 from fem_forms.materials.homogeneous import MODES, nominal_stress
 from fem_forms.output.results import write_json_atomic
@@ -15,9 +16,12 @@ COLOURS = {"uniaxial": "tab:blue", "biaxial": "tab:orange", "shear": "tab:green"
 
 
 def write_fit(f: Fit, out: Path) -> None:
-    """fit.json and fit.png in `out` (created)."""
-    out.mkdir(parents=True, exist_ok=True)
-    fit_picture(f, out / "fit.png")
+    """fit.json and fit.png in `out` (created); a folder that cannot be written is one line (InputError)."""
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        fit_picture(f, out / "fit.png")
+    except OSError as e:
+        raise InputError(f"--out {str(out)!r}: cannot write ({e.strerror or e})") from None
     write_json_atomic(out / "fit.json", f.summary())
 
 
@@ -58,7 +62,7 @@ def fit_picture(f: Fit, path: Path) -> None:
 def fit_text(f: Fit) -> str:
     """The printed summary: the TOML lines, standard errors, errors per point, stable ranges, warnings."""
     lines = ["# paste into a [[material]] table (add bulk = ... or nu = ...):", f.toml(), "",
-             "standard errors:"]
+             "standard errors (nan: on a bound; inf: not determined by these tests):"]
     for k, v in f.errors.items():
         lines.append(f"  {k}: " + (", ".join(f"{x:.3g}" for x in v) if isinstance(v, list) else f"{v:.3g}"))
     for t, e in zip(f.tests, f.relative_errors):
@@ -68,4 +72,8 @@ def fit_text(f: Fit) -> str:
     lines.append("Drucker-stable stretch range: " + "; ".join(f"{m} {lo:.4g} to {hi:.4g}"
                                                              for m, (lo, hi) in f.stable.items()))
     lines += [f"warning: {w}" for w in f.unstable_in_data]
+    if f.at_bound:
+        lines.append(f"warning: {', '.join(f.at_bound)} ended on a bound of the search (Ogden: a term's mu alpha >= 0, "
+                     "|alpha| <= 20; Yeoh: C10 > 0; Gent: Jm beyond the data): no standard error; fewer terms may fit "
+                     "as well")
     return "\n".join(lines)

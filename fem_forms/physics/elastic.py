@@ -25,15 +25,25 @@ class ElasticEnergy(Solid):
         self.name = f"elastic ({model_name})"
         self._locking = None
 
+    def _locking_measure(self, F):
+        """The materials' `locking(F)` measure (Gent: (I1_bar - 3) / Jm, 1 where the chains lock) as one UFL
+        expression: a part's on its own cells where models of several kinds share the body (fibres aside), or
+        None when no material has one."""
+        parts = getattr(self.material, "parts", None)
+        if parts is None:
+            base = getattr(self.material, "base", self.material)
+            return base.locking(F) if hasattr(base, "locking") else None
+        own = [p.indicator * getattr(p.material, "base", p.material).locking(F) for p in parts
+               if hasattr(getattr(p.material, "base", p.material), "locking")]
+        return sum(own[1:], own[0]) if own else None
+
     def _locking_reached(self, ctx: Context) -> float | None:
-        """The largest value over the quadrature points of the material's `locking(F)` measure (Gent: (I1_bar -
-        3) / Jm, 1 where the chains lock), or None for a material without one."""
-        locking = getattr(self.material, "locking", None)
-        if locking is None:
-            return None
-        if self._locking is None:                              # compiled once, on first use
-            self._locking = SmallestValue(1 - locking(ctx.F), ctx.mesh, ctx.dx.metadata()["quadrature_degree"])
-        return 1 - self._locking()
+        """The largest value of the locking measure over the quadrature points (all ranks), or None."""
+        if self._locking is None:                              # compiled once, on first use (False: none)
+            measure = self._locking_measure(ctx.F)
+            self._locking = False if measure is None else SmallestValue(1 - measure, ctx.mesh,
+                                                                        ctx.dx.metadata()["quadrature_degree"])
+        return None if self._locking is False else 1 - self._locking()
 
     def outside_theory(self, ctx: Context) -> str | None:
         """A state at or past the locking limit has no finite energy: rejected."""

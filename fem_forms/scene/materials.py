@@ -7,6 +7,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from fem_forms.errors import InputError
 from fem_forms.materials import MODELS, Material, make_material
 from fem_forms.materials.anisotropic import FIBER_MODELS, ORTHOTROPIC_CONSTANTS
@@ -155,6 +157,14 @@ class MaterialSpec:
                 raise InputError(str(e).replace("material", self.key, 1)) from None
             self._built = (values, built)
         return self._built[1]
+
+    @property
+    def poisson(self) -> float | None:
+        """Poisson's ratio at small strain: nu as given, or a rubber model's from its bulk and shear moduli."""
+        if self.nu is not None or self.bulk is None:
+            return self.nu
+        mu0 = float(np.min(self.material.shear_modulus(np.asarray)))
+        return (3 * self.bulk - 2 * mu0) / (2 * (3 * self.bulk + mu0))
 
     @property
     def plasticity(self):

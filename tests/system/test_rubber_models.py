@@ -159,7 +159,7 @@ def test_a_dog_bone_of_a_fitted_material_follows_its_own_fit(tmp_path):
 
 def test_at_rest_every_model_vibrates_as_its_small_strain_moduli_say():
     """Linearised at rest each model is isotropic linear elasticity with shear modulus mu0 and bulk modulus K
-    (Ogden's three stretches coincide there: principal.py's floor): the modes of a cantilever equal
+    (Ogden's three stretches coincide there: kinematics.principal_values' floor): the modes of a cantilever equal
     those of the package's neo-Hookean solid with mu = mu0, lambda = K - 2 mu0 / 3 to 1e-8."""
     from fem_forms.analyses.modal import solve_modal
     bulk = 4.0e6
@@ -221,3 +221,19 @@ def test_inverse_design_and_dynamics_take_the_rubber_models(tmp_path):
         tips.append(np.asarray(data["probes"]["tip"]["displacement"]))
     assert np.linalg.norm(tips[0]) > 1e-3
     np.testing.assert_allclose(tips[0], tips[1], rtol=0, atol=1e-5 * np.linalg.norm(tips[1]))
+
+
+def test_gent_beside_another_model_still_says_its_chains_lock(tmp_path):
+    """Two models side by side (Gent and neo-Hookean, each on half the cube's section: both stretched alike by the
+    faces held as above): the run stops with the locking named (the measure is Gent's own cells')."""
+    from helpers import run_scene
+    d = rollered_cube("gent", mode_stretches("uniaxial", 2.6), Jm=3.0)
+    d["mesh"]["cells"] = [1, 2, 1]
+    d["material"]["bulk"] = 1.0e10                            # nearly incompressible: no escape by swelling
+    d["material"] = [{"name": "gent", **d["material"]},
+                     {"name": "soft", "model": "neo-hookean", "E": 3e5, "nu": 0.3,
+                      "where": {"box": [[0.0, 0.5, 0.0], [1.0, 1.0, 1.0]]}}]
+    d["discretization"] = {"degree": 2}
+    d["solver"] = {"steps": 4, "max_cutbacks": 4}
+    code, s, err, _ = run_scene(tmp_path, d)
+    assert code == 3 and "the chains lock" in s["message"]

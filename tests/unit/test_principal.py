@@ -1,4 +1,4 @@
-"""The closed-form principal values in UFL (physics/principal.py) and Miehe's tensile energy written on them,
+"""The closed-form principal values in UFL (kinematics.principal_values) and Miehe's tensile energy written on them,
 against numpy's symmetric eigensolver: values, and the tensile stress lambda <tr eps>+ I + 2 mu eps+ (the
 energy's derivative), also where eigenvalues coincide (uniaxial strain, isotropic, zero)."""
 from dolfinx import fem, mesh
@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 import ufl
 
-from fem_forms.physics.principal import FLOOR, principal_values, tensile_energy
+from fem_forms.kinematics import FLOOR, principal_values
+from fem_forms.physics.principal import tensile_energy
 
 MU, LMBDA = 0.7, 1.3
 CASES = {

@@ -189,3 +189,28 @@ def test_a_library_material_brings_its_model_density_and_source():
     assert own.materials[0].material.bulk == 1e8 and own.materials[0].rho == 1000.0
     pla = ff.Scene.from_dict(beam_scene(material={"library": "pla"})).materials[0]
     assert pla.strength_yield == 53.0e6
+
+
+def test_nu_gives_the_bulk_modulus_of_the_initial_shear_modulus():
+    """K = 2 mu0 (1 + nu) / (3 (1 - 2 nu)): E = 2 mu0 (1 + nu) as for a Hookean solid."""
+    for model, p, mu0 in (("gent", {"mu": 1e5, "Jm": 10.0}, 1e5), ("yeoh", {"C10": 5e4}, 1e5),
+                          ("ogden", {"mu": [3e5, -1e4], "alpha": [1.5, -2.0]}, 0.5 * (4.5e5 + 2e4))):
+        m = ff.make_material(model, **p, nu=0.3)
+        assert m.bulk == pytest.approx(2 * mu0 * 1.3 / (3 * 0.4), rel=1e-14)
+        assert m.young_modulus(np.asarray) == pytest.approx(2 * mu0 * 1.3, rel=1e-14)
+
+
+def test_two_parameter_standard_errors_and_bounds_are_said():
+    """Gent from noisy uniaxial data: both errors finite and near the scatter of repeated fits; a third Ogden term
+    that Treloar's uniaxial data cannot pin (it runs to |alpha| = 20) is reported on its bound, not given an error."""
+    lam = np.linspace(1.2, 5.0, 40)
+    clean = nominal_stress("gent", {"mu": 2e5, "Jm": 40.0}, "uniaxial", lam)
+    rng = np.random.default_rng(5)
+    fits = [fit("gent", [LabTest("uniaxial", lam, clean * (1 + 0.02 * rng.standard_normal(lam.size)))])
+            for _ in range(30)]
+    for name in ("mu", "Jm"):
+        quoted = np.median([f.errors[name] for f in fits])
+        assert np.isfinite(quoted) and quoted == pytest.approx(np.std([f.parameters[name] for f in fits]), rel=0.5)
+    f = fit("ogden", [treloar()], terms=3)
+    assert f.at_bound and all(np.isnan(f.errors[n.split("[")[0]][int(n[-2])]) for n in f.at_bound)
+    assert f.summary()["at_bound"] == f.at_bound
