@@ -9,7 +9,8 @@ demos/pneunet_actuator.py, cast in that silicone (demos/scenes/fitted_pneunet.to
 (the silicone stiffens as it stretches) and with a one-term fit of the same test (neo-Hookean: no
 stiffening). Writes curl.png: the tip angle against the chamber pressure for both.
 
-Run: `.venv/bin/python demos/fitted_actuator.py [OUT_DIR] [H]` (H the cell size in m, default 0.006).
+Run: `.venv/bin/python demos/fitted_actuator.py [OUT_DIR] [H]` (H the cell size in m, default 0.007: its
+pressures are 4 % above those of 0.006, its run 36 s against 58 s serial).
 """
 import sys
 from pathlib import Path
@@ -27,7 +28,7 @@ sys.path.insert(0, str(here / "geometry"))
 import pneunet  # noqa: E402
 
 out = Path(sys.argv[1]) if len(sys.argv) > 1 else Path("out/fitted_actuator")
-h = float(sys.argv[2]) if len(sys.argv) > 2 else 0.006
+h = float(sys.argv[2]) if len(sys.argv) > 2 else 0.007
 comm = MPI.COMM_WORLD
 ff.quiet_jit()
 

