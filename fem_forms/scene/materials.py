@@ -35,7 +35,7 @@ MATERIAL_KEYS = (
         note=f"unknown model (choose from {', '.join(MODELS)})"),
     *PARAMETER_KEYS,
     Key("library", "string", "a named material of the library (its model, parameters, density and source; the "
-        "manual's materials page lists them)", choices=tuple(LIBRARY), note=f"unknown material (the library has "
+        "manual's rubber page lists them)", choices=tuple(LIBRARY), note=f"unknown material (the library has "
         f"{', '.join(LIBRARY)})"),
     Key("fit", "table", "fit the model (ogden, yeoh, gent, arruda-boyce) to lab tests before the analysis: CSV "
         "files with the columns stretch, nominal_stress (Pa)", keys=(
