@@ -81,9 +81,10 @@ class Fit:
                 "stable_range": self.stable, "unstable_in_data": self.unstable_in_data, "at_bound": self.at_bound}
 
     def toml(self) -> str:
-        """The parameters as lines to paste into a [[material]] table."""
+        """The parameters as lines to paste into a [[material]] table (10 significant digits: Ogden's mu and
+        alpha are tightly coupled)."""
         def fmt(v):
-            return "[" + ", ".join(f"{x:.6g}" for x in v) + "]" if isinstance(v, list) else f"{v:.6g}"
+            return "[" + ", ".join(f"{x:.10g}" for x in v) + "]" if isinstance(v, list) else f"{v:.10g}"
         return "\n".join([f'model = "{self.model}"'] + [f"{k} = {fmt(v)}" for k, v in self.parameters.items()])
 
 
@@ -124,7 +125,7 @@ class _Parametrization:
         m, n, mu0 = self.model, self.terms, self.mu0
         if m == "ogden":
             for signs in itertools.product((1.0, -1.0), repeat=n):
-                if signs[0] < 0:
+                if signs[0] < 0 and n > 1:        # one sign pattern of each pair (the terms are interchangeable)
                     continue
                 alpha0 = [s * a for s, a in zip(signs, (2.0, 4.0, 1.0)[:n])]
                 lo = [0.0] * n + [0.05 if s > 0 else -MAX_ALPHA for s in signs]

@@ -64,7 +64,8 @@ def test_treloar_is_fitted_as_well_as_ogden_1972():
     ("yeoh", {"C10": 1.2e5, "C20": -3.0e3, "C30": 80.0}, 3),
     ("gent", {"mu": 2.5e5, "Jm": 40.0}, None),
     ("arruda-boyce", {"mu": 2.5e5, "lambda_m": 3.0}, None),
-    ("ogden", {"mu": [3.0e5, 2.0e3], "alpha": [1.8, 6.0]}, 2)])
+    ("ogden", {"mu": [3.0e5, 2.0e3], "alpha": [1.8, 6.0]}, 2),
+    ("ogden", {"mu": [-2.0e5], "alpha": [-1.5]}, 1)])
 def test_known_parameters_are_recovered(model, truth, terms):
     p = {k: np.asarray(v) for k, v in truth.items()}
     tests = [LabTest(mode, lam, nominal_stress(model, p, mode, lam))
