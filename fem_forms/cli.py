@@ -1,4 +1,5 @@
-"""Command line: `fem-forms run SCENE.toml [--out DIR] [-q] [-snes_monitor ...]`, `fem-forms study SCENE.toml`,
+"""Command line: `fem-forms run SCENE.toml [--out DIR] [-q] [--no-limits] [--petsc "-log_view"] [-snes_monitor ...]`,
+`fem-forms study SCENE.toml`,
 `fem-forms fit TEST.csv ... --model M [--terms N] [--mode uniaxial|biaxial|shear] [--out DIR]`,
 `fem-forms schema [--out FILE]`.
 
@@ -8,6 +9,9 @@ interrupted (Ctrl-C), 143 terminated (SIGTERM); an interrupt prints one line, "f
 traceback, and a static run leaves its last accepted load step and a results.json with "interrupted": true
 (output/interrupts.py, also under mpirun).
 Progress (load step, Newton iteration, residual, elapsed time) goes to stderr on rank 0 unless --quiet.
+A scene is data (docs/sharing.md): its PETSc options are the ones users tune, its caps (scene/limits.py) hold
+unless --no-limits, and nothing is written outside the output folder (output/folder.py); the command line is the
+user's own, so PETSc options given there (trailing, or --petsc) may be any, -log_view included.
 Results: results.json is written last and atomically, and a run removes an old results.json from its
 output folder before it solves, so after an interrupted or failed rerun no results.json from an earlier
 run is left looking like this run's answer (a scene that fails to read changes nothing)."""
@@ -15,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+import shlex
 import signal
 import sys
 
@@ -26,23 +31,25 @@ from fem_forms.logs import quiet_jit, stale_compile_lock
 from fem_forms.materials.fitting import FIT_MODELS, RESIDUALS, fit as fit_model, read_test
 from fem_forms.materials.homogeneous import MODES
 from fem_forms.output.fit_report import fit_text, write_fit
+from fem_forms.output.folder import check_output_folder
 from fem_forms.output.interrupts import Terminated
 from fem_forms.output.progress_line import show_progress
 from fem_forms.output.results import forget_results
-from fem_forms.scene import Scene, parse_assignment
+from fem_forms.scene import LIMITS, NO_LIMITS, Scene, parse_assignment
 from fem_forms.scene.manual import built, manual_page
 from fem_forms.scene.petsc_options import check_options
 from fem_forms.scene.schema import schema_json
+from fem_forms.solvers.petsc_log import petsc_log
 from fem_forms.study import run_study, solve_to_tolerance
 
 
-def _petsc_options(extra: list[str]) -> dict:
+def _petsc_options(extra: list[str], where: str = "command line") -> dict:
     """PETSc-style trailing options (`-snes_rtol 1e-8 -snes_monitor`) as a dict."""
     opts, i = {}, 0
     while i < len(extra):
         tok = extra[i]
         if not (tok.startswith("-") and len(tok) > 1 and tok[1:].replace("_", "").isalnum()):
-            raise InputError(f"command line: {tok!r} is not an option (PETSc options look like -snes_rtol 1e-8)")
+            raise InputError(f"{where}: {tok!r} is not an option (PETSc options look like -snes_rtol 1e-8)")
         key = tok.lstrip("-")
         if i + 1 < len(extra) and not (extra[i + 1].startswith("-") and extra[i + 1][1:2].isalpha()):
             opts[key] = extra[i + 1]
@@ -70,6 +77,12 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--no-adapt", action="store_true",
                      help="solve the discretization as given, ignoring [discretization] tolerance")
     run.add_argument("--restart", metavar="DIR", help="continue the stopped dynamic run in DIR from its checkpoint")
+    run.add_argument("--petsc", action="append", default=[], metavar="OPTIONS",
+                     help="PETSc options of your own, e.g. --petsc \"-log_view -snes_monitor\" (a scene may not set "
+                          "options that write files, monitor or import code; the command line may)")
+    run.add_argument("--no-limits", action="store_true",
+                     help="lift the caps a scene file is held to (cells, load and time steps, modes, probes, sound "
+                          "samples, obstacle triangles, the file's size)")
     run.add_argument("-v", "--verbose", action="store_true", help="show FFCx/UFL compilation logs")
     run.add_argument("-q", "--quiet", action="store_true", help="show no progress on stderr")
     study = sub.add_parser("study", help="solve a scene on a ladder of meshes and degrees; error vs cost")
@@ -80,6 +93,7 @@ def _parser() -> argparse.ArgumentParser:
     study.add_argument("--refine", type=int, default=3, help="number of mesh levels (each refined by 2)")
     study.add_argument("--ranks", type=int, default=1, help="MPI ranks per run")
     study.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override a scene key")
+    study.add_argument("--no-limits", action="store_true", help="lift the caps a scene file is held to")
     study.add_argument("-v", "--verbose", action="store_true", help="show FFCx/UFL compilation logs")
     study.add_argument("-q", "--quiet", action="store_true", help="show no progress (the per-run lines)")
     fit = sub.add_parser("fit", help="fit a rubber model to lab tests (CSV: stretch,nominal_stress in Pa); prints "
@@ -117,6 +131,7 @@ def _fit(args) -> int:
     tests = [read_test(path, mode, path) for path, mode in zip(args.tests, modes)]
     f = fit_model(args.model, tests, args.terms, args.residual)
     out = Path(args.out) if args.out else default_out("fit", args.tests[0])
+    check_output_folder(out, default=not args.out)
     if MPI.COMM_WORLD.rank == 0:
         write_fit(f, out)
         print(fit_text(f) + f"\n-> {out / 'fit.json'}, {out / 'fit.png'}")
@@ -138,28 +153,40 @@ def _run(args, petsc: dict) -> int:
             raise InputError(f"--out {args.out!r}: cannot write ({e.strerror})") from None
         return 0
     overrides = dict(parse_assignment(a) for a in args.set)
+    limits = NO_LIMITS if args.no_limits else LIMITS
+    check_output_folder(Path(args.out or default_out(args.command, args.scene)), default=args.out is None)
     if args.out is None:
         args.out = str(default_out(args.command, args.scene))
     if args.command == "study":
         if petsc:
             raise InputError("study: PETSc options go into the scene ([solver] petsc) or --set")
         run_study(Path(args.scene), Path(args.out), args.degrees, args.refine, overrides, args.ranks,
-                  echo=not args.quiet)
+                  echo=not args.quiet, limits=limits)
         return 0
-    scene = Scene.from_file(args.scene, overrides)
-    scene.solver.petsc.update(check_options(petsc, "command line: -", sep=""))
+    scene = Scene.from_file(args.scene, overrides, limits)
+    for text in args.petsc:
+        try:
+            words = shlex.split(text)
+        except ValueError as e:
+            raise InputError(f"--petsc {text!r}: {e}") from None
+        petsc.update(_petsc_options(words, "--petsc"))
+    log = petsc_log(petsc)                               # -log_view: PETSc's own, not the solver's
+    scene.solver.petsc.update(check_options(petsc, "command line: -", sep="", scene=False))
     if args.restart and scene.analysis != "dynamic":
         raise InputError(f"--restart: only for analysis = \"dynamic\" (this scene's is {scene.analysis!r})")
     forget_results(Path(args.out) / "results.json")
     if scene.discretization.tolerance is not None and not args.no_adapt:
         if petsc or MPI.COMM_WORLD.size > 1:
             raise InputError("discretization.tolerance: run serially, with PETSc options in the scene")
-        s = solve_to_tolerance(Path(args.scene), Path(args.out), scene.discretization.tolerance, overrides)
+        s = solve_to_tolerance(Path(args.scene), Path(args.out), scene.discretization.tolerance, overrides,
+                               limits=limits)
         print(f"{scene.title}: P{s['chosen']['degree']} at mesh level {s['chosen']['mesh_level']} meets "
               f"tolerance {s['tolerance']} (estimated error {s['error_estimate']:.2e}), {s['dofs']} dofs "
               f"-> {args.out}")
         return 0
     run_analysis(scene, Path(args.out), echo=True, **({"restart": Path(args.restart)} if args.restart else {}))
+    if log is not None:
+        log.view()
     return 0
 
 

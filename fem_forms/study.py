@@ -20,7 +20,7 @@ import numpy as np
 
 from fem_forms.errors import InputError, SolveError
 from fem_forms.output.results import write_json_atomic
-from fem_forms.scene import Scene
+from fem_forms.scene import LIMITS, NO_LIMITS, Limits, Scene
 
 # Key numbers whose norm is below this fraction of the part's size (the largest probe point or displacement;
 # for frequencies the highest one) are zero to the solver's accuracy: a probe on a clamp, an unloaded part.
@@ -82,8 +82,10 @@ def mesh_level(scene: Scene, level: int) -> dict:
     raise InputError("study: a mesh file cannot be refined here; use --refine 1 to vary the degree only")
 
 
-def _run_one(scene_path: Path, run: Run, ranks: int) -> None:
+def _run_one(scene_path: Path, run: Run, ranks: int, limits: Limits) -> None:
     cmd = [sys.executable, "-m", "fem_forms", "run", str(scene_path), "--out", str(run.folder), "--no-adapt", "-q"]
+    if limits == NO_LIMITS:
+        cmd.append("--no-limits")
     for k, v in run.overrides.items():
         cmd += ["--set", f"{k}={json.dumps(v)}"]
     env = dict(os.environ)
@@ -121,10 +123,11 @@ def richardson(values: list[np.ndarray]) -> np.ndarray | None:
 
 
 def study(scene_path: Path, out: Path, degrees: list[int], refine: int, overrides: dict | None = None,
-          ranks: int = 1, echo: bool = True) -> list[Run]:
-    """Run the ladder (the scene's mesh, then refined by 2 per level) and fill in error estimates."""
+          ranks: int = 1, echo: bool = True, limits: Limits = LIMITS) -> list[Run]:
+    """Run the ladder (the scene's mesh, then refined by 2 per level) and fill in error estimates; each run of it
+    within `limits` (NO_LIMITS: --no-limits)."""
     overrides = dict(overrides or {})
-    scene = Scene.from_file(scene_path, overrides)           # validates once, up front
+    scene = Scene.from_file(scene_path, overrides, limits)           # validates once, up front
     if any(d not in (1, 2) for d in degrees):
         raise InputError(f"study --degrees {degrees}: element degrees 1 and 2 are available")
     if refine < 1:
@@ -133,12 +136,12 @@ def study(scene_path: Path, out: Path, degrees: list[int], refine: int, override
     for degree in sorted(set(degrees)):
         # a warm-up run on the coarsest mesh compiles this degree's forms, so no timed run pays JIT
         _run_one(scene_path, Run(degree, 0, {**overrides, "discretization.degree": degree},
-                                 out / f"P{degree}_warmup"), ranks)
+                                 out / f"P{degree}_warmup"), ranks, limits)
         shutil.rmtree(out / f"P{degree}_warmup", ignore_errors=True)
         for level in range(refine):
             o = {**overrides, "discretization.degree": degree, **mesh_level(scene, level)}
             run = Run(degree, level, o, out / f"P{degree}_level{level}")
-            _run_one(scene_path, run, ranks)
+            _run_one(scene_path, run, ranks, limits)
             if echo:
                 print(f"  degree {degree}, level {level}: {run.dofs} dofs, {run.wall:.2f} s"
                       + ("" if run.ok else " (failed)"), flush=True)
@@ -248,13 +251,13 @@ def pareto(runs: list[Run]) -> list[Run]:
 
 
 def run_study(scene_path: Path, out: Path, degrees: list[int], refine: int, overrides: dict,
-              ranks: int = 1, echo: bool = True) -> list[Run]:
+              ranks: int = 1, echo: bool = True, limits: Limits = LIMITS) -> list[Run]:
     if MPI.COMM_WORLD.size > 1:
         raise InputError("study: run it serially; use --ranks N for parallel runs of the ladder")
     out.mkdir(parents=True, exist_ok=True)
-    title = Scene.from_file(scene_path, overrides).title
+    title = Scene.from_file(scene_path, overrides, limits).title
     print(f"study of {title}: degrees {degrees}, {refine} mesh levels")
-    runs = study(scene_path, out, degrees, refine, overrides, ranks, echo=echo)
+    runs = study(scene_path, out, degrees, refine, overrides, ranks, echo=echo, limits=limits)
     print(write_report(runs, out, title))
     print(f"-> {out}/study.md, study.csv, study.png")
     return runs
@@ -270,10 +273,10 @@ def cheapest_meeting(runs: list[Run], tolerance: float) -> Run | None:
 
 
 def solve_to_tolerance(scene_path: Path, out: Path, tolerance: float, overrides: dict,
-                       degrees=(1, 2), refine: int = 3) -> dict:
+                       degrees=(1, 2), refine: int = 3, limits: Limits = LIMITS) -> dict:
     """Accuracy on request: run the ladder, pick the cheapest run whose estimated error meets the
     tolerance, and make its results the answer in `out` (results.json gains "error_estimate")."""
-    runs = study(scene_path, out / "study", list(degrees), refine, overrides, echo=False)
+    runs = study(scene_path, out / "study", list(degrees), refine, overrides, echo=False, limits=limits)
     write_report(runs, out / "study", "accuracy on request")
     best = cheapest_meeting(runs, tolerance)
     if best is None:

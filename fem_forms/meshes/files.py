@@ -17,11 +17,11 @@ from fem_forms.meshes.repair import repair_surface
 
 
 def read_surface_file(path: Path, h: float | None, limit: float, degree: int, repair: bool = False,
-                      scale: float = 1.0) -> MeshArrays:
+                      scale: float = 1.0, max_cells: int | None = None) -> MeshArrays:
     """A closed surface (STL, OBJ, PLY, OFF), its coordinates times `scale`, filled with tetrahedra of
     size h (default: the surface's mean edge length), after checking that it is closed (or, with
     `repair`, making it so with MeshFix: results.json `mesh.repair` says what changed) and that the
-    mesh will fit in memory."""
+    mesh will fit in memory and under the scene's cap on cells."""
     key = f"mesh.file = {str(path)!r}"
     raw_points, raw_tris = surfaces.read_triangles(path)
     points, tris = surfaces.merge_points(raw_points, raw_tris)
@@ -32,6 +32,7 @@ def read_surface_file(path: Path, h: float | None, limit: float, degree: int, re
     surfaces.check_closed(points, tris, key)
     h = h or surfaces.mean_edge(points, tris)
     cells, dofs = resources.tetrahedra_counts(surfaces.enclosed_volume(points, tris), h, degree)
+    resources.check_cap(cells, max_cells, f"{key} at h = {h:.3g}", estimated=True)
     resources.check_fits(cells, dofs, "tetrahedron", degree, f"{key} at h = {h:.3g}", limit)
     x, tets = surfaces.tetrahedralise(points, tris, h, key)
     arrays = compact(MeshArrays(x, tets, "tetrahedron"))

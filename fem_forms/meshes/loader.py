@@ -103,6 +103,7 @@ def load_mesh(spec: MeshSpec, comm: MPI.Comm = MPI.COMM_WORLD, degree: int = 1) 
     limit = resources.machine_memory(comm)
     if spec.generator == "box":
         counts = resources.box_counts(spec.cells, spec.cell, degree)
+        resources.check_cap(counts[0], spec.max_cells, f"mesh.cells = {list(spec.cells)}")
         resources.check_fits(*counts, spec.cell, degree, f"mesh.cells = {list(spec.cells)}", limit)
         lo = np.array(spec.origin, dtype=float)
         hi = lo + np.array(spec.size, dtype=float)
@@ -118,14 +119,17 @@ def load_mesh(spec: MeshSpec, comm: MPI.Comm = MPI.COMM_WORLD, degree: int = 1) 
 
     def build():
         if spec.generator == "file" and spec.file.suffix.lower() in SURFACE_SUFFIXES:
-            arrays = read_surface_file(spec.file, spec.h, limit, degree, spec.repair, spec.length_scale)
+            arrays = read_surface_file(spec.file, spec.h, limit, degree, spec.repair, spec.length_scale,
+                                       spec.max_cells)
         elif spec.generator == "file":
             arrays = read_mesh_file(spec.file)
+            resources.check_cap(len(arrays.cells), spec.max_cells, f"mesh.file = {spec.file.name!r}")
             arrays.info = {"source": spec.file.name, "cells": len(arrays.cells)}
             scale_arrays(arrays, spec.length_scale)
         else:
-            resources.check_fits(*resources.tetrahedra_counts(resources.solid_volume(spec), spec.h, degree),
-                                 "tetrahedron", degree, f"mesh.h = {spec.h}", limit)
+            counts = resources.tetrahedra_counts(resources.solid_volume(spec), spec.h, degree)
+            resources.check_cap(counts[0], spec.max_cells, f"mesh.h = {spec.h}", estimated=True)
+            resources.check_fits(*counts, "tetrahedron", degree, f"mesh.h = {spec.h}", limit)
             arrays = generate_solid(spec)
             arrays.info = {"source": f"{spec.generator} meshed by gmsh at h = {spec.h:.4g}",
                            **surfaces.quality(arrays.points, arrays.cells)}

@@ -70,6 +70,13 @@ def estimate_bytes(cells: int, dofs: int, cell_type: str, degree: int) -> float:
     return BYTES_PER_CELL * cells + MATRIX_COPIES * BYTES_PER_ENTRY * dofs * 3 * stencil
 
 
+def check_cap(cells: int, cap: int | None, key: str, estimated: bool = False) -> None:
+    """Refuse a mesh of more cells than the scene may ask for (scene/limits.py; None: no cap)."""
+    if cap is not None and cells > cap:
+        raise InputError(f"{key}: {'about ' if estimated else ''}{cells:,} cells, more than a scene may ask for "
+                         f"({cap:,}); --no-limits lifts it")
+
+
 def check_fits(cells: int, dofs: int, cell_type: str, degree: int, key: str, limit: int) -> None:
     """Refuse a mesh whose estimated memory exceeds `limit` bytes, naming the estimate."""
     need = estimate_bytes(cells, dofs, cell_type, degree)

@@ -23,6 +23,7 @@ from fem_forms.scene.analyses.thermal_section import ThermalSpec
 from fem_forms.scene.cavities import cavity_rules
 from fem_forms.scene.materials import MaterialSpec, kinematics_rules, viscoelastic_rules
 from fem_forms.scene.files import parse_assignment, read_toml, set_key
+from fem_forms.scene.limits import LIMITS, NO_LIMITS, Limits, check_scene
 from fem_forms.scene.reader import AXES, Key, Section, Table, Variants, check_number, check_vector
 from fem_forms.scene.registry import ANALYSIS_KEY
 from fem_forms.scene.spec import (CELL_TYPES, CORE_SECTIONS, GENERATORS, LOAD_TYPES, TITLE, Discretization,
@@ -30,8 +31,8 @@ from fem_forms.scene.spec import (CELL_TYPES, CORE_SECTIONS, GENERATORS, LOAD_TY
                                   prism_rules, quadrature_rules)
 from fem_forms.scene.plasticity import plasticity_rules
 
-__all__ = ["AXES", "CELL_TYPES", "GENERATORS", "LOAD_TYPES", "Discretization", "Fix", "InverseSpec", "Key",
-           "Load", "MaterialSpec", "MeshSpec", "ModalSpec", "OutputSpec", "Scene", "Section", "Selector",
+__all__ = ["AXES", "CELL_TYPES", "GENERATORS", "LIMITS", "LOAD_TYPES", "NO_LIMITS", "Discretization", "Fix",
+           "InverseSpec", "Key", "Limits", "Load", "MaterialSpec", "MeshSpec", "ModalSpec", "OutputSpec", "Scene", "Section", "Selector",
            "SolverSpec", "SoundSpec", "Table", "Variants", "check_number", "check_vector", "parse_assignment",
            "set_key"]
 
@@ -58,6 +59,7 @@ class Scene:
     contact: ContactSpec | None = None     # None: no contact
     fracture: FractureSpec | None = None   # None: no damage field
     source: Path | None = None
+    limits: Limits = LIMITS                # what the scene may ask for (NO_LIMITS: --no-limits)
 
     @property
     def material(self) -> MaterialSpec:
@@ -75,15 +77,16 @@ class Scene:
         return all(m.model in SMALL_STRAIN_MODELS for m in self.materials)
 
     @classmethod
-    def from_file(cls, path: str | Path, overrides: dict | None = None) -> "Scene":
+    def from_file(cls, path: str | Path, overrides: dict | None = None, limits: Limits = LIMITS) -> "Scene":
         """Read and validate a TOML scene; `overrides` {"mesh.cells": [8, 1, 1], ...} replace keys first."""
         path = Path(path)
-        return cls.from_dict(read_toml(path, overrides), base_dir=path.parent, source=path)
+        return cls.from_dict(read_toml(path, overrides, limits), base_dir=path.parent, source=path, limits=limits)
 
     @classmethod
-    def from_dict(cls, data: dict, base_dir: str | Path = ".", source: Path | None = None) -> "Scene":
-        """Validate a scene given as a dict (file paths in it are relative to base_dir)."""
-        return _parse_scene(data, Path(base_dir), source)
+    def from_dict(cls, data: dict, base_dir: str | Path = ".", source: Path | None = None,
+                  limits: Limits = LIMITS) -> "Scene":
+        """Validate a scene given as a dict (file paths in it are relative to base_dir) against `limits`."""
+        return _parse_scene(data, Path(base_dir), source, limits)
 
 
 # the corotated model's mixed tangent did not finish compiling within 6 minutes (materials/hyperelastic.py);
@@ -95,9 +98,9 @@ def _section(t: Table, section: Section, base_dir: Path):
     return section.parse(t.raw(section.name), base_dir) if t.has(section.name) else section.missing()
 
 
-def _parse_scene(data: dict, base_dir: Path, source: Path | None) -> Scene:
+def _parse_scene(data: dict, base_dir: Path, source: Path | None, limits: Limits) -> Scene:
     t = Table(data, "", base_dir)
-    sc = Scene(source=source)
+    sc = Scene(source=source, limits=limits)
     sc.title = t.read(TITLE)
     sc.analysis = t.read(ANALYSIS_KEY)
     analysis = registry.get(sc.analysis)
@@ -141,4 +144,5 @@ def _parse_scene(data: dict, base_dir: Path, source: Path | None) -> Scene:
     if analysis.check is not None:
         analysis.check(sc)
     t.done()
+    check_scene(sc, limits)
     return sc

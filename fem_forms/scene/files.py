@@ -6,17 +6,24 @@ import tomllib
 from typing import Any
 
 from fem_forms.errors import InputError
+from fem_forms.scene.limits import LIMITS, Limits, nesting_depth
 
 
-def read_toml(path: str | Path, overrides: dict | None = None) -> dict:
-    """The scene file as a dict, with `overrides` {"mesh.cells": [8, 1, 1], ...} applied."""
+def read_toml(path: str | Path, overrides: dict | None = None, limits: Limits = LIMITS) -> dict:
+    """The scene file as a dict, with `overrides` {"mesh.cells": [8, 1, 1], ...} applied. A file larger than
+    limits.scene_bytes is refused before it is read, one nested deeper than limits.nesting once parsed."""
     path = Path(path)
+    name = f"scene file {str(path)!r}"
     if not path.is_file():
-        raise InputError(f"scene file {str(path)!r}: not found")
+        raise InputError(f"{name}: not found")
+    limits.check("scene_bytes", path.stat().st_size, name, "bytes")
     try:
         data = tomllib.loads(path.read_text())
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
-        raise InputError(f"scene file {str(path)!r}: not valid TOML ({e})") from None
+        raise InputError(f"{name}: not valid TOML ({e})") from None
+    except RecursionError:
+        raise InputError(f"{name}: tables and arrays nested too deeply to read") from None
+    limits.check("nesting", nesting_depth(data), name, "levels of tables and arrays inside each other")
     for key, value in (overrides or {}).items():
         set_key(data, key, value)
     return data
@@ -73,4 +80,6 @@ def parse_assignment(text: str) -> tuple[str, Any]:
         value = tomllib.loads(f"v = {raw.strip()}")["v"]
     except tomllib.TOMLDecodeError:
         value = raw.strip()                          # a bare word: a string
+    except RecursionError:
+        raise InputError(f"--set {key.strip()}: the value is nested too deeply to read") from None
     return key.strip(), value

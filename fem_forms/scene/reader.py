@@ -48,6 +48,25 @@ def key_name(name: Any) -> str:
     return name if isinstance(name, str) and _PLAIN_NAME.match(name) else brief(name, 40)
 
 
+_CONTROL = re.compile(r"[\x00-\x08\x0b-\x1f\x7f]")
+
+
+def plain_text(v: str, key: str) -> None:
+    """Refuse a string with control characters (a terminal's escape sequences would run when it is printed)."""
+    if _CONTROL.search(v):
+        raise InputError(f"{key} = {brief(v)}: control characters are not allowed in a scene's text")
+
+
+def check_name(v: str, key: str) -> None:
+    """A name the package writes into its outputs (a probe's, a support's, an obstacle's): no path in it, so it
+    can never become one (no slash, backslash or '..'), no control characters, at most 80 characters."""
+    if not isinstance(v, str) or not v.strip():
+        raise InputError(f"{key}: a name must be a non-empty string")
+    if "/" in v or "\\" in v or ".." in v or any(c < " " or c == "\x7f" for c in v) or len(v) > 80:
+        raise InputError(f"{key} = {brief(v)}: a name may not hold '/', '\\', '..' or control characters, nor "
+                         "exceed 80 characters")
+
+
 def check_number(v: Any, key: str, *, positive=False, nonneg=False, integer=False):
     """A finite number (a whole one with `integer`), as float (or int)."""
     if isinstance(v, bool) or not isinstance(v, (int, float)):
@@ -79,6 +98,9 @@ def _scalar(k: Key, v: Any, key: str) -> Any:
     elif k.kind == "string" or k.kind == "file":
         if not isinstance(v, str):
             raise InputError(f"{key} = {brief(v)}: must be a string")
+        plain_text(v, key)
+        if k.name == "name":
+            check_name(v, key)
     elif k.kind == "boolean":
         if not isinstance(v, bool):
             raise InputError(f"{key} = {brief(v)}: must be true or false")
@@ -192,6 +214,8 @@ def read_value(k: Key, v: Any, key: str, base_dir: Path) -> Any:
     if k.kind == "map":
         if not isinstance(v, dict):
             raise InputError(f"{key}: must be a table name = {k.item.doc}")
+        for n in v:
+            check_name(n, f"{key}.{key_name(n)}")
         return {n: read_value(k.item, x, f"{key}.{key_name(n)}", base_dir) for n, x in v.items()}
     if k.kind == "options":
         if not isinstance(v, dict):

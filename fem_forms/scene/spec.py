@@ -75,6 +75,7 @@ class MeshSpec:
     repair: bool = False
     scale: float | None = None
     units: str | None = None
+    max_cells: int | None = None     # the scene's cap on cells (scene/limits.py), checked when the mesh is built
 
     @property
     def length_scale(self) -> float:

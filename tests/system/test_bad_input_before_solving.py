@@ -29,7 +29,8 @@ REFUSED = [
     ("free but not pushed", with_(BASE, "fix", [{"where": {"axis": "x", "at": 0.0}, "components": ["x", "z"]}]),
      "fix: the supports leave the body free (translation y); the loads do not push it that way"),
     ("box larger than the machine", with_(BASE, "mesh.cells", [4000, 4000, 4000]),
-     "mesh.cells = [4000, 4000, 4000]: 3.84e+11 cells"),
+     "mesh.cells = [4000, 4000, 4000]: 384,000,000,000 cells, more than a scene may ask for (2,000,000); "
+     "--no-limits lifts it"),
     ("non-numeric snes_rtol", with_(BASE, "solver", {"petsc": {"snes_rtol": "abc"}}),
      "solver.petsc.snes_rtol = 'abc': must be a finite number"),
     ("bad line search", with_(BASE, "solver", {"petsc": {"snes_linesearch_type": "cubic"}}),
@@ -48,8 +49,8 @@ def test_refused_in_one_line_with_status_2(tmp_path, capsys, name, scene, fragme
 
 
 def test_memory_refusal_names_the_estimate_and_the_machine(tmp_path, capsys):
-    code, err, _ = run(tmp_path, with_(BASE, "mesh.cells", [4000, 4000, 4000]), capsys)
-    assert code == 2 and "GiB, more than this machine's" in err and "use fewer cells" in err
+    code, err, _ = run(tmp_path, with_(BASE, "mesh.cells", [4000, 4000, 4000]), capsys, "--no-limits")
+    assert code == 2 and "3.84e+11 cells" in err and "GiB, more than this machine's" in err and "use fewer cells" in err
 
 
 def test_a_surface_meshed_too_finely_is_refused_before_gmsh_runs(tmp_path, capsys):
@@ -61,6 +62,8 @@ def test_a_surface_meshed_too_finely_is_refused_before_gmsh_runs(tmp_path, capsy
     scene = with_(BASE, "mesh", {"generator": "file", "file": str(tmp_path / "cube.stl"), "h": 1e-4})
     scene["output"]["probes"] = {}
     code, err, _ = run(tmp_path, scene, capsys)
+    assert code == 2 and "mesh.file = " in err and "at h = 0.0001: about" in err and "--no-limits lifts it" in err
+    code, err, _ = run(tmp_path, scene, capsys, "--no-limits")
     assert code == 2 and "mesh.file = " in err and "at h = 0.0001" in err and "GiB" in err
 
 

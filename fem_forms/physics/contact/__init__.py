@@ -21,4 +21,4 @@ def contact_terms(scene, mesh) -> list[Term]:
         modulus = max(young_modulus(m.material) for m in scene.materials)
     except InputError:
         raise InputError("contact: needs a built-in material model (its modulus scales the barrier)") from None
-    return [ContactTerm(scene.contact, modulus)]
+    return [ContactTerm(scene.contact, modulus, scene.limits.obstacle_triangles)]

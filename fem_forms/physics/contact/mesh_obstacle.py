@@ -12,18 +12,21 @@ from fem_forms.meshes.surfaces import check_closed, merge_points, read_surface
 from fem_forms.physics.contact.obstacles import Obstacle
 
 SAMPLES = 64          # points tested for lying inside the other surface (enough once no triangles cross)
-MAX_TRIANGLES = 300_000    # an obstacle refined to the part's surface edge beyond this is refused
 
 
 class FileObstacle(Obstacle):
     """The obstacle's rest points (n, 3) and triangles (m, 3); `points_at(t)` moves them rigidly."""
 
-    def __init__(self, spec, key: str):
+    def __init__(self, spec, key: str, max_triangles: int | None):
         super().__init__(spec)
         path = Path(spec.file)
+        self.max_triangles = max_triangles      # the scene's cap (scene/limits.py; None: none), also once refined
         self.points, self.triangles = read_surface(path, f"{key}.file")
         if not len(self.triangles):
             raise InputError(f"{key}.file = {str(path)!r}: holds no triangles")
+        if max_triangles is not None and len(self.triangles) > max_triangles:
+            raise InputError(f"{key}.file = {str(path)!r}: {len(self.triangles):,} triangles, more than a scene "
+                             f"may ask for ({max_triangles:,}); --no-limits lifts it")
         check_closed(self.points, self.triangles, f"{key}.file = {str(path)!r}",
                      hint="an obstacle must enclose a solid (repair it, e.g. with pymeshfix, or use a shape)")
 
@@ -35,10 +38,11 @@ class FileObstacle(Obstacle):
         tri = self.points[self.triangles]
         longest = np.linalg.norm(tri - tri[:, [1, 2, 0]], axis=2).max(axis=1)
         ks = np.maximum(np.ceil(longest / h).astype(int), 1)
-        if int(np.sum(ks ** 2)) > MAX_TRIANGLES:
+        if self.max_triangles is not None and int(np.sum(ks ** 2)) > self.max_triangles:
             raise InputError(f"{key}.file: refined to the part's surface edge ({h:.3g} m) it would have "
-                             f"{int(np.sum(ks ** 2))} triangles (at most {MAX_TRIANGLES}); use a shape, a smaller "
-                             "obstacle or a coarser part surface")
+                             f"{int(np.sum(ks ** 2)):,} triangles, more than a scene may ask for "
+                             f"({self.max_triangles:,}); use a shape, a smaller obstacle or a coarser part surface "
+                             "(--no-limits lifts it)")
         points, triangles = [], []
         count = 0
         for (a, b, c), k in zip(tri, ks):

@@ -40,8 +40,9 @@ class ContactTerm(ArrayTerm):
     lagging = True                 # friction's normal forces and tangent planes, the obstacles' positions
     energy_columns = ("contact",)
 
-    def __init__(self, spec, modulus: float):
+    def __init__(self, spec, modulus: float, max_triangles: int | None):
         self.modulus = modulus
+        self.max_triangles = max_triangles         # an obstacle file's cap (scene/limits.py)
         self.surface: BoundarySurface | None = None
         self.selfc: IpcSurfaces | None = None      # the part against itself
         self.filec: IpcSurfaces | None = None      # the part against the obstacle files
@@ -57,7 +58,8 @@ class ContactTerm(ArrayTerm):
         self.spec = spec
         self.obstacles = [make_obstacle(ob) for ob in spec.obstacle if ob.shape != "file"]
         self.file_index = [i for i, ob in enumerate(spec.obstacle) if ob.shape == "file"]   # their scene index
-        self.files = [FileObstacle(spec.obstacle[i], f"contact.obstacle[{i}]") for i in self.file_index]
+        self.files = [FileObstacle(spec.obstacle[i], f"contact.obstacle[{i}]", self.max_triangles)
+                      for i in self.file_index]
         for ob in self.obstacles + self.files:
             ob.move_to(self.time)
 

@@ -22,7 +22,7 @@ IMPACT_KEYS = (
         "(by the modal analysis's inertia count)", unit="Hz", exclusive_minimum=0,
         default_note="20000 Hz, or the WAV's Nyquist frequency sample_rate / 2 if lower"),
     Key("count", "integer", "impact: the lowest elastic modes, this many (instead of up_to)", minimum=1,
-        maximum=500, note="must be a whole number of modes in 1..500"),
+        note="must be a whole number of modes, at least 1 (a scene may ask for 500; --no-limits lifts that)"),
 )
 _K = {k.name: k for k in IMPACT_KEYS}
 _H = {k.name: k for k in HEARING_KEYS}

@@ -10,8 +10,8 @@ from fem_forms.scene.analyses import Analysis
 from fem_forms.scene.reader import Key, Section, Table
 
 MODAL_KEYS = (
-    Key("count", "integer", "number of elastic modes", default=6, minimum=1, maximum=500,
-        note="must be a whole number of modes in 1..500"),
+    Key("count", "integer", "number of elastic modes", default=6, minimum=1,
+        note="must be a whole number of modes, at least 1 (a scene may ask for 500; --no-limits lifts that)"),
     Key("up_to", "number", "every elastic mode below this frequency, however many (instead of count)",
         unit="Hz", exclusive_minimum=0),
     Key("prestress", "boolean", "modes about the static equilibrium under the scene's loads", default=False),
