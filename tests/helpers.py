@@ -3,6 +3,7 @@ runners. Test modules import them with `from helpers import ...` (tests/ is on s
 tests/conftest.py and the `pythonpath` setting in pyproject.toml)."""
 import copy
 import json
+import re
 import os
 import shutil
 import subprocess
@@ -146,14 +147,18 @@ def mesh_volume(mesh) -> float:
 
 # --- TOML writers -----------------------------------------------------------------------------
 def toml_dumps(d: dict, prefix: str = "") -> str:
-    """Minimal TOML writer for the test scenes (tables, arrays of tables, inline values)."""
+    """Minimal TOML writer for the test scenes (tables, arrays of tables, inline values; keys quoted where they
+    are not bare)."""
+    def key(k):
+        return k if re.fullmatch(r"[A-Za-z0-9_-]+", str(k)) else json.dumps(str(k))
+
     def val(v):
         if isinstance(v, bool):
             return "true" if v else "false"
         if isinstance(v, str):
             return json.dumps(v)
         if isinstance(v, dict):
-            return "{ " + ", ".join(f"{k} = {val(x)}" for k, x in v.items()) + " }"
+            return "{ " + ", ".join(f"{key(k)} = {val(x)}" for k, x in v.items()) + " }"
         if isinstance(v, list):
             return "[" + ", ".join(val(x) for x in v) + "]"
         return repr(v)
@@ -164,16 +169,16 @@ def toml_dumps(d: dict, prefix: str = "") -> str:
         elif isinstance(v, list) and v and all(isinstance(x, dict) for x in v):
             tables.append((k, v))
         else:
-            lines.append(f"{k} = {val(v)}")
+            lines.append(f"{key(k)} = {val(v)}")
     for k, v in tables:
         name = f"{prefix}{k}"
         if isinstance(v, list):
             for item in v:
                 lines.append(f"[[{name}]]")
-                lines.extend(f"{kk} = {val(vv)}" for kk, vv in item.items())
+                lines.extend(f"{key(kk)} = {val(vv)}" for kk, vv in item.items())
         else:
             lines.append(f"[{name}]")
-            lines.extend(f"{kk} = {val(vv)}" for kk, vv in v.items())
+            lines.extend(f"{key(kk)} = {val(vv)}" for kk, vv in v.items())
     return "\n".join(lines) + "\n"
 
 

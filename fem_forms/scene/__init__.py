@@ -32,9 +32,9 @@ from fem_forms.scene.spec import (CELL_TYPES, CORE_SECTIONS, GENERATORS, LOAD_TY
 from fem_forms.scene.plasticity import plasticity_rules
 
 __all__ = ["AXES", "CELL_TYPES", "GENERATORS", "LIMITS", "LOAD_TYPES", "NO_LIMITS", "Discretization", "Fix",
-           "InverseSpec", "Key", "Limits", "Load", "MaterialSpec", "MeshSpec", "ModalSpec", "OutputSpec", "Scene", "Section", "Selector",
-           "SolverSpec", "SoundSpec", "Table", "Variants", "check_number", "check_vector", "parse_assignment",
-           "set_key"]
+           "InverseSpec", "Key", "Limits", "Load", "MaterialSpec", "MeshSpec", "ModalSpec", "OutputSpec", "Scene",
+           "Section", "Selector", "SolverSpec", "SoundSpec", "Table", "Variants", "check_number", "check_vector",
+           "parse_assignment", "set_key"]
 
 
 @dataclass

@@ -291,7 +291,9 @@ SOLVER_KEYS = (
     Key("load_drop", "number", "arc length past a limit point ends once the load factor has dropped by this "
         "fraction of its peak (as a test machine stops at a load drop; 1: followed down to zero load, and up "
         "again where the path rises: a snap-through)", default=1.0, exclusive_minimum=0, maximum=1),
-    Key("petsc", "options", "PETSc options (name without dash = value), applied last", default={}),
+    Key("petsc", "options", "PETSc options of the solver (name without dash = value), applied last: snes_*, ksp_*, "
+        "pc_*, mat_mumps_*, eps_*, st_*, none that names a file, viewer, monitor or code (docs/sharing.md)",
+        default={}),
 )
 
 
