@@ -10,9 +10,10 @@ Python API::
 The API prints nothing while it works: no FFCx compile log (``quiet_jit(verbose=True)`` shows it) and no
 progress (``show_progress()`` shows load steps, Newton iterations and residuals on stderr).
 """
-from fem_forms import threads
+from fem_forms import petsc_start, threads
 
 threads.pin_blas_environment()          # before numpy loads OpenBLAS (fem_forms/threads.py says why)
+petsc_start.skip_petscrc()              # before PETSc starts: a shared folder's .petscrc is not read
 
 from fem_forms.analyses.modal import write_modal_outputs
 from fem_forms.analyses.static import write_static_outputs

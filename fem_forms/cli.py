@@ -170,13 +170,12 @@ def _run(args, petsc: dict) -> int:
         except ValueError as e:
             raise InputError(f"--petsc {text!r}: {e}") from None
         petsc.update(_petsc_options(words, "--petsc"))
-    log = petsc_log(petsc)                               # -log_view: PETSc's own, not the solver's
-    scene.solver.petsc.update(check_options(petsc, "command line: -", sep="", scene=False))
+    user = check_options(petsc, "command line: -", sep="", scene=False)
     if args.restart and scene.analysis != "dynamic":
         raise InputError(f"--restart: only for analysis = \"dynamic\" (this scene's is {scene.analysis!r})")
     forget_results(Path(args.out) / "results.json")
     if scene.discretization.tolerance is not None and not args.no_adapt:
-        if petsc or MPI.COMM_WORLD.size > 1:
+        if user or MPI.COMM_WORLD.size > 1:
             raise InputError("discretization.tolerance: run serially, with PETSc options in the scene")
         s = solve_to_tolerance(Path(args.scene), Path(args.out), scene.discretization.tolerance, overrides,
                                limits=limits)
@@ -184,9 +183,13 @@ def _run(args, petsc: dict) -> int:
               f"tolerance {s['tolerance']} (estimated error {s['error_estimate']:.2e}), {s['dofs']} dofs "
               f"-> {args.out}")
         return 0
-    run_analysis(scene, Path(args.out), echo=True, **({"restart": Path(args.restart)} if args.restart else {}))
-    if log is not None:
-        log.view()
+    log = petsc_log(user)                                # -log_view: PETSc's own, not the solver's
+    scene.solver.petsc.update(user)
+    try:
+        run_analysis(scene, Path(args.out), echo=True, **({"restart": Path(args.restart)} if args.restart else {}))
+    finally:
+        if log is not None:                              # also after a failed or interrupted run
+            log.view()
     return 0
 
 

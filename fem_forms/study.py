@@ -20,8 +20,9 @@ import numpy as np
 
 from fem_forms.errors import InputError, SolveError
 from fem_forms.output.results import write_json_atomic
-from fem_forms.scene import LIMITS, NO_LIMITS, Limits, Scene
+from fem_forms.scene import LIMITS, Limits, Scene
 
+PACKAGE_ROOT = Path(__file__).resolve().parent.parent     # the folder fem_forms is imported from
 # Key numbers whose norm is below this fraction of the part's size (the largest probe point or displacement;
 # for frequencies the highest one) are zero to the solver's accuracy: a probe on a clamp, an unloaded part.
 # Their relative errors would be a ratio of two round-off numbers, so the study reports absolute errors.
@@ -84,11 +85,14 @@ def mesh_level(scene: Scene, level: int) -> dict:
 
 def _run_one(scene_path: Path, run: Run, ranks: int, limits: Limits) -> None:
     cmd = [sys.executable, "-m", "fem_forms", "run", str(scene_path), "--out", str(run.folder), "--no-adapt", "-q"]
-    if limits == NO_LIMITS:
+    if limits != LIMITS:             # the study's user lifted or changed the caps (the base scene met them)
         cmd.append("--no-limits")
     for k, v in run.overrides.items():
         cmd += ["--set", f"{k}={json.dumps(v)}"]
-    env = dict(os.environ)
+    # the current folder is not searched for modules (a shared folder's json.py is not imported): fem_forms is
+    # found where this one was
+    env = {**os.environ, "PYTHONSAFEPATH": "1",
+           "PYTHONPATH": os.pathsep.join(filter(None, [str(PACKAGE_ROOT), os.environ.get("PYTHONPATH")]))}
     if ranks > 1:
         env.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1")
         cmd = [shutil.which("mpirun") or "mpirun", "-n", str(ranks), "--bind-to", "none"] + cmd

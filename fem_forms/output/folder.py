@@ -33,6 +33,12 @@ def check_output_folder(out: Path, default: bool) -> None:
     for folder, dirs, files in os.walk(out, followlinks=False):
         for name in dirs + files:
             entry = Path(folder) / name
-            if entry.is_symlink() and not _inside(entry.resolve(), root):
+            if not entry.is_symlink():
+                continue
+            try:
+                target = entry.resolve(strict=False)
+            except (OSError, RuntimeError):              # a loop of links
+                target = None
+            if target is None or not _inside(target, root):
                 raise InputError(f"output folder {str(out)!r}: {str(entry)!r} is a symbolic link out of it (to "
                                  f"{os.readlink(entry)!r}); {HINT}")

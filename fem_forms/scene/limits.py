@@ -20,11 +20,13 @@ LIFT = "--no-limits lifts it"
 class Limits:
     """The caps (None: no cap)."""
     cells: int | None = 2_000_000                 # mesh cells (a box's, a gmsh mesh's estimate, a file's)
-    load_steps: int | None = 10_000               # [solver] steps
+    load_steps: int | None = 10_000               # [solver] steps, 1 / max_step
+    cutbacks: int | None = 60                     # [solver] max_cutbacks (2^-60 of a step: below round-off)
+    iterations: int | None = 100_000              # [fracture] max_iterations, [inverse] iterations
     time_steps: int | None = 1_000_000            # [dynamic] duration / dt
     modes: int | None = 500                       # [modal] count, [sound.impact] count
     probes: int | None = 1_000                    # [output] probes
-    sound_samples: int | None = 30_000_000        # [sound] duration x sample_rate (11 minutes at 44.1 kHz)
+    sound_samples: int | None = 2**26             # [sound] duration x sample_rate (25 minutes at 44.1 kHz)
     obstacle_triangles: int | None = 300_000      # an obstacle file's triangles (also once refined)
     scene_bytes: int | None = 8_000_000           # the scene file's size, refused before it is parsed
     nesting: int | None = 32                      # tables and arrays inside each other
@@ -57,6 +59,11 @@ def check_scene(sc, limits: Limits) -> None:
     """The caps a read scene's own numbers can be checked against (the mesh's cells and an obstacle's triangles
     are checked when they are known: mesh.max_cells, the contact term's max_triangles)."""
     limits.check("load_steps", sc.solver.steps, "solver.steps", "load steps")
+    limits.check("load_steps", 1.0 / sc.solver.max_step, "solver.max_step", "load steps at least (1 / max_step)")
+    limits.check("cutbacks", sc.solver.max_cutbacks, "solver.max_cutbacks", "halvings of a step")
+    limits.check("iterations", sc.inverse.iterations, "inverse.iterations", "iterations")
+    if sc.fracture is not None:
+        limits.check("iterations", sc.fracture.max_iterations, "fracture.max_iterations", "sweeps")
     limits.check("probes", len(sc.output.probes or {}), "output.probes", "probes")
     if sc.analysis == "dynamic":
         limits.check("time_steps", sc.dynamic.duration / sc.dynamic.dt, "dynamic.duration / dynamic.dt",

@@ -15,6 +15,7 @@ import re
 from typing import Any
 
 from fem_forms.errors import InputError
+from fem_forms.scene.petsc_allowed import BOOL, REAL, kind_of
 
 # suffixes of options that take a real number, or a whole number
 REAL_SUFFIXES = ("_rtol", "_atol", "_stol", "_divtol", "_damping", "_maxstep", "_minlambda",
@@ -46,41 +47,43 @@ ENUM_OPTIONS = {
 }
 _NAME = re.compile(r"^[A-Za-z0-9_]+$")
 
-# the families a scene's option may belong to, after the prefixes of nested solvers (below)
-FAMILIES = ("snes_", "ksp_", "pc_", "mat_mumps_icntl_", "mat_mumps_cntl_", "eps_", "st_", "bv_", "ds_", "rg_")
-# nested solvers' prefixes: multigrid levels, sub-domains, field splits, SLEPc's spectral transformation, MUMPS
-NESTED = re.compile(r"^(?:mg_levels_(?:\d+_)?|mg_coarse_|esteig_|sub_|redundant_|fieldsplit_[A-Za-z0-9]+_|st_|inner_)*")
-# words that make an option write, draw, import or read (by name): refused in a scene whatever its family
-REFUSED = (("view", "names a viewer (PETSc writes to it)"), ("monitor", "is a monitor (it may name a viewer)"),
-           ("reason", "names a viewer (PETSc writes to it)"), ("draw", "draws in a window"),
-           ("plot", "draws in a window"), ("log", "writes a log"), ("python", "imports a Python type"),
-           ("options", "reads another options source"), ("file", "names a file"), ("help", "prints PETSc's help"),
-           ("dump", "writes a file"), ("save", "writes a file"), ("load", "reads a file"), ("dir", "names a folder"),
-           ("ooc", "writes out-of-core files"), ("history", "records a history"), ("test", "runs PETSc's checks"),
-           ("error", "prints an error viewer"), ("info", "writes information"), ("trace", "traces calls"),
-           ("dll", "loads a library"), ("debug", "starts a debugger"), ("malloc", "changes memory checking"))
-# MUMPS's output streams (Fortran units: a number writes fort.N) and out-of-core factorisation (files)
-REFUSED_MUMPS = {"mat_mumps_icntl_1", "mat_mumps_icntl_2", "mat_mumps_icntl_3", "mat_mumps_icntl_22"}
-# option values that are Python or user code, however the option is named
-CODE_VALUES = {"python", "shell"}
-_WORD = re.compile(r"^[A-Za-z0-9_.,+-]*$")
+# why an option a scene may not set is refused, by a word of its name (the first that matches), for the message
+WHY = (("view", "names a viewer (PETSc writes to it)"), ("monitor", "is a monitor (it may name a viewer)"),
+       ("reason", "names a viewer (PETSc writes to it)"), ("converged_rate", "names a viewer (PETSc writes to it)"),
+       ("compute_", "prints or draws (a viewer)"), ("print", "writes a file"), ("draw", "draws in a window"),
+       ("plot", "draws in a window"), ("log", "writes a log"), ("python", "imports a Python type"),
+       ("options", "reads another options source"), ("file", "names a file"), ("help", "prints PETSc's help"),
+       ("dump", "writes a file"), ("mat_mumps_icntl_", "is a MUMPS output stream, verbosity or out-of-core files "
+                                                        "(MUMPS writes files)"),
+       ("eps_nev", "sets the number of modes ([modal] count does, under its cap)"),
+       ("eps_ncv", "sets the eigensolver's subspace ([modal] count does)"),
+       ("eps_mpd", "sets the eigensolver's subspace ([modal] count does)"))
+_FIELDS = re.compile(r"^\d+(,\d+)*$")
 
 
 def scene_may_set(name: str, value: Any, where: str) -> None:
-    """Refuse, in one line naming `where`, an option a scene may not set: outside the families users tune, or one
-    that names a file, a viewer, a monitor, a Python type or another options source."""
-    why = next((w for word, w in REFUSED if word in name.lower()), None)
-    if why is None and name in REFUSED_MUMPS:
-        why = "names an output stream or out-of-core files (MUMPS writes files)"
-    if why is None and isinstance(value, str) and value.strip().lower() in CODE_VALUES:
-        why = f"{value!r} is user code (PETSc would import or call it)"
-    if why is None and isinstance(value, str) and not _WORD.match(value.strip()):
-        why = "a value with a path, a viewer or spaces (a scene's options take numbers and plain words)"
-    if why is None and not (name.startswith(FAMILIES) or NESTED.sub("", name).startswith(FAMILIES)):
-        why = ("not an option a scene may set (solver, line search, Krylov, preconditioner, MUMPS, SLEPc: snes_*, "
-               "ksp_*, pc_*, mat_mumps_*, eps_*, st_*)")
-    if why is not None:
+    """Refuse, in one line naming `where`, an option a scene may not set (scene/petsc_allowed.py lists those it
+    may, with their kinds) or a value not of its kind: a scene's options are numbers, booleans and listed words."""
+    kind = kind_of(name)
+    if kind is None:
+        why = next((w for word, w in WHY if word in name.lower()),
+                   "not an option a scene may set (the solver's, line search's, Krylov's, preconditioner's, MUMPS's "
+                   "and SLEPc's tuning options: docs/sharing.md)")
         raise InputError(f"{where}: {why}; a scene is data: give it on the command line (--petsc)")
+    if kind == REAL:
+        ok, what = _as_number(value, integer=False), "a finite number"
+    elif kind == BOOL:
+        ok, what = isinstance(value, bool) or str(value).lower() in BOOLEAN_WORDS, "true or false"
+    elif kind == "fields":
+        ok, what = isinstance(value, str) and bool(_FIELDS.match(value)), "field numbers such as \"0,1\""
+    elif kind[0] == "int":
+        lo, hi = kind[1], kind[2]
+        ok = _as_number(value, integer=True) and lo <= float(value) <= hi
+        what = f"a whole number in {lo}..{hi:,}"
+    else:
+        ok, what = isinstance(value, str) and value in kind, f"one of {', '.join(kind[:8])}{', ...' * (len(kind) > 8)}"
+    if not ok:
+        raise InputError(f"{where}: must be {what}")
 
 
 def _short(v: Any, limit: int = 40) -> str:
@@ -114,7 +117,7 @@ def check_option(name: Any, value: Any, key: str, sep: str = ".", scene: bool = 
         raise InputError(f"{where}: must be a single number, word or boolean")
     if scene:
         scene_may_set(name, value, where)
-    if name in ENUM_OPTIONS:
+    elif name in ENUM_OPTIONS:
         if not isinstance(value, str) or value not in ENUM_OPTIONS[name]:
             raise InputError(f"{where}: must be one of {', '.join(ENUM_OPTIONS[name][:8])}, ...")
     elif name in BOOLEAN_OPTIONS:

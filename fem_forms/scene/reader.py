@@ -48,7 +48,8 @@ def key_name(name: Any) -> str:
     return name if isinstance(name, str) and _PLAIN_NAME.match(name) else brief(name, 40)
 
 
-_CONTROL = re.compile(r"[\x00-\x08\x0b-\x1f\x7f]")
+_CONTROL = re.compile(r"[\x00-\x08\x0b-\x1f\x7f-\x9f]")     # C0 (but tab and newline), DEL and C1
+_NAME = re.compile(r"^\w[\w .()+-]{0,79}$")          # \w: letters (any script), digits, _
 
 
 def plain_text(v: str, key: str) -> None:
@@ -58,13 +59,12 @@ def plain_text(v: str, key: str) -> None:
 
 
 def check_name(v: str, key: str) -> None:
-    """A name the package writes into its outputs (a probe's, a support's, an obstacle's): no path in it, so it
-    can never become one (no slash, backslash or '..'), no control characters, at most 80 characters."""
-    if not isinstance(v, str) or not v.strip():
-        raise InputError(f"{key}: a name must be a non-empty string")
-    if "/" in v or "\\" in v or ".." in v or any(c < " " or c == "\x7f" for c in v) or len(v) > 80:
-        raise InputError(f"{key} = {brief(v)}: a name may not hold '/', '\\', '..' or control characters, nor "
-                         "exceed 80 characters")
+    """A name the package writes into its outputs (a probe's, a support's, an obstacle's: results.json, CSV
+    headers): letters, digits, spaces and _ . ( ) + -, starting with a letter, digit or _ (no path, no comma,
+    no spreadsheet formula), no '..', at most 80 characters."""
+    if not isinstance(v, str) or not _NAME.match(v) or ".." in v:
+        raise InputError(f"{key} = {brief(v)}: a name is up to 80 letters, digits, spaces and _ . ( ) + -, "
+                         "starting with a letter, digit or _ (no '/', '..' or ',')")
 
 
 def check_number(v: Any, key: str, *, positive=False, nonneg=False, integer=False):

@@ -25,40 +25,52 @@ VIEWER_OPTIONS = ["snes_view", "ksp_view", "pc_view", "mat_view", "eps_view", "l
                   "eps_view_values", "eps_error_relative", "ksp_view_mat", "snes_test_jacobian_view", "options_file",
                   "help", "malloc_dump", "info", "history", "mat_mumps_icntl_1", "mat_mumps_icntl_22",
                   "viewer_binary_filename", "ksp_plot_eigenvalues", "dll_append", "on_error_attach_debugger",
-                  "objects_dump", "mg_levels_ksp_view", "st_ksp_monitor", "fieldsplit_0_ksp_view"]
-VIEWER_VALUES = ["ascii:{S}/a.txt", "binary:{S}/b.bin", "{S}/c.txt", "", "draw"]
+                  "objects_dump", "mg_levels_ksp_view", "st_ksp_monitor", "fieldsplit_0_ksp_view",
+                  "pc_asm_print_subdomains", "pc_gasm_print_subdomains", "sub_pc_asm_print_subdomains",
+                  "ksp_converged_rate", "ksp_compute_eigenvalues", "ksp_compute_singularvalues",
+                  "ksp_compute_eigenvalues_explicitly", "st_mat_mumps_icntl_1", "sub_mat_mumps_icntl_22",
+                  "mg_coarse_mat_mumps_icntl_3", "fieldsplit_u_mat_mumps_icntl_2", "mat_mumps_icntl_4"]
+VIEWER_VALUES = ["ascii:{S}/a.txt", "binary", "{S}/c.txt", ".bashrc"]
 CODE_OPTIONS = [("pc_type", "python"), ("ksp_type", "python"), ("snes_type", "python"),
                 ("pc_python_type", "os.system"), ("ksp_python_type", "builtins.exec"), ("snes_type", "shell"),
                 ("snes_linesearch_type", "shell"), ("pc_type", "shell"), ("snes_python_type", "x.Y"),
-                ("pc_type", "lu -options_file {S}/o"), ("mat_type", "python"), ("dm_plex_filename", "{S}/m.h5")]
-NAMES = ["../x", "a/b", "/abs/path", "..", "x\\y", "\x1b[2J", "a\nb", "~/../../etc"]
+                ("pc_type", "lu -options_file {S}/o"), ("mat_type", "python"), ("dm_plex_filename", "{S}/m.h5"),
+                ("pc_composite_pcs", "ilu,python"), ("snes_composite_sneses", "newtonls,python"),
+                ("eps_nev", 100000), ("eps_ncv", 100000), ("ksp_gmres_restart", 10**8), ("pc_factor_levels", 10**6),
+                ("mat_mumps_icntl_14", 10**7), ("snes_max_it", 10**9)]
+NAMES = ["../x", "a/b", "/abs/path", "..", "x\\y", "\x1b[2J", "a\nb", "~/../../etc", "=HYPERLINK(1)", "a,b",
+         "\x9b31m", "x" * 81]
 
 
 def _cases(sandbox: Path) -> list:
-    """(name, scene dict or None, file text or None, extra argv, setup, expected fragment) for 200 scenes."""
+    """(name, scene dict or None, file text or None, extra argv, setup, expected fragment): exactly 200 scenes."""
     s = str(sandbox)
     cases = []
-    for name, value in itertools.product(VIEWER_OPTIONS, VIEWER_VALUES):
+    pairs = [(n, VIEWER_VALUES[(i + k) % len(VIEWER_VALUES)]) for i, n in enumerate(VIEWER_OPTIONS) for k in (0, 1)]
+    for name, value in pairs:
         cases.append((f"{name}={value}", with_(BASE, "solver", {"petsc": {name: value.format(S=s)}}), None, [],
                       None, f"solver.petsc.{name}"))
     for name, value in CODE_OPTIONS:
-        cases.append((f"{name}={value}", with_(BASE, "solver", {"petsc": {name: value.format(S=s)}}), None, [],
-                      None, f"solver.petsc.{name}"))
-        cases.append((f"--set {name}", BASE, None, ["--set", f"solver.petsc.{name}={json.dumps(value.format(S=s))}"],
-                      None, f"solver.petsc.{name}"))
+        v = value.format(S=s) if isinstance(value, str) else value
+        cases.append((f"{name}={value}", with_(BASE, "solver", {"petsc": {name: v}}), None, [], None,
+                      f"solver.petsc.{name}"))
+        cases.append((f"--set {name}={value}", BASE, None, ["--set", f"solver.petsc.{name}={json.dumps(v)}"], None,
+                      f"solver.petsc.{name}"))
     for name in NAMES:
         cases.append((f"probe {name!r}", with_(BASE, "output.probes", {name: [1.0, 0.05, 0.05]}), None, [], None,
                       "output.probes"))
         cases.append((f"fix {name!r}", with_(BASE, "fix.0.name", name), None, [], None, "fix[0].name"))
         cases.append((f"material {name!r}", with_(BASE, "material.name", name), None, [], None, "material.name"))
-    for target in ("results.json", "probes.csv", "newton_history.csv", "sub"):
+    for target in ("results.json", "probes.csv", "newton_history.csv", "sub", "loop"):
         cases.append((f"link {target}", BASE, None, [], ("link", target), "symbolic link out of it"))
     cases.append(("default out/ a link", BASE, None, ["--default-out"], ("out link", None), "a symbolic link"))
     cases.append(("default out/stem a link", BASE, None, ["--default-out"], ("stem link", None), "a symbolic link"))
     struck = with_(with_(MODAL, "modal", {"count": 6}), "sound",
                    {"strike": {"point": [1.0, 0.05, 0.1], "direction": [0, 0, -1]}})
-    huge = [(BASE, "mesh.cells", [3000, 3000, 3000], "mesh.cells"),
+    huge = [(BASE, "mesh.cells", [3000, 3000, 3000], "mesh.cells = [3000, 3000, 3000]"),
             (BASE, "solver.steps", 10**7, "solver.steps"),
+            (BASE, "solver.max_step", 1e-9, "solver.max_step"),
+            (BASE, "solver.max_cutbacks", 10**6, "solver.max_cutbacks"),
             (BASE, "output.probes", {f"p{i}": [1.0, 0.05, 0.05] for i in range(1500)}, "output.probes"),
             (with_(DYNAMIC, "dynamic", {"duration": 1e4}), "dynamic.dt", 1e-6, "dynamic.duration / dynamic.dt"),
             (MODAL, "modal.count", 10**5, "modal.count"),
@@ -72,13 +84,14 @@ def _cases(sandbox: Path) -> list:
                   "nested too deeply"))
     cases.append(("nested inline tables", None, "a = " + "{b = " * 60 + "1" + "}" * 60 + "\n", [], None,
                   "levels of tables and arrays"))
-    fill = itertools.cycle(itertools.product(["snes_view", "ksp_monitor", "log_view", "options_file"],
-                                             ["ascii:{S}/e.txt", "{S}/../f.txt", "stdout"]))
-    while len(cases) < 200:
-        name, value = next(fill)
-        cases.append((f"--set {name}={value}#{len(cases)}", BASE, None,
-                       ["--set", f"solver.petsc.{name}={json.dumps(value.format(S=s))}"], None, f"solver.petsc.{name}"))
-    return cases[:200]
+    cases.append(("title with an escape", with_(BASE, "title", "\x1b]0;owned\x07"), None, [], None, "title"))
+    assert len(cases) <= 200, len(cases)
+    fill = itertools.product(["snes_view", "ksp_monitor", "log_view", "options_file", "pc_asm_print_subdomains"],
+                             ["ascii:{S}/e.txt", "{S}/../f.txt", "stdout", "binary"])
+    for name, value in itertools.islice(fill, 200 - len(cases)):
+        argv = ["--set", f"solver.petsc.{name}={json.dumps(value.format(S=s))}"]
+        cases.append((f"--set {name}={value}", BASE, None, argv, None, f"solver.petsc.{name}"))
+    return cases
 
 
 def _set(scene: dict, key: str, value) -> dict:
@@ -109,7 +122,11 @@ def _setup(kind, out: Path, sandbox: Path, cwd: Path) -> None:
     if kind is None:
         return
     what, target = kind
-    if what == "link":
+    if what == "link" and target == "loop":
+        out.mkdir(parents=True, exist_ok=True)
+        os.symlink(out / "b", out / "a")
+        os.symlink(out / "a", out / "b")
+    elif what == "link":
         out.mkdir(parents=True, exist_ok=True)
         os.symlink(sandbox / "victim" if target != "sub" else sandbox, out / target)
     elif what == "out link":
@@ -130,7 +147,7 @@ def sandbox(tmp_path_factory):
 def test_two_hundred_hostile_scenes_are_refused_in_one_line_and_write_nothing(tmp_path, sandbox, capsys,
                                                                               monkeypatch):
     cases = _cases(sandbox)
-    assert len(cases) == 200
+    assert len(cases) == 200 and len({c[0] for c in cases}) == 200
     before = _listing(sandbox)
     for i, (name, scene, text, extra, setup, fragment) in enumerate(cases):
         cwd = tmp_path / f"case{i}"
@@ -192,3 +209,24 @@ def test_an_obstacle_file_over_the_cap_is_refused(tmp_path):
     with pytest.raises(InputError, match="refined to the part's surface edge"):
         ob.refine(0.4, "contact.obstacle[0]")          # 3 x 3 pieces each: 9 times the triangles
     FileObstacle(spec, "contact.obstacle[0]", None).refine(0.4, "contact.obstacle[0]")
+
+
+def test_a_shared_folders_petscrc_and_modules_are_not_read(tmp_path, sandbox, monkeypatch):
+    """PETSc reads .petscrc from the current folder when it starts, Python imports modules from it: a folder
+    shared with a scene could hold either. A run (a process of its own) and a study's runs read neither."""
+    import subprocess
+    import sys
+    from fem_forms.study import study
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "scene.toml").write_text(toml_dumps(BASE))
+    (tmp_path / ".petscrc").write_text(f"-log_view ascii:{sandbox}/petscrc.txt\n")
+    (tmp_path / "petscrc").write_text(f"-options_file {sandbox}/other\n")
+    (tmp_path / "json.py").write_text(f"open({str(sandbox / 'json_imported.txt')!r}, 'w').write('x')\n"
+                                      "raise SystemExit(7)\n")
+    before = _listing(sandbox)
+    script = Path(sys.executable).parent / "fem-forms"          # the command users run (its folder on sys.path)
+    p = subprocess.run([str(script), "run", "scene.toml", "-q"], capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    study(Path("scene.toml"), tmp_path / "study", [1], 1, echo=False)
+    assert json.loads((tmp_path / "study" / "P1_level0" / "results.json").read_text())["converged"]
+    assert _listing(sandbox) == before

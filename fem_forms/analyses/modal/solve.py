@@ -277,7 +277,8 @@ def solve_modal(scene: Scene, material=None, model: Model | None = None) -> Moda
     try:
         if spec.up_to is not None:
             try:
-                res, band = solve_band(ops.K, ops.M, spec.up_to, free_target, scene.solver.petsc)
+                res, band = solve_band(ops.K, ops.M, spec.up_to, free_target, scene.solver.petsc,
+                                       scene.limits.modes)
             except (PETSc.Error, SolveError) as e:
                 raise SolveError(f"{scene.title}: modal solve failed: {e}") from None
             rigid = np.abs(res.values) < rigid_below

@@ -28,7 +28,6 @@ def _modal_rules(s: ModalSpec, t: Table) -> None:
         raise InputError(f"{t.key('up_to')}: give either count or up_to, not both")
 
 
-MAX_SAMPLES = 2**26
 STRIKE = Key("strike", "table", "where and how the body is struck", required=True, keys=(
     Key("point", "vector", "struck point", unit="m", required=True, length=3),
     Key("direction", "vector", "direction of the blow (normalised)", required=True, length=3)))
@@ -80,13 +79,12 @@ def _damping_table_rules(pairs: list, key: str) -> None:
 
 
 def hearing_rules(s, t: Table) -> None:
-    """The rules of the shared [sound] keys: one damping law, a damping table that makes sense, a WAV that fits."""
+    """The rules of the shared [sound] keys: one damping law, a damping table that makes sense (the WAV's length: its
+    cap in scene/limits.py)."""
     if s.modal_damping is not None:
         if t.has("damping"):
             raise InputError(f"{t.key('modal_damping')}: give either damping (Rayleigh) or modal_damping, not both")
         _damping_table_rules(s.modal_damping, t.key("modal_damping"))
-    if s.duration * s.sample_rate > MAX_SAMPLES:
-        raise InputError(f"{t.key('duration')} = {s.duration}: too long (at most {MAX_SAMPLES} samples)")
 
 
 def _sound_rules(s: SoundSpec, t: Table) -> None:
