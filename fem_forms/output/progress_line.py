@@ -36,6 +36,7 @@ class ProgressLine:
         self._time0: tuple[float, float] | None = None   # (wall, simulated time) at the first time step
         self._last_line = -1.0       # when a plain line was last written
         self._quiet_steps = 0        # accepted time steps not written on a line of their own since then
+        self._selected: set = set()  # the selectors whose facet count was written
 
     # -- the reporter ------------------------------------------------------------------------------
     def __call__(self, event: str, **fields) -> None:
@@ -58,6 +59,12 @@ class ProgressLine:
         elif event == "solve_done":     # the next solve (e.g. a forward check) counts from 1 again
             self.close()
             self.state = {}
+            return
+        elif event == "selected":       # once per selector: how many facets it took
+            if fields.get("key") not in self._selected:
+                self._selected.add(fields.get("key"))
+                self.close()
+                self._write(f"fem-forms: {fields.get('key')}: {fields.get('facets')} boundary facets\n")
             return
         if self.tty:
             if event != "newton" or time.perf_counter() - self._last_draw >= REDRAW_EVERY_S:

@@ -12,7 +12,9 @@ from petsc4py import PETSc
 
 from fem_forms.errors import InputError
 from fem_forms.meshes import LoadedMesh, bounding_box, mesh_size
+from fem_forms.meshes.facet_geometry import boundary_facets, cavities, outward_geometry
 from fem_forms.meshes.groups import distance_to_points, distance_to_segments
+from fem_forms.progress import report
 from fem_forms.scene import Fix, Load, Selector
 
 
@@ -33,13 +35,45 @@ def locate_facets(loaded: LoadedMesh, sel: Selector) -> np.ndarray:
             raise InputError(f"{sel.key}.group = {sel.group!r}: a {kind} group; a traction or pressure "
                              "needs a surface group")
         facets = loaded.facet_tags.indices[loaded.facet_tags.values == loaded.groups[sel.group]]
+    elif sel.kind in ("normal", "oblique", "cavity"):
+        facets = _facets_by_geometry(mesh, sel)
     else:
-        raise InputError(f"{sel.key}: a {sel.kind} has no area; select facets with axis/at, box or group")
-    if mesh.comm.allreduce(len(facets), op=MPI.SUM) == 0:
+        raise InputError(f"{sel.key}: a {sel.kind} has no area; select facets with axis/at, box, group, normal, "
+                         "plane or cavity")
+    found = mesh.comm.allreduce(len(_owned(mesh, facets)), op=MPI.SUM)
+    if found == 0:
         lo, hi = bounding_box(mesh)
         raise InputError(f"{sel.key}: matches no boundary facet (mesh spans {np.round(lo, 6).tolist()} "
                          f"to {np.round(hi, 6).tolist()})")
+    report("selected", key=sel.key, facets=found)
     return np.asarray(facets, dtype=np.int32)
+
+
+def _owned(mesh: dmesh.Mesh, facets: np.ndarray) -> np.ndarray:
+    """The facets this rank owns (the others are ghosts another rank counts)."""
+    return facets[facets < mesh.topology.index_map(mesh.topology.dim - 1).size_local]
+
+
+def _facets_by_geometry(mesh: dmesh.Mesh, sel: Selector) -> np.ndarray:
+    """Boundary facets facing a direction (normal), on a plane of any orientation (oblique), or a cavity's walls."""
+    if sel.kind == "oblique":
+        tol = sel.tolerance if sel.tolerance is not None else 1e-6 * mesh_size(mesh)
+        p, n = np.array(sel.origin)[:, None], np.array(sel.direction)
+        return dmesh.locate_entities_boundary(mesh, mesh.topology.dim - 1, lambda x: np.abs(n @ (x - p)) <= tol)
+    if sel.kind == "normal":
+        facets = boundary_facets(mesh)
+        normal, _, _ = outward_geometry(mesh, facets)
+        return facets[normal @ np.array(sel.direction) >= np.cos(np.radians(sel.within_deg)) - 1e-12]
+    found = cavities(mesh)
+    volumes = ", ".join(f"{v:.4g}" for v, _ in found[:6]) + (", ..." if len(found) > 6 else "")
+    if not found:
+        raise InputError(f"{sel.key}.cavity: the mesh has no cavity (no closed surface inside the part)")
+    if sel.cavity == "all":
+        return np.concatenate([f for _, f in found])
+    if sel.cavity > len(found):
+        raise InputError(f"{sel.key}.cavity = {sel.cavity}: the mesh has {len(found)} cavit"
+                         f"{'y' if len(found) == 1 else 'ies'} (enclosing {volumes} m^3, largest first)")
+    return found[sel.cavity - 1][1]
 
 
 def _group(loaded: LoadedMesh, sel: Selector) -> str:
@@ -93,7 +127,7 @@ def support_dofs(V: fem.FunctionSpace, loaded: LoadedMesh, sel: Selector, compon
     mesh = loaded.mesh
     tdim = mesh.topology.dim
     kind = _group(loaded, sel) if sel.kind == "group" else sel.kind
-    if kind in ("plane", "box", "surface"):
+    if kind in ("plane", "box", "surface", "normal", "oblique", "cavity"):
         facets = locate_facets(loaded, sel)
         return [fem.locate_dofs_topological(V.sub(c), tdim - 1, facets) for c in components]
     if kind == "volume":

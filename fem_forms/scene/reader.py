@@ -235,14 +235,15 @@ def read_value(k: Key, v: Any, key: str, base_dir: Path) -> Any:
     if k.kind == "selection":
         return read_selection(k, v, key)
     if k.kind == "either":
-        for alt in k.keys:
-            if _shape(v) == _shape_of_kind(alt.kind):
-                if alt.kind != "table":
-                    return read_value(alt, v, key, base_dir)
-                t = Table(v, key, base_dir)
-                out = t.read_keys(alt.keys)
-                t.done()
-                return out
+        same = [a for a in k.keys if _shape(v) == _shape_of_kind(a.kind)]
+        # among single values, the alternative of the value's own type first ("all" or 1)
+        for alt in sorted(same, key=lambda a: _scalar_type(v) != _SCALAR_TYPE.get(a.kind))[:1]:
+            if alt.kind != "table":
+                return read_value(alt, v, key, base_dir)
+            t = Table(v, key, base_dir)
+            out = t.read_keys(alt.keys)
+            t.done()
+            return out
         raise InputError(f"{key} = {v!r}: must be " + " or ".join(a.doc for a in k.keys))
     raise TypeError(f"{key}: no reader for kind {k.kind!r}")   # a declaration error, not user input
 
@@ -250,6 +251,15 @@ def read_value(k: Key, v: Any, key: str, base_dir: Path) -> Any:
 def _shape(v: Any) -> str:
     """What an `either` key's alternatives are told apart by: a table, a list or a single value."""
     return "table" if isinstance(v, dict) else "list" if isinstance(v, list) else "value"
+
+
+_SCALAR_TYPE = {"number": "number", "integer": "number", "string": "string", "file": "string", "boolean": "boolean"}
+
+
+def _scalar_type(v: Any) -> str | None:
+    """A single value's type, to prefer the alternative of that type among an `either` key's single values."""
+    return ("boolean" if isinstance(v, bool) else "number" if isinstance(v, (int, float))
+            else "string" if isinstance(v, str) else None)
 
 
 def _shape_of_kind(kind: str) -> str:

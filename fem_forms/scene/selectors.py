@@ -1,5 +1,6 @@
-"""Boundary selectors: where a support holds or a load acts (a plane, a box, a gmsh group, the node nearest
-a point, the nodes on a segment), read from a scene's `where` table."""
+"""Boundary selectors: where a support holds or a load acts (a plane, a box, a gmsh group, the facets facing a
+direction, the facets on a plane of any orientation, a cavity's walls, the node nearest a point, the nodes on a
+segment), read from a scene's `where` table."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -20,19 +21,40 @@ SEL_POINT = Key("point", "vector", "the mesh node nearest to [x, y, z] (supports
 SEL_LINE = Key("line", "points", "the mesh nodes on the segment [[x0, y0, z0], [x1, y1, z1]] (supports only)",
                unit="m", required=True, length=3, min_items=2, max_items=2,
                note="must be two points [[x0, y0, z0], [x1, y1, z1]]")
+SEL_NORMAL = Key("normal", "vector", "boundary facets whose outward normal lies within within_deg of this "
+                 "direction (a curved part: every facet in that cone)", required=True, length=3)
+SEL_WITHIN = Key("within_deg", "number", "the cone's half-angle about normal", unit="deg", default=5.0, minimum=0,
+                 maximum=180)
+SEL_OBLIQUE = Key("plane", "points", "boundary facets on the plane through a point with a normal, "
+                  "[[x, y, z], [nx, ny, nz]] (any orientation)", unit="m, 1", required=True, length=3, min_items=2,
+                  max_items=2, note="must be a point and a normal [[x, y, z], [nx, ny, nz]]")
+SEL_TOLERANCE = Key("tolerance", "number", "how far from the plane a facet's corners may lie", unit="m",
+                    exclusive_minimum=0, default_note="1e-6 x the mesh's bounding-box diagonal")
+SEL_CAVITY = Key("cavity", "either", "the walls of a cavity (a closed interior surface of the mesh): 1 the "
+                 "largest by enclosed volume, 2 the next, ...; \"all\": every one", required=True, keys=(
+                     Key("cavity", "integer", "its rank by enclosed volume, largest first", minimum=1),
+                     Key("cavity", "string", "every cavity", choices=("all",))))
 SELECTOR_KEYS = {"plane": (SEL_AXIS, SEL_AT), "box": (SEL_BOX,), "group": (SEL_GROUP,), "point": (SEL_POINT,),
-                 "line": (SEL_LINE,)}
-_SELECTOR_OF = {"axis": "plane", "box": "box", "group": "group", "point": "point", "line": "line"}
-AREA_SELECTORS = ("plane", "box", "group")        # what a traction or pressure may act on
+                 "line": (SEL_LINE,), "normal": (SEL_NORMAL, SEL_WITHIN), "oblique": (SEL_OBLIQUE, SEL_TOLERANCE),
+                 "cavity": (SEL_CAVITY,)}
+_SELECTOR_OF = {"axis": "plane", "box": "box", "group": "group", "point": "point", "line": "line",
+                "normal": "normal", "plane": "oblique", "cavity": "cavity"}
+# what a traction or pressure may act on: facets
+AREA_SELECTORS = ("plane", "box", "group", "normal", "oblique", "cavity")
 
 
 @dataclass
 class Selector:
     """Where: a plane (axis, at), a box [[lo], [hi]] or a gmsh physical group of boundary facets, or (for
     supports) the mesh node nearest a point or the nodes on a line segment."""
-    kind: str                      # "plane" | "box" | "group" | "point" | "line"
+    kind: str                      # "plane" | "box" | "group" | "point" | "line" | "normal" | "oblique" | "cavity"
     axis: int = 0
     at: float = 0.0
+    direction: tuple = ()          # normal: the unit direction; oblique: the plane's unit normal
+    within_deg: float = 5.0
+    origin: tuple = ()             # oblique: a point on the plane
+    tolerance: float | None = None
+    cavity: int | str = 1          # 1, 2, ... or "all"
     lo: tuple = ()
     hi: tuple = ()
     group: str = ""
@@ -46,14 +68,14 @@ class Selector:
         t = Table(data, key)
         present = [k for k in _SELECTOR_OF if t.has(k)]
         if len(present) != 1:
-            raise InputError(f"{key}: give exactly one of axis/at, box, group, point or line")
+            raise InputError(f"{key}: give exactly one of axis/at, box, group, normal, plane, cavity, point or line")
         kind = _SELECTOR_OF[present[0]]
         if kinds is not None and kind not in kinds:
             if kinds == ("box",):
                 raise InputError(f"{key}: must be a box = [[x0, y0, z0], [x1, y1, z1]]")
             if kind in ("point", "line") and kinds == AREA_SELECTORS:
                 raise InputError(f"{key}: a {kind} has no area to carry a traction or pressure; "
-                                 "select facets with axis/at, box or group")
+                                 "select facets with axis/at, box, group, normal, plane or cavity")
             raise InputError(f"{key}: must be one of {', '.join(kinds)}")
         if kind == "plane":
             sel = Selector("plane", axis=AXES[t.read(SEL_AXIS)], at=t.read(SEL_AT), key=key)
@@ -72,10 +94,26 @@ class Selector:
             if a == b:
                 raise InputError(f"{key}.line: its two ends coincide; use point = {a}")
             sel = Selector("line", line=(tuple(a), tuple(b)), key=key)
+        elif kind == "normal":
+            sel = Selector("normal", direction=_unit(t.read(SEL_NORMAL), f"{key}.normal"),
+                           within_deg=t.read(SEL_WITHIN), key=key)
+        elif kind == "oblique":
+            point, normal = t.read(SEL_OBLIQUE)
+            sel = Selector("oblique", origin=tuple(point), direction=_unit(normal, f"{key}.plane[1]"),
+                           tolerance=t.read(SEL_TOLERANCE), key=key)
+        elif kind == "cavity":
+            sel = Selector("cavity", cavity=t.read(SEL_CAVITY), key=key)
         else:
             sel = Selector("group", group=t.read(SEL_GROUP), key=key)
         t.done()
         return sel
+
+
+def _unit(v: list, key: str) -> tuple:
+    norm = sum(c * c for c in v) ** 0.5
+    if norm == 0.0:
+        raise InputError(f"{key} = {v}: must not be the zero vector")
+    return tuple(c / norm for c in v)
 
 
 def where(doc: str, required: bool = True, kinds: tuple | None = None) -> Key:
