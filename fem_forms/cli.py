@@ -1,7 +1,7 @@
 """Command line: `fem-forms run SCENE.toml [--out DIR] [-q] [--no-limits] [--petsc "-log_view"] [-snes_monitor ...]`,
 `fem-forms study SCENE.toml`,
 `fem-forms fit TEST.csv ... --model M [--terms N] [--mode uniaxial|biaxial|shear] [--out DIR]`,
-`fem-forms schema [--out FILE]`.
+`fem-forms schema [--out FILE]`, `fem-forms faces CAD_FILE [--units mm] [--out DIR]` (the faces numbered).
 
 Exit status: 0 solved, 2 bad input (one line on stderr naming the key), 3 no convergence (a static limit
 point included), 1 a form whose compile never finished (a killed run's lock in the form cache), 130
@@ -31,6 +31,8 @@ from fem_forms.logs import quiet_jit, stale_compile_lock
 from fem_forms.materials.fitting import FIT_MODELS, RESIDUALS, fit as fit_model, read_test
 from fem_forms.materials.homogeneous import MODES
 from fem_forms.output.fit_report import fit_text, write_fit
+from fem_forms.meshes.cad import cad_faces
+from fem_forms.output.faces_report import faces_text, write_faces
 from fem_forms.output.folder import check_output_folder
 from fem_forms.output.interrupts import Terminated
 from fem_forms.output.progress_line import show_progress
@@ -39,6 +41,7 @@ from fem_forms.scene import LIMITS, NO_LIMITS, Scene, parse_assignment
 from fem_forms.scene.manual import built, manual_page
 from fem_forms.scene.petsc_options import check_options
 from fem_forms.scene.schema import schema_json
+from fem_forms.scene.spec import CAD_SUFFIXES, UNIT_SCALES
 from fem_forms.solvers.petsc_log import petsc_log
 from fem_forms.study import run_study, solve_to_tolerance
 
@@ -106,6 +109,13 @@ def _parser() -> argparse.ArgumentParser:
     fit.add_argument("--residual", choices=RESIDUALS, default="relative", help="fit relative or absolute errors")
     fit.add_argument("--out", help="output folder (created)")
     fit.set_defaults(verbose=False, quiet=True)
+    faces = sub.add_parser("faces", help="number a CAD file's faces for where = { face = N }: prints them, writes "
+                           "faces.png and faces.json to --out (default out/<stem>_faces/)")
+    faces.add_argument("file", help="a CAD file (.step, .stp, .iges, .igs, .brep)")
+    faces.add_argument("--units", choices=tuple(UNIT_SCALES), help="read it in this unit (a STEP or IGES file "
+                       "declares its own: the part comes at its true size anyway; a BREP needs it)")
+    faces.add_argument("--out", help="output folder (created)")
+    faces.set_defaults(verbose=False, quiet=True)
     schema = sub.add_parser("schema", help="print the JSON Schema of scene files (for editors: Taplo, "
                             "Even Better TOML); the same keys, explained: the manual's scene reference",
                             epilog=f"The manual's scene reference explains every key: {built('reference/index.html')}")
@@ -115,10 +125,10 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def default_out(command: str, scene: str) -> Path:
-    """out/<stem>/ for run, out/<stem>_study/ for study, out/<stem>_fit/ for fit (of the first test file): a
-    study's or a fit's folders never mix with a run's files."""
+    """out/<stem>/ for run, out/<stem>_study/ for study, out/<stem>_fit/ for fit (of the first test file),
+    out/<stem>_faces/ for faces: a study's, a fit's or a face listing's folders never mix with a run's files."""
     stem = Path(scene).stem
-    return Path("out") / (f"{stem}_{command}" if command in ("study", "fit") else stem)
+    return Path("out") / (f"{stem}_{command}" if command in ("study", "fit", "faces") else stem)
 
 
 def _fit(args) -> int:
@@ -138,7 +148,25 @@ def _fit(args) -> int:
     return 0
 
 
+def _faces(args) -> int:
+    """`fem-forms faces`: a CAD file's faces listed, faces.png and faces.json written."""
+    path = Path(args.file)
+    if not path.is_file():
+        raise InputError(f"faces {str(path)!r}: file not found")
+    if path.suffix.lower() not in CAD_SUFFIXES:
+        raise InputError(f"faces {str(path)!r}: not a CAD file ({', '.join(CAD_SUFFIXES)})")
+    out = Path(args.out) if args.out else default_out("faces", args.file)
+    check_output_folder(out, default=not args.out)
+    faces, triangles = cad_faces(path, args.units)
+    if MPI.COMM_WORLD.rank == 0:
+        write_faces(faces, triangles, path.name, out)
+        print(faces_text(faces) + f"\n-> {out / 'faces.png'}, {out / 'faces.json'}")
+    return 0
+
+
 def _run(args, petsc: dict) -> int:
+    if args.command == "faces":
+        return _faces(args)
     if args.command == "fit":
         if petsc:
             raise InputError(f"fit: no PETSc options ({next(iter(petsc))!r})")

@@ -17,11 +17,12 @@ from fem_forms.errors import InputError
 from fem_forms.meshes import resources, surfaces
 from fem_forms.meshes.arrays import MeshArrays, check_cells
 from fem_forms.meshes.files import read_mesh_file, read_surface_file, scale_arrays
+from fem_forms.meshes.cad import mesh_cad
 from fem_forms.meshes.gmsh_models import generate_solid
 from fem_forms.meshes.groups import distribute_cell_groups
 from fem_forms.meshes.prisms import create_prism_box
 from fem_forms.scene import MeshSpec
-from fem_forms.scene.spec import SURFACE_SUFFIXES
+from fem_forms.scene.spec import CAD_SUFFIXES, SURFACE_SUFFIXES
 
 
 @dataclass
@@ -118,7 +119,9 @@ def load_mesh(spec: MeshSpec, comm: MPI.Comm = MPI.COMM_WORLD, degree: int = 1) 
     key = "mesh.file" if spec.generator == "file" else f"mesh ({spec.generator})"
 
     def build():
-        if spec.generator == "file" and spec.file.suffix.lower() in SURFACE_SUFFIXES:
+        if spec.generator == "file" and spec.file.suffix.lower() in CAD_SUFFIXES:
+            arrays = mesh_cad(spec, limit, degree)
+        elif spec.generator == "file" and spec.file.suffix.lower() in SURFACE_SUFFIXES:
             arrays = read_surface_file(spec.file, spec.h, limit, degree, spec.repair, spec.length_scale,
                                        spec.max_cells)
         elif spec.generator == "file":

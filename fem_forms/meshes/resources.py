@@ -60,8 +60,12 @@ def box_counts(cells: list, cell_type: str, degree: int) -> tuple[int, int]:
 def tetrahedra_counts(volume: float, h: float, degree: int) -> tuple[int, int]:
     """(cells, dofs) of a tetrahedral mesh of size h filling `volume` (regular tetrahedra of edge h)."""
     cells = int(volume / (h**3 / 8.485))
-    nodes = cells / 5.5 if degree == 1 else cells * 1.4
-    return cells, int(3 * nodes)
+    return cells, tetrahedra_dofs(cells, degree)
+
+
+def tetrahedra_dofs(cells: int, degree: int) -> int:
+    """The displacement dofs of a tetrahedral mesh of `cells` cells (5.5 cells per vertex; P2: 1.4 nodes a cell)."""
+    return int(3 * (cells / 5.5 if degree == 1 else cells * 1.4))
 
 
 def estimate_bytes(cells: int, dofs: int, cell_type: str, degree: int) -> float:

@@ -36,7 +36,8 @@ class ProgressLine:
         self._time0: tuple[float, float] | None = None   # (wall, simulated time) at the first time step
         self._last_line = -1.0       # when a plain line was last written
         self._quiet_steps = 0        # accepted time steps not written on a line of their own since then
-        self._selected: set = set()  # the selectors whose facet count was written
+        self._selected: dict = {}    # selector key -> the boundary facets it took
+        self._unsaid: list = []      # the keys whose count is still to be written
 
     # -- the reporter ------------------------------------------------------------------------------
     def __call__(self, event: str, **fields) -> None:
@@ -60,12 +61,15 @@ class ProgressLine:
             self.close()
             self.state = {}
             return
-        elif event == "selected":       # once per selector: how many facets it took
+        elif event == "selected":       # once per selector: how many facets it took, said once solving starts
             if fields.get("key") not in self._selected:
-                self._selected.add(fields.get("key"))
-                self.close()
-                self._write(f"fem-forms: {fields.get('key')}: {fields.get('facets')} boundary facets\n")
+                self._selected[fields.get("key")] = fields.get("facets")
+                self._unsaid.append(fields.get("key"))
             return
+        if self._unsaid:                # (bad input found before then stays one line)
+            self.close()
+            self._write("".join(f"fem-forms: {k}: {self._selected[k]} boundary facets\n" for k in self._unsaid))
+            self._unsaid = []
         if self.tty:
             if event != "newton" or time.perf_counter() - self._last_draw >= REDRAW_EVERY_S:
                 self._draw(self.status())

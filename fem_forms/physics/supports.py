@@ -29,17 +29,17 @@ def locate_facets(loaded: LoadedMesh, sel: Selector) -> np.ndarray:
         lo, hi = np.array(sel.lo)[:, None] - tol, np.array(sel.hi)[:, None] + tol
         facets = dmesh.locate_entities_boundary(
             mesh, fdim, lambda x: np.all((x >= lo) & (x <= hi), axis=0))
-    elif sel.kind == "group":
+    elif sel.kind in ("group", "face"):
         kind = _group(loaded, sel)
         if kind != "surface":
             raise InputError(f"{sel.key}.group = {sel.group!r}: a {kind} group; a traction or pressure "
                              "needs a surface group")
-        facets = loaded.facet_tags.indices[loaded.facet_tags.values == loaded.groups[sel.group]]
+        facets = loaded.facet_tags.indices[loaded.facet_tags.values == loaded.groups[_group_name(loaded, sel)]]
     elif sel.kind in ("normal", "oblique", "cavity"):
         facets = _facets_by_geometry(mesh, sel)
     else:
         raise InputError(f"{sel.key}: a {sel.kind} has no area; select facets with axis/at, box, group, normal, "
-                         "plane or cavity")
+                         "plane, cavity or face")
     found = mesh.comm.allreduce(len(_owned(mesh, facets)), op=MPI.SUM)
     if found == 0:
         lo, hi = bounding_box(mesh)
@@ -76,10 +76,25 @@ def _facets_by_geometry(mesh: dmesh.Mesh, sel: Selector) -> np.ndarray:
     return found[sel.cavity - 1][1]
 
 
+def _group_name(loaded: LoadedMesh, sel: Selector) -> str:
+    """The group a selector names: its own, or the group a CAD file's face (by number) became."""
+    if sel.kind != "face":
+        return sel.group
+    faces = loaded.info.get("faces")
+    if faces is None:
+        raise InputError(f"{sel.key}.face: only for a mesh made from a CAD file (.step, .iges, .brep)")
+    match = [f["group"] for f in faces if f["face"] == sel.face]
+    if not match:
+        raise InputError(f"{sel.key}.face = {sel.face}: the CAD file has faces {faces[0]['face']}.."
+                         f"{faces[-1]['face']} (`fem-forms faces FILE` lists them)")
+    return match[0]
+
+
 def _group(loaded: LoadedMesh, sel: Selector) -> str:
+    name = _group_name(loaded, sel)
     for kind, groups in (("surface", loaded.groups), ("volume", loaded.cells), ("curve", loaded.curves),
                          ("point", loaded.points)):
-        if sel.group in groups:
+        if name in groups:
             return kind
     raise InputError(f"{sel.key}.group = {sel.group!r}: no such group (the mesh has: {loaded.group_names()})")
 
@@ -126,7 +141,7 @@ def support_dofs(V: fem.FunctionSpace, loaded: LoadedMesh, sel: Selector, compon
     groups); an error when nothing is selected on any rank."""
     mesh = loaded.mesh
     tdim = mesh.topology.dim
-    kind = _group(loaded, sel) if sel.kind == "group" else sel.kind
+    kind = _group(loaded, sel) if sel.kind in ("group", "face") else sel.kind
     if kind in ("plane", "box", "surface", "normal", "oblique", "cavity"):
         facets = locate_facets(loaded, sel)
         return [fem.locate_dofs_topological(V.sub(c), tdim - 1, facets) for c in components]

@@ -34,13 +34,15 @@ SEL_CAVITY = Key("cavity", "either", "the walls of a cavity (a closed interior s
                  "largest by enclosed volume, 2 the next, ...; \"all\": every one", required=True, keys=(
                      Key("cavity", "integer", "its rank by enclosed volume, largest first", minimum=1),
                      Key("cavity", "string", "every cavity", choices=("all",))))
+SEL_FACE = Key("face", "integer", "a CAD file's face by its number (`fem-forms faces FILE` lists and draws them)",
+               required=True, minimum=1)
 SELECTOR_KEYS = {"plane": (SEL_AXIS, SEL_AT), "box": (SEL_BOX,), "group": (SEL_GROUP,), "point": (SEL_POINT,),
                  "line": (SEL_LINE,), "normal": (SEL_NORMAL, SEL_WITHIN), "oblique": (SEL_OBLIQUE, SEL_TOLERANCE),
-                 "cavity": (SEL_CAVITY,)}
+                 "cavity": (SEL_CAVITY,), "face": (SEL_FACE,)}
 _SELECTOR_OF = {"axis": "plane", "box": "box", "group": "group", "point": "point", "line": "line",
-                "normal": "normal", "plane": "oblique", "cavity": "cavity"}
+                "normal": "normal", "plane": "oblique", "cavity": "cavity", "face": "face"}
 # what a traction or pressure may act on: facets
-AREA_SELECTORS = ("plane", "box", "group", "normal", "oblique", "cavity")
+AREA_SELECTORS = ("plane", "box", "group", "normal", "oblique", "cavity", "face")
 
 
 @dataclass
@@ -55,6 +57,7 @@ class Selector:
     origin: tuple = ()             # oblique: a point on the plane
     tolerance: float | None = None
     cavity: int | str = 1          # 1, 2, ... or "all"
+    face: int = 0                  # a CAD face's number
     lo: tuple = ()
     hi: tuple = ()
     group: str = ""
@@ -68,14 +71,14 @@ class Selector:
         t = Table(data, key)
         present = [k for k in _SELECTOR_OF if t.has(k)]
         if len(present) != 1:
-            raise InputError(f"{key}: give exactly one of axis/at, box, group, normal, plane, cavity, point or line")
+            raise InputError(f"{key}: give exactly one of axis/at, box, group, normal, plane, cavity, face, point or line")
         kind = _SELECTOR_OF[present[0]]
         if kinds is not None and kind not in kinds:
             if kinds == ("box",):
                 raise InputError(f"{key}: must be a box = [[x0, y0, z0], [x1, y1, z1]]")
             if kind in ("point", "line") and kinds == AREA_SELECTORS:
                 raise InputError(f"{key}: a {kind} has no area to carry a traction or pressure; "
-                                 "select facets with axis/at, box, group, normal, plane or cavity")
+                                 "select facets with axis/at, box, group, normal, plane, cavity or face")
             raise InputError(f"{key}: must be one of {', '.join(kinds)}")
         if kind == "plane":
             sel = Selector("plane", axis=AXES[t.read(SEL_AXIS)], at=t.read(SEL_AT), key=key)
@@ -103,6 +106,8 @@ class Selector:
                            tolerance=t.read(SEL_TOLERANCE), key=key)
         elif kind == "cavity":
             sel = Selector("cavity", cavity=t.read(SEL_CAVITY), key=key)
+        elif kind == "face":
+            sel = Selector("face", face=t.read(SEL_FACE), key=key)
         else:
             sel = Selector("group", group=t.read(SEL_GROUP), key=key)
         t.done()

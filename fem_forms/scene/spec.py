@@ -17,6 +17,7 @@ from fem_forms.scene.term_sections import TERM_SECTIONS
 
 # --- mesh -----------------------------------------------------------------------------------
 SURFACE_SUFFIXES = (".stl", ".obj", ".ply", ".off")    # closed surfaces the loader fills with tetrahedra
+CAD_SUFFIXES = (".step", ".stp", ".iges", ".igs", ".brep")   # CAD solids gmsh meshes (meshes/cad.py)
 GENERATOR = Key("generator", "string", "how the mesh is made: a built-in shape or a mesh file",
                 default="box", choices=("box", "cylinder", "sphere", "revolve", "file"))
 CELL = Key("cell", "string", "cell type (cylinder, sphere and revolve make tetrahedra only; prism: box only, "
@@ -37,8 +38,15 @@ PROFILE = Key("profile", "points", "closed outline [[r, z], ...] revolved about 
               required=True, length=2, min_items=3,
               note="must list at least 3 points [r, z] of a closed outline")
 FILE = Key("file", "file", "mesh file, relative to the scene file: a volume mesh (gmsh .msh or any meshio "
-           "format) or a closed surface (.stl, .obj, .ply, .off) that gmsh fills with tetrahedra of size h",
-           required=True)
+           "format), a closed surface (.stl, .obj, .ply, .off) or a CAD solid (.step, .stp, .iges, .igs, .brep) "
+           "that gmsh fills with tetrahedra of size h", required=True)
+H_MIN = Key("h_min", "number", "CAD files: the smallest cell gmsh may make", unit="m", exclusive_minimum=0,
+            default_note="h / 4")
+H_MAX = Key("h_max", "number", "CAD files: the largest cell gmsh may make", unit="m", exclusive_minimum=0,
+            default_note="h")
+NEAR = Key("near", "points", "CAD files: finer cells near points, [[x, y, z, r, h], ...]: size h within r of "
+           "(x, y, z), growing to h_max over another r", unit="m", length=5, min_items=1,
+           note="must list [x, y, z, r, h] rows")
 REPAIR = Key("repair", "boolean", "surface files only: fill holes and remove duplicate, degenerate and "
              "self-intersecting faces with MeshFix before gmsh meshes the surface (results.json mesh.repair "
              "says what changed); without it an open surface is refused", default=False)
@@ -54,7 +62,7 @@ MESH_VARIANTS = Variants(GENERATOR, {
     "cylinder": (ORIGIN, RADIUS, HEIGHT, H),
     "sphere": (ORIGIN, RADIUS, H),
     "revolve": (ORIGIN, PROFILE, H),
-    "file": (FILE, H, REPAIR, SCALE, UNITS),
+    "file": (FILE, H, H_MIN, H_MAX, NEAR, REPAIR, SCALE, UNITS),
 })
 GENERATORS = GENERATOR.choices
 CELL_TYPES = CELL.choices
@@ -70,6 +78,9 @@ class MeshSpec:
     radius: float | None = None
     height: float | None = None
     h: float | None = None
+    h_min: float | None = None
+    h_max: float | None = None
+    near: list | None = None         # [[x, y, z, r, h], ...]
     profile: list | None = None
     file: Path | None = None
     repair: bool = False
@@ -94,10 +105,23 @@ def _mesh_rules(m: MeshSpec, t: Table) -> None:
         if max(edges) > MAX_CELL_ASPECT * min(edges):
             raise InputError(f"{t.path}: box cells of {' x '.join(f'{e:.3g}' for e in edges)} m are too "
                              f"elongated (aspect above {MAX_CELL_ASPECT:.0e}); change size or cells")
-    if m.generator == "file" and m.h is not None and m.file.suffix.lower() not in SURFACE_SUFFIXES:
-        raise InputError(f"{t.key('h')}: only for surface files ({', '.join(SURFACE_SUFFIXES)}); "
-                         f"{m.file.name!r} is meshed already")
-    if m.generator == "file" and m.repair and m.file.suffix.lower() not in SURFACE_SUFFIXES:
+    suffix = m.file.suffix.lower() if m.generator == "file" else ""
+    if m.generator == "file" and m.h is not None and suffix not in SURFACE_SUFFIXES + CAD_SUFFIXES:
+        raise InputError(f"{t.key('h')}: only for surface and CAD files "
+                         f"({', '.join(SURFACE_SUFFIXES + CAD_SUFFIXES)}); {m.file.name!r} is meshed already")
+    for name, value in (("h_min", m.h_min), ("h_max", m.h_max), ("near", m.near)):
+        if value is not None and suffix not in CAD_SUFFIXES:
+            raise InputError(f"{t.key(name)}: only for CAD files ({', '.join(CAD_SUFFIXES)})")
+    if m.h_min is not None and m.h_max is not None and m.h_min > m.h_max:
+        raise InputError(f"{t.key('h_min')} = {m.h_min}: exceeds h_max = {m.h_max}")
+    if any(r <= 0 or h <= 0 for _, _, _, r, h in m.near or []):
+        raise InputError(f"{t.key('near')}: each row's r and h must be positive")
+    if suffix in (".step", ".stp", ".iges", ".igs") and m.scale is not None:
+        raise InputError(f"{t.key('scale')}: a STEP or IGES file declares its length unit (it is read at its "
+                         "true size); scale is for files that do not")
+    if suffix in CAD_SUFFIXES and m.cell != "tetrahedron":
+        raise InputError(f"{t.key('cell')} = {m.cell!r}: a CAD file is filled with tetrahedra only")
+    if m.generator == "file" and m.repair and suffix not in SURFACE_SUFFIXES:
         raise InputError(f"{t.key('repair')}: only for surface files ({', '.join(SURFACE_SUFFIXES)}); "
                          f"{m.file.name!r} is a volume mesh")
     if m.scale is not None and m.units is not None:

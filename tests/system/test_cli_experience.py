@@ -195,10 +195,12 @@ def test_cli_shows_progress_unless_quiet_and_the_api_stays_silent(tmp_path, caps
 # -- interrupts --------------------------------------------------------------------------------------------
 
 def start_and_interrupt(cmd: list, sig: int, out: Path) -> tuple[subprocess.CompletedProcess, str]:
-    """Start a run, wait for its first progress line (a load step was solved: we are mid-solve) and for that
+    """Start a run, wait for its first step's progress line (a load step was solved: we are mid-solve) and for that
     step's row in probes.csv (written just after the line), then send sig."""
     p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV, cwd=ROOT)
     first = p.stderr.readline()
+    while " boundary facets" in first:              # what each selector took, said as solving starts
+        first = p.stderr.readline()
     deadline = time.monotonic() + 60
     while not (out / "probes.csv").exists() and p.poll() is None and time.monotonic() < deadline:
         time.sleep(0.02)

@@ -78,7 +78,7 @@ def test_h_is_only_for_surface_files(tmp_path):
     import meshio
     pts, _ = box_surface(1, 1, 1)
     meshio.write(tmp_path / "t.vtu", meshio.Mesh(pts[:4], [("tetra", np.array([[0, 1, 2, 4]]))]))
-    with pytest.raises(InputError, match=r"mesh.h: only for surface files"):
+    with pytest.raises(InputError, match=r"mesh.h: only for surface and CAD files"):
         ff.Scene.from_dict(bar({"generator": "file", "file": str(tmp_path / "t.vtu"), "h": 0.1}))
 
 
