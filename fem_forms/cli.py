@@ -1,7 +1,8 @@
 """Command line: `fem-forms run SCENE.toml [--out DIR] [-q] [--no-limits] [--petsc "-log_view"] [-snes_monitor ...]`,
 `fem-forms study SCENE.toml`,
 `fem-forms fit TEST.csv ... --model M [--terms N] [--mode uniaxial|biaxial|shear] [--out DIR]`,
-`fem-forms schema [--out FILE]`, `fem-forms faces CAD_FILE [--units mm] [--out DIR]` (the faces numbered).
+`fem-forms schema [--out FILE]`, `fem-forms faces CAD_FILE [--units mm] [--out DIR]` (the faces numbered),
+`fem-forms help KEY` (a scene key's reference; error messages about a key end with this command).
 
 Exit status: 0 solved, 2 bad input (one line on stderr naming the key), 3 no convergence (a static limit
 point included), 1 a form whose compile never finished (a killed run's lock in the form cache), 130
@@ -38,7 +39,7 @@ from fem_forms.output.interrupts import Terminated
 from fem_forms.output.progress_line import show_progress
 from fem_forms.output.results import forget_results
 from fem_forms.scene import LIMITS, NO_LIMITS, Scene, parse_assignment
-from fem_forms.scene.manual import built, manual_page
+from fem_forms.scene.manual import built, help_text, manual_key, manual_page
 from fem_forms.scene.petsc_options import check_options
 from fem_forms.scene.schema import schema_json
 from fem_forms.scene.spec import CAD_SUFFIXES, UNIT_SCALES
@@ -116,6 +117,10 @@ def _parser() -> argparse.ArgumentParser:
                        "declares its own: the part comes at its true size anyway; a BREP needs it)")
     faces.add_argument("--out", help="output folder (created)")
     faces.set_defaults(verbose=False, quiet=True)
+    helper = sub.add_parser("help", help="print a scene key's reference (type, default, range, unit, meaning): "
+                            "fem-forms help mesh.h; a table's keys: fem-forms help mesh")
+    helper.add_argument("key", nargs="?", default="scene", help="a scene key (mesh.h, load.where) or a table (mesh)")
+    helper.set_defaults(verbose=False, quiet=True)
     schema = sub.add_parser("schema", help="print the JSON Schema of scene files (for editors: Taplo, "
                             "Even Better TOML); the same keys, explained: the manual's scene reference",
                             epilog=f"The manual's scene reference explains every key: {built('reference/index.html')}")
@@ -164,7 +169,20 @@ def _faces(args) -> int:
     return 0
 
 
+def pointer(message: str) -> str:
+    """Where an error about a scene key is explained: `fem-forms help KEY` (always there), and the built manual's
+    page once it is built."""
+    key = manual_key(message)
+    if key is None:
+        return ""
+    page = built(manual_page(message))
+    return f" (help: fem-forms help {key}" + (f"; manual: {page}" if Path(page.split("#")[0]).is_file() else "") + ")"
+
+
 def _run(args, petsc: dict) -> int:
+    if args.command == "help":
+        print(help_text(args.key))
+        return 0
     if args.command == "faces":
         return _faces(args)
     if args.command == "fit":
@@ -236,8 +254,7 @@ def main(argv: list[str] | None = None) -> int:
         if reporter:
             reporter.close()
         if rank == 0:
-            page = manual_page(str(e)) if isinstance(e, InputError) else None
-            print(f"fem-forms: error: {e}" + (f" (manual: {built(page)})" if page else ""), file=sys.stderr)
+            print(f"fem-forms: error: {e}" + (pointer(str(e)) if isinstance(e, InputError) else ""), file=sys.stderr)
         return e.exit_status
     except (TimeoutError, RuntimeError) as e:
         if (lock := stale_compile_lock(e)) is None:

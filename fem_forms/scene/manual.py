@@ -1,16 +1,19 @@
 """Where the manual explains a scene key: one reference page per scene table, one anchor per key.
 
-The manual's scene reference (docs/_ext/scene_reference.py) is written from `pages()` below, and the CLI
-points an error message at `manual_page(message)`: both walk the same declarations, so a pointer always
-names a page and an anchor that exist. The manual is built with `sphinx-build -W -b html docs docs/_build/html`.
+The manual's scene reference (docs/_ext/scene_reference.py) is written from `pages()` below, `fem-forms help KEY`
+prints one key from them (`help_text`), and the CLI points an error message at its key (`manual_key`,
+`manual_page`): all walk the same declarations, so a pointer always names a key, a page and an anchor that exist. The manual is built with `sphinx-build -W -b html docs docs/_build/html`.
 """
 from __future__ import annotations
 
+import difflib
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from fem_forms.errors import InputError
 from fem_forms.scene import registry
+from fem_forms.scene.key_text import facts
 from fem_forms.scene.reader import Key, Section
 from fem_forms.scene.spec import CORE_SECTIONS, TITLE
 
@@ -96,22 +99,47 @@ def key_paths() -> dict[str, str]:
     return {path: p.name for p in pages() for path in p.entries}
 
 
-def manual_page(message: str) -> str | None:
-    """The reference page (and the anchor of the longest key it names) for an error message that starts
-    with a scene key, e.g. "material[1].E = -1: ..." -> "reference/material.html#key-material.E"; None when
-    the message names no scene key."""
+def manual_key(message: str) -> str | None:
+    """The documented key (the longest) an error message starts with, e.g. "material[1].E = -1: ..." ->
+    "material.E", or its table ("mesh" for "mesh.cellz: unknown key"); None when it names no scene key."""
     m = _PATH.match(message)
     if not m or re.match(r" [A-Za-z]", message[m.end():]) or "(manual: " in message:
         return None                                 # "scene file 'x': ...", or a message already pointing
-    path = re.sub(r"\[\d+\]", "", m.group())
+    parts = re.sub(r"\[\d+\]", "", m.group()).split(".")
     known = key_paths()
-    parts = path.split(".")
     for n in range(len(parts), 0, -1):
-        p = ".".join(parts[:n])
-        if p in known:
-            return f"reference/{known[p]}.html#{anchor(p)}"
-    pages_by_name = {p.name for p in pages()}
-    return f"reference/{parts[0]}.html" if parts[0] in pages_by_name else None
+        if ".".join(parts[:n]) in known:
+            return ".".join(parts[:n])
+    return parts[0] if parts[0] in {p.name for p in pages()} else None
+
+
+def manual_page(message: str) -> str | None:
+    """The reference page (and the anchor of the key) for an error message that starts with a scene key, e.g.
+    "material[1].E = -1: ..." -> "reference/material.html#key-material.E"; None when it names no scene key."""
+    key = manual_key(message)
+    if key is None:
+        return None
+    known = key_paths()
+    return f"reference/{known[key]}.html#{anchor(key)}" if key in known else f"reference/{key}.html"
+
+
+def help_text(key: str) -> str:
+    """`fem-forms help KEY`: the key's reference as the manual gives it (a table: its keys), in plain text."""
+    key = re.sub(r"\[\d+\]", "", key.strip())
+    for page in pages():
+        if key in page.entries:
+            entry = page.entries[key]
+            lines = [f"{key}  (manual page: reference/{page.name})"]
+            for k, when in entry.cases:
+                lines += ["", (f"{' or '.join(when)}: " if len(entry.cases) > 1 and when else "") + k.doc]
+                lines += facts(k, [] if len(entry.cases) > 1 else when)
+            return "\n".join(lines)
+        if key == page.name or (key in ("", "scene") and page.name == SCENE_PAGE):
+            rows = [f"{path:<32} {e.cases[0][0].doc}" for path, e in page.entries.items()]
+            return "\n".join([f"[{page.name}]: {page.doc}", "", *rows])
+    close = difflib.get_close_matches(key, list(key_paths()) + [p.name for p in pages()], n=3)
+    raise InputError(f"help {key!r}: no such scene key" + (f" (did you mean {', '.join(close)}?)" if close else
+                                                            " (fem-forms help mesh lists a table's keys)"))
 
 
 def built(page: str) -> str:

@@ -86,9 +86,15 @@ def test_a_bad_key_points_to_its_page(html, capsys, monkeypatch, tmp_path):
     scene.write_text('analysis = "modal"\n[mesh]\n[material]\nE = 1.0e6\nnu = 0.3\n[modal]\ncount = 0\n')
     assert main(["run", str(scene), "-q", "--out", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err
-    m = re.search(r"\(manual: docs/_build/html/(reference/(\w+)\.html)#(\S+)\)$", err.strip())
-    assert m and err.count("\n") == 1, err
-    assert f'id="{m.group(3)}"' in (html / m.group(1)).read_text()
+    m = re.search(r"\(help: fem-forms help (\S+?)(; manual: docs/_build/html/reference/\w+\.html#\S+)?\)$", err.strip())
+    assert m and m.group(1) == "modal.count" and err.count("\n") == 1, err
+    page, anchor = manual_page(err.split("error: ", 1)[1]).split("#")
+    assert page == "reference/modal.html" and f'id="{anchor}"' in (html / page).read_text()
+    assert main(["help", "modal.count"]) == 0
+    text = capsys.readouterr().out
+    assert text.startswith("modal.count  (manual page: reference/modal)") and "- type: whole number" in text
+    assert main(["help", "modal.cont"]) == 2
+    assert "help 'modal.cont': no such scene key (did you mean modal.count" in capsys.readouterr().err
     assert manual_page("material[1].where.box: lower corner [1, 0, 0] exceeds upper corner") == \
         "reference/material.html#key-material.where"
     assert manual_page("mesh.cellz: unknown key") == "reference/mesh.html"

@@ -64,5 +64,5 @@ def test_bad_input_under_mpi_is_one_line_and_status_2(tmp_path):
     lines = [ln for ln in p.stderr.splitlines() if "fem-forms: error" in ln]
     assert len(lines) == 1 and lines[0].startswith(
         "fem-forms: error: fix[0].where: matches no boundary facet (mesh spans [0.0, 0.0, 0.0] to [1.0, 0.1, 0.1])"
-        " (manual: ") and lines[0].endswith("reference/fix.html#key-fix.where)"), p.stderr     # one line, its page
+        " (help: fem-forms help fix.where"), p.stderr                                           # one line, its key
     assert "Traceback" not in p.stderr

@@ -85,8 +85,8 @@ def test_without_repair_the_open_surface_exits_2_suggesting_repair(tmp_path, cap
     code, data, err, out = run_scene(tmp_path, sphere_scene(stl), capsys)
     assert code == 2 and data is None
     assert "the surface is not closed" in err
-    assert "set [mesh] repair = true to fill holes and remove bad faces (manual: " in err, err
-    assert err.strip().endswith("reference/mesh.html#key-mesh.file)"), err       # the key's page in the manual
+    assert "set [mesh] repair = true to fill holes and remove bad faces (help: fem-forms help mesh" in err, err
+    assert err.strip().endswith("(help: fem-forms help mesh.file)") or err.strip().endswith("#key-mesh.file)"), err
 
 
 def test_repair_is_refused_on_other_generators_and_on_volume_files(tmp_path):
