@@ -131,3 +131,23 @@ def test_a_face_number_on_a_mesh_not_from_cad_is_refused(tmp_path, capsys):
     path.write_text(toml_dumps(scene))
     assert main(["run", str(path), "--out", str(tmp_path / "out"), "-q"]) == 2
     assert "fix[0].where.face: only for a mesh made from a CAD file" in capsys.readouterr().err
+
+
+def test_the_manuals_bracket_carries_its_load_to_the_wall(tmp_path, capsys):
+    """docs/cad.md's L-bracket (docs/examples/bracket.step, a STEP in mm) as its page runs it: the wall's reaction
+    balances the traction on the shelf's meshed top face (equilibrium), whose area is the CAD face's to its
+    faceting."""
+    from fem_forms.meshes.facet_geometry import outward_geometry
+    from fem_forms.physics.supports import locate_facets
+    from fem_forms.scene import Selector
+    from helpers import ROOT
+    scene = ROOT / "docs" / "examples" / "bracket.toml"
+    assert main(["run", str(scene), "--out", str(tmp_path / "out"), "-q"]) == 0, capsys.readouterr().err
+    res = json.loads((tmp_path / "out" / "results.json").read_text())
+    loaded = load_mesh(ff.Scene.from_file(scene).mesh)
+    top = locate_facets(loaded, Selector.parse({"face": 7}, "where"))
+    area = float(outward_geometry(loaded.mesh, top)[1].sum())
+    assert res["reactions"]["wall"] == pytest.approx([0.0, 0.0, 2.0e4 * area], abs=1e-9 * 2.0e4 * area)
+    cad_area = next(f["area"] for f in res["mesh"]["faces"] if f["face"] == 7)
+    assert cad_area == pytest.approx((52 * 20 - math.pi * 4**2) * 1e-6, rel=1e-9)     # 52 x 20 mm less the hole
+    assert area == pytest.approx(cad_area, rel=0.01)                                    # the hole's polygon
