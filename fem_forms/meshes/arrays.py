@@ -81,3 +81,18 @@ def compact(a: MeshArrays) -> MeshArrays:
     groups = {n: new[f][np.all(new[f] >= 0, axis=1)] for n, f in a.facet_groups.items()}
     return MeshArrays(a.points[used], new[a.cells], a.cell_type, {n: f for n, f in groups.items() if len(f)},
                       a.cell_groups, a.curve_groups, a.point_groups, a.info, a.cell_fields)
+
+
+def outward_normals(points: np.ndarray, cells: np.ndarray, facets: np.ndarray) -> np.ndarray:
+    """Unit normals (n, 3) of boundary triangles (vertex indices into points) of a tetrahedral mesh given as
+    arrays, pointing out of the tetrahedron each bounds (before the mesh is distributed: a CAD face's normal)."""
+    opposite = {}
+    for c in cells:
+        for i in range(4):
+            opposite[tuple(sorted(np.delete(c, i).tolist()))] = c[i]
+    tri = points[facets[:, :3]]
+    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    n /= np.maximum(np.linalg.norm(n, axis=1), np.finfo(float).tiny)[:, None]
+    away = np.array([points[opposite[tuple(sorted(f[:3].tolist()))]] for f in facets]) - tri[:, 0]
+    n[np.einsum("ij,ij->i", n, away) > 0] *= -1
+    return n

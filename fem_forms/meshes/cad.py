@@ -1,7 +1,7 @@
 """CAD files (STEP, IGES, BREP) meshed by gmsh through OpenCASCADE: the solids of the file filled with tetrahedra of
-size h (h_min, h_max, and finer near given points), every CAD face a surface group - its CAD name where the file
-carries one, else face<N> - so a support or a load can take it (`where = { face = N }` or `{ group = ... }`), every
-named solid a volume group. A STEP or IGES file declares its length unit: OpenCASCADE converts to the unit the
+size h (h_min, h_max, and finer near given points), every CAD face a surface group face<N>, so a support or a load
+can take it (`where = { face = N }`; faces the file names: `{ group = NAME }`, all of that name), every solid a
+volume group named by the CAD (solids of one name together). A STEP or IGES file declares its length unit: OpenCASCADE converts to the unit the
 scene names (`units`, metres by default) and the coordinates are then scaled into metres, so the part comes in at
 its true size; a BREP declares none, so `units` or `scale` says it as for an STL."""
 from __future__ import annotations
@@ -9,15 +9,20 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import numpy as np
+
 from fem_forms.errors import InputError
 from fem_forms.meshes import resources
-from fem_forms.meshes.arrays import MeshArrays
+from fem_forms.meshes.arrays import MeshArrays, outward_normals
 from fem_forms.meshes.gmsh_models import gmsh_arrays, gmsh_session
 from fem_forms.scene import MeshSpec
 from fem_forms.scene.spec import UNIT_SCALES
 
 OCC_UNITS = {"m": "M", "mm": "MM", "cm": "CM", "in": "INCH"}
 H_PER_DIAGONAL = 20            # the default h: the part's bounding-box diagonal over this
+LISTING_CELLS = 15             # `fem-forms faces` meshes at the diagonal over this (enough to draw and orient)
+MIN_FRACTION = 0.25            # the default h_min: this fraction of h
+FLAT = 1e-9                    # a face is flat when its facets' normals agree to this (1 - cosine)
 
 
 def import_cad(gmsh, path: Path, units: str | None, key: str) -> list:
@@ -48,41 +53,56 @@ def _cad_name(gmsh, dim: int, tag: int) -> str:
     return gmsh.model.getEntityName(dim, tag).rsplit("/", 1)[-1].strip()
 
 
-def face_table(gmsh, scale: float = 1.0) -> list[dict]:
-    """Every CAD face: its number, its group (CAD name or face<N>), its area (m^2), centroid (m) and, when flat,
-    its normal (out of the solid it bounds)."""
-    faces, seen = [], {}
-    for _, tag in gmsh.model.getEntities(2):
-        name = _cad_name(gmsh, 2, tag)
-        group = name if name and name not in seen else f"face{tag}"
-        seen[group] = tag
-        centroid = [c * scale for c in gmsh.model.occ.getCenterOfMass(2, tag)]
-        row = {"face": tag, "group": group, "area": gmsh.model.occ.getMass(2, tag) * scale**2, "centroid": centroid}
-        if gmsh.model.getType(2, tag) == "Plane":
-            u0, u1 = gmsh.model.getParametrizationBounds(2, tag)
-            n = gmsh.model.getNormal(tag, [(u0[0] + u1[0]) / 2, (u0[1] + u1[1]) / 2])
-            row["normal"] = [round(float(c), 12) + 0.0 for c in _outward(gmsh, tag, list(n))]
-        faces.append(row)
+def _group_solids(gmsh, solids: list) -> None:
+    """One volume group per CAD name (solids sharing a name together), solid<i> for a solid without one."""
+    named: dict = {}
+    for i, (_, tag) in enumerate(solids):
+        named.setdefault(_cad_name(gmsh, 3, tag) or f"solid{i + 1}", []).append(tag)
+    for name, tags in named.items():
+        gmsh.model.setPhysicalName(3, gmsh.model.addPhysicalGroup(3, tags), name)
+
+
+def _group_faces(gmsh) -> list[int]:
+    """Every CAD face a surface group face<N> (N its number); its CAD name is kept in the face table."""
+    faces = [tag for _, tag in gmsh.model.getEntities(2)]
+    for tag in faces:
+        gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, [tag], tag), f"face{tag}")
     return faces
 
 
-def _outward(gmsh, tag: int, n: list) -> list:
-    """A flat face's normal n turned to point out of the solid it bounds (a point just off the face along n lies
-    inside the solid: n points in)."""
-    solids = gmsh.model.getAdjacencies(2, tag)[0]
-    if not len(solids):
-        return n
-    x0, y0, z0, x1, y1, z1 = gmsh.model.getBoundingBox(3, int(solids[0]))
-    step = 1e-6 * math.dist((x0, y0, z0), (x1, y1, z1))
-    inside = gmsh.model.getClosestPoint(2, tag, list(gmsh.model.occ.getCenterOfMass(2, tag)))[0]
-    probe = [c + step * v for c, v in zip(inside, n)]
-    return [-v for v in n] if gmsh.model.isInside(3, int(solids[0]), probe) else n
+def face_table(gmsh, arrays: MeshArrays, scale: float) -> list[dict]:
+    """Every CAD face: its number, its group (face<N>), its CAD name where the file gives one, its area (m^2),
+    centroid (m) and, when flat, its outward normal (from its mesh facets and the tetrahedra they bound)."""
+    rows = []
+    for tag in sorted(t for _, t in gmsh.model.getEntities(2)):
+        row = {"face": tag, "group": f"face{tag}", "area": gmsh.model.occ.getMass(2, tag) * scale**2,
+               "centroid": [c * scale for c in gmsh.model.occ.getCenterOfMass(2, tag)]}
+        name = _cad_name(gmsh, 2, tag)
+        if name:
+            row["name"] = name
+        facets = arrays.facet_groups.get(f"face{tag}")
+        if facets is not None and len(facets):
+            n = outward_normals(arrays.points, arrays.cells, facets)
+            mean = n.mean(axis=0) / np.linalg.norm(n.mean(axis=0))
+            if np.all(n @ mean >= 1.0 - FLAT):
+                row["normal"] = [round(float(c), 12) + 0.0 for c in mean]
+        rows.append(row)
+    return rows
+
+
+def _sizes(spec: MeshSpec, h: float) -> tuple[float, float]:
+    """(smallest, largest) cell gmsh may make: h_min (default a quarter of h, or the smallest near h), and h capped
+    by h_max."""
+    largest = min(h, spec.h_max) if spec.h_max else h
+    smallest = spec.h_min or min([largest * MIN_FRACTION] + [row[4] for row in spec.near or []])
+    return smallest, largest
 
 
 def _size_fields(gmsh, spec: MeshSpec, h: float, scale: float) -> None:
     """Cells of size h (between h_min and h_max), finer within r of each near point (the scene's metres)."""
-    gmsh.option.setNumber("Mesh.MeshSizeMax", (spec.h_max or h) / scale)
-    gmsh.option.setNumber("Mesh.MeshSizeMin", (spec.h_min or min(h, spec.h_max or h) / 4) / scale)
+    smallest, largest = _sizes(spec, h)
+    gmsh.option.setNumber("Mesh.MeshSizeMax", largest / scale)
+    gmsh.option.setNumber("Mesh.MeshSizeMin", smallest / scale)
     if not spec.near:
         return
     field = gmsh.model.mesh.field
@@ -90,7 +110,7 @@ def _size_fields(gmsh, spec: MeshSpec, h: float, scale: float) -> None:
     for x, y, z, r, h_near in spec.near:
         b = field.add("Ball")
         for name, value in (("XCenter", x), ("YCenter", y), ("ZCenter", z), ("Radius", r), ("Thickness", r),
-                            ("VIn", h_near), ("VOut", spec.h_max or h)):
+                            ("VIn", h_near), ("VOut", largest)):
             field.setNumber(b, name, value / scale)
         balls.append(b)
     least = field.add("Min")
@@ -100,15 +120,24 @@ def _size_fields(gmsh, spec: MeshSpec, h: float, scale: float) -> None:
 
 
 def _estimated_cells(volume: float, spec: MeshSpec, h: float) -> int:
-    cells = resources.tetrahedra_counts(volume, spec.h_max or h, 1)[0]
+    cells = resources.tetrahedra_counts(volume, _sizes(spec, h)[1], 1)[0]
     for _, _, _, r, h_near in spec.near or []:
         cells += resources.tetrahedra_counts(4 / 3 * math.pi * (2 * r) ** 3, h_near, 1)[0]
     return cells
 
 
+def _generate(gmsh, key: str, h: float) -> MeshArrays:
+    try:
+        gmsh.model.mesh.generate(3)
+    except Exception as e:                       # noqa: BLE001 (gmsh raises Exception with its log line)
+        raise InputError(f"{key}: gmsh could not mesh it at h = {h:.3g} ({str(e).strip()[:120]})") from None
+    return gmsh_arrays(gmsh)
+
+
 def mesh_cad(spec: MeshSpec, limit: float, degree: int) -> MeshArrays:
     """The CAD file of `spec` meshed with tetrahedra, refused first when its estimated size exceeds the scene's cap
-    on cells or the machine's memory; info lists its faces (results.json mesh.faces)."""
+    on cells or the machine's memory (and after meshing, by its count); info lists its faces (results.json
+    mesh.faces)."""
     key = f"mesh.file = {str(spec.file)!r}"
     gmsh = gmsh_session()
     try:
@@ -121,23 +150,19 @@ def mesh_cad(spec: MeshSpec, limit: float, degree: int) -> MeshArrays:
         resources.check_cap(cells, spec.max_cells, f"{key} at h = {h:.3g}", estimated=True)
         resources.check_fits(cells, resources.tetrahedra_dofs(cells, degree), "tetrahedron", degree,
                              f"{key} at h = {h:.3g}", limit)
-        faces = face_table(gmsh, scale)
-        for row in faces:
-            gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, [row["face"]], row["face"]), row["group"])
-        for i, (_, tag) in enumerate(solids):
-            name = _cad_name(gmsh, 3, tag) or f"solid{i + 1}"
-            gmsh.model.setPhysicalName(3, gmsh.model.addPhysicalGroup(3, [tag], tag), name)
+        _group_faces(gmsh)
+        _group_solids(gmsh, solids)
         _size_fields(gmsh, spec, h, scale)
         gmsh.option.setNumber("Mesh.Optimize", 1)
-        try:
-            gmsh.model.mesh.generate(3)
-        except Exception as e:                   # noqa: BLE001
-            raise InputError(f"{key}: gmsh could not mesh it at h = {h:.3g} ({str(e).strip()[:120]})") from None
-        arrays = gmsh_arrays(gmsh)
+        arrays = _generate(gmsh, key, h)
+        resources.check_cap(len(arrays.cells), spec.max_cells, f"{key} at h = {h:.3g}")
+        faces = face_table(gmsh, arrays, 1.0)
     finally:
         gmsh.finalize()
     if scale != 1.0:
         arrays.points = arrays.points * scale
+        for row in faces:
+            row["area"], row["centroid"] = row["area"] * scale**2, [c * scale for c in row["centroid"]]
     arrays.info = {"source": f"{spec.file.name} (CAD, {len(solids)} solid{'s' * (len(solids) > 1)}, {len(faces)} "
                              f"faces) meshed by gmsh at h = {h:.4g}", "faces": faces}
     return arrays
@@ -145,25 +170,20 @@ def mesh_cad(spec: MeshSpec, limit: float, degree: int) -> MeshArrays:
 
 def cad_faces(path: Path, units: str | None) -> tuple[list[dict], dict]:
     """The faces of a CAD file (face_table, in metres) and each face's surface triangles (face number -> (m, 3, 3)
-    corners, from a coarse surface mesh), for listing and drawing them before a scene picks one."""
-    key = f"{str(path)!r}"
+    corners), from a coarse mesh, for listing and drawing them before a scene picks one."""
+    key = f"faces {str(path)!r}"
     gmsh = gmsh_session()
     try:
-        import_cad(gmsh, path, units, key)
+        solids = import_cad(gmsh, path, units, key)
         scale = UNIT_SCALES[units] if units else 1.0      # into metres from the unit OpenCASCADE gave
         x0, y0, z0, x1, y1, z1 = gmsh.model.getBoundingBox(-1, -1)
-        gmsh.option.setNumber("Mesh.MeshSizeMax", math.dist((x0, y0, z0), (x1, y1, z1)) / 30)
-        faces = face_table(gmsh, scale)
-        gmsh.model.mesh.generate(2)
-        tags, coords, _ = gmsh.model.mesh.getNodes()
-        position = dict(zip(tags.tolist(), (coords.reshape(-1, 3) * scale).tolist()))
-        triangles = {}
-        for row in faces:
-            types, _, nodes = gmsh.model.mesh.getElements(2, row["face"])
-            corners = [n.reshape(-1, gmsh.model.mesh.getElementProperties(t)[3])[:, :3]
-                       for t, n in zip(types, nodes)]
-            flat = [c for block in corners for c in block.tolist()]
-            triangles[row["face"]] = [[position[v] for v in tri] for tri in flat]
+        _group_faces(gmsh)
+        _group_solids(gmsh, solids)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", math.dist((x0, y0, z0), (x1, y1, z1)) / LISTING_CELLS)
+        arrays = _generate(gmsh, key, math.dist((x0, y0, z0), (x1, y1, z1)) * scale / LISTING_CELLS)
+        faces = face_table(gmsh, arrays, scale)
     finally:
         gmsh.finalize()
+    triangles = {row["face"]: (arrays.points[arrays.facet_groups[row["group"]][:, :3]] * scale).tolist()
+                 for row in faces if row["group"] in arrays.facet_groups}
     return faces, triangles

@@ -7,6 +7,11 @@ from __future__ import annotations
 from dolfinx import cpp, mesh as dmesh
 import numpy as np
 
+from fem_forms.meshes.loader import bounding_box
+
+SYMMETRY_TOLERANCE = 1e-6     # a facet lies in a symmetry plane x_i = 0 within this fraction of the part's size
+VOLUME_ROUNDOFF = 1e-12       # a surface enclosing less than this fraction of the largest is no cavity
+
 
 def boundary_facets(mesh: dmesh.Mesh) -> np.ndarray:
     """Local indices of the facets on the part's boundary (the exterior facets)."""
@@ -49,7 +54,9 @@ def cavities(mesh: dmesh.Mesh) -> list[tuple[float, np.ndarray]]:
     """The part's cavities: each closed interior surface as (the volume it encloses, the local indices of its
     facets on this rank), largest volume first; the same list (and volumes) on every rank. A surface is a set of
     boundary facets connected through their vertices; it bounds a cavity when its outward normals (out of the
-    material) point into what it encloses: the divergence theorem then gives it a negative volume."""
+    material) point into what it encloses: the divergence theorem then gives it a negative volume. Facets in a
+    symmetry plane through the origin (x = 0, y = 0 or z = 0) are left out: they add no volume, and a cavity cut
+    by the plane (a half or quarter model) would otherwise join the outer surface through them."""
     facets = boundary_facets(mesh)
     normal, area, centroid = outward_geometry(mesh, facets)
     top = mesh.topology
@@ -57,13 +64,16 @@ def cavities(mesh: dmesh.Mesh) -> list[tuple[float, np.ndarray]]:
     top.create_connectivity(fdim, 0)
     f2v = top.connectivity(fdim, 0)
     imap = top.index_map(0)
+    lo, hi = bounding_box(mesh)
+    tol = SYMMETRY_TOLERANCE * float((hi - lo).max())
+    in_plane = np.any((np.abs(centroid) <= tol) & (np.abs(np.abs(normal) - 1.0) <= SYMMETRY_TOLERANCE), axis=1)
     keys = [tuple(sorted(imap.local_to_global(f2v.links(f)).tolist())) for f in facets]
     volume = np.einsum("ij,ij->i", centroid, normal) * area / 3.0
-    gathered = mesh.comm.allgather(list(zip(keys, volume.tolist())))
+    mine = [(k, v, tuple(c)) for k, v, c, skip in zip(keys, volume.tolist(), centroid.tolist(), in_plane) if not skip]
     seen: dict = {}
-    for part in gathered:
-        for key, v in part:
-            seen.setdefault(key, v)                 # a facet on two ranks (a ghost) counts once
+    for part in mesh.comm.allgather(mine):
+        for key, v, c in part:
+            seen.setdefault(key, (v, c))            # a facet on two ranks (a ghost) counts once
     parent: dict = {}
 
     def root(a):
@@ -77,9 +87,13 @@ def cavities(mesh: dmesh.Mesh) -> list[tuple[float, np.ndarray]]:
         for v in key[1:]:
             parent[root(v)] = r
     enclosed: dict = {}
-    for key, v in seen.items():
+    corner: dict = {}
+    for key, (v, c) in seen.items():
         r = root(key[0])
         enclosed[r] = enclosed.get(r, 0.0) + v
-    order = sorted((r for r, v in enclosed.items() if v < 0), key=lambda r: (enclosed[r], r))
-    local_root = np.array([root(k[0]) for k in keys]) if keys else np.zeros(0)
+        corner[r] = min(corner.get(r, c), c)     # ties in volume: the lowest corner first, on any partition
+    scale = max(abs(v) for v in enclosed.values()) if enclosed else 1.0
+    order = sorted((r for r, v in enclosed.items() if v < -VOLUME_ROUNDOFF * scale),
+                   key=lambda r: (round(enclosed[r] / scale, 9), corner[r]))
+    local_root = np.array([root(k[0]) if k in seen else -1 for k in keys]) if keys else np.zeros(0)
     return [(-enclosed[r], facets[local_root == r]) for r in order]

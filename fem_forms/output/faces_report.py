@@ -11,11 +11,12 @@ import numpy as np
 
 def faces_text(faces: list[dict]) -> str:
     """The table a user picks a face from."""
-    lines = [f"{'face':>5}  {'group':<20} {'area m^2':>10}  {'centroid m':<32} normal (flat faces)"]
+    lines = [f"{'face':>5}  {'group':<20} {'area m^2':>10}  {'centroid m':<32} normal (flat faces), CAD name"]
     for f in faces:
         c = ", ".join(f"{v:.4g}" for v in f["centroid"])
-        n = ", ".join(f"{v:.3g}" for v in f["normal"]) if "normal" in f else "(curved)"
-        lines.append(f"{f['face']:>5}  {f['group']:<20} {f['area']:>10.4g}  [{c}]".ljust(72) + f" [{n}]")
+        n = "[" + ", ".join(f"{v:.3g}" for v in f["normal"]) + "]" if "normal" in f else "(curved)"
+        name = f"  {f['name']}" if "name" in f else ""
+        lines.append(f"{f['face']:>5}  {f['group']:<20} {f['area']:>10.4g}  [{c}]".ljust(72) + f" {n}{name}")
     return "\n".join(lines)
 
 

@@ -59,6 +59,7 @@ class ProgressLine:
             return
         elif event == "solve_done":     # the next solve (e.g. a forward check) counts from 1 again
             self.close()
+            self._say_selected()
             self.state = {}
             return
         elif event == "selected":       # once per selector: how many facets it took, said once solving starts
@@ -66,10 +67,7 @@ class ProgressLine:
                 self._selected[fields.get("key")] = fields.get("facets")
                 self._unsaid.append(fields.get("key"))
             return
-        if self._unsaid:                # (bad input found before then stays one line)
-            self.close()
-            self._write("".join(f"fem-forms: {k}: {self._selected[k]} boundary facets\n" for k in self._unsaid))
-            self._unsaid = []
+        self._say_selected()            # (bad input found before then stays one line)
         if self.tty:
             if event != "newton" or time.perf_counter() - self._last_draw >= REDRAW_EVERY_S:
                 self._draw(self.status())
@@ -82,6 +80,13 @@ class ProgressLine:
                        counted=event != "step_rejected")
         elif event == "time_step":
             self._quiet_steps += 1
+
+    def _say_selected(self) -> None:
+        """The facet counts not written yet, each on a line (once solving starts, or a solve ended)."""
+        if self._unsaid:
+            self.close()
+            self._write("".join(f"fem-forms: {k}: {self._selected[k]} boundary facets\n" for k in self._unsaid))
+            self._unsaid = []
 
     def _due(self) -> bool:
         """Whether an accepted time step gets a line of its own in a log (at most one per PLAIN_EVERY_S)."""
@@ -96,6 +101,7 @@ class ProgressLine:
     def _march_done(self, fields: dict) -> None:
         """The last line of a time march: where it got, in how many steps, how long it took."""
         self.close()
+        self._say_selected()
         if not self.tty:
             rejected = fields.get("rejected") or 0
             ended = "stopped at" if fields.get("failed") else "reached"

@@ -1,6 +1,7 @@
 """Selectors, the load factor and supports (Dirichlet conditions with Constant values).
 
-The one selector mechanism: boundary facets (plane, box, surface group) for loads and supports;
+The one selector mechanism: boundary facets (plane, box, surface group, a CAD face, the facets facing a direction,
+on a plane of any orientation or around a cavity) for loads and supports;
 for supports also cells (volume group) and positions (the nearest node to a point, nodes on a line
 segment, on a gmsh curve group's edges or at a point group's points)."""
 from __future__ import annotations
@@ -15,6 +16,8 @@ from fem_forms.meshes import LoadedMesh, bounding_box, mesh_size
 from fem_forms.meshes.facet_geometry import boundary_facets, cavities, outward_geometry
 from fem_forms.meshes.groups import distance_to_points, distance_to_segments
 from fem_forms.progress import report
+
+CONE_ROUNDOFF = 1e-12          # a facet exactly on the cone's edge (within_deg = 90 takes the faces square to it)
 from fem_forms.scene import Fix, Load, Selector
 
 
@@ -34,7 +37,8 @@ def locate_facets(loaded: LoadedMesh, sel: Selector) -> np.ndarray:
         if kind != "surface":
             raise InputError(f"{sel.key}.group = {sel.group!r}: a {kind} group; a traction or pressure "
                              "needs a surface group")
-        facets = loaded.facet_tags.indices[loaded.facet_tags.values == loaded.groups[_group_name(loaded, sel)]]
+        tags = [loaded.groups[name] for name in _surface_groups(loaded, sel)]
+        facets = loaded.facet_tags.indices[np.isin(loaded.facet_tags.values, tags)]
     elif sel.kind in ("normal", "oblique", "cavity"):
         facets = _facets_by_geometry(mesh, sel)
     else:
@@ -56,6 +60,9 @@ def _owned(mesh: dmesh.Mesh, facets: np.ndarray) -> np.ndarray:
 
 def _facets_by_geometry(mesh: dmesh.Mesh, sel: Selector) -> np.ndarray:
     """Boundary facets facing a direction (normal), on a plane of any orientation (oblique), or a cavity's walls."""
+    if mesh.topology.cell_type == dmesh.CellType.prism:
+        raise InputError(f"{sel.key}: normal, plane and cavity take the facets of tetrahedra and hexahedra (this "
+                         "mesh has prisms); use axis/at, box or group")
     if sel.kind == "oblique":
         tol = sel.tolerance if sel.tolerance is not None else 1e-6 * mesh_size(mesh)
         p, n = np.array(sel.origin)[:, None], np.array(sel.direction)
@@ -63,7 +70,7 @@ def _facets_by_geometry(mesh: dmesh.Mesh, sel: Selector) -> np.ndarray:
     if sel.kind == "normal":
         facets = boundary_facets(mesh)
         normal, _, _ = outward_geometry(mesh, facets)
-        return facets[normal @ np.array(sel.direction) >= np.cos(np.radians(sel.within_deg)) - 1e-12]
+        return facets[normal @ np.array(sel.direction) >= np.cos(np.radians(sel.within_deg)) - CONE_ROUNDOFF]
     found = cavities(mesh)
     volumes = ", ".join(f"{v:.4g}" for v, _ in found[:6]) + (", ..." if len(found) > 6 else "")
     if not found:
@@ -76,22 +83,26 @@ def _facets_by_geometry(mesh: dmesh.Mesh, sel: Selector) -> np.ndarray:
     return found[sel.cavity - 1][1]
 
 
-def _group_name(loaded: LoadedMesh, sel: Selector) -> str:
-    """The group a selector names: its own, or the group a CAD file's face (by number) became."""
-    if sel.kind != "face":
-        return sel.group
+def _surface_groups(loaded: LoadedMesh, sel: Selector) -> list[str]:
+    """The surface groups a selector names: its group; a CAD file's face by number (face<N>); or every CAD face
+    the file gives the name `group`."""
     faces = loaded.info.get("faces")
-    if faces is None:
-        raise InputError(f"{sel.key}.face: only for a mesh made from a CAD file (.step, .iges, .brep)")
-    match = [f["group"] for f in faces if f["face"] == sel.face]
-    if not match:
-        raise InputError(f"{sel.key}.face = {sel.face}: the CAD file has faces {faces[0]['face']}.."
-                         f"{faces[-1]['face']} (`fem-forms faces FILE` lists them)")
-    return match[0]
+    if sel.kind == "face":
+        if faces is None:
+            raise InputError(f"{sel.key}.face: only for a mesh made from a CAD file (.step, .iges, .brep)")
+        if not any(f["face"] == sel.face for f in faces):
+            raise InputError(f"{sel.key}.face = {sel.face}: the CAD file has faces {faces[0]['face']}.."
+                             f"{faces[-1]['face']} (`fem-forms faces FILE` lists them)")
+        return [f"face{sel.face}"]
+    if sel.group not in loaded.groups and faces is not None:
+        named = [f["group"] for f in faces if f.get("name") == sel.group]
+        if named:
+            return named
+    return [sel.group]
 
 
 def _group(loaded: LoadedMesh, sel: Selector) -> str:
-    name = _group_name(loaded, sel)
+    name = _surface_groups(loaded, sel)[0]
     for kind, groups in (("surface", loaded.groups), ("volume", loaded.cells), ("curve", loaded.curves),
                          ("point", loaded.points)):
         if name in groups:

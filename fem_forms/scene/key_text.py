@@ -70,7 +70,7 @@ def facts(k: Key, when: list, esc: Callable[[str], str] = plain, code: Callable[
     if k.kind == "selector":
         for kd in [kd for kd in SELECTOR_KEYS if k.choices is None or kd in k.choices]:
             keys = SELECTOR_KEYS[kd]
-            out.append(f"- {kd}: {code('{ ' + ', '.join(f'{s.name} = ...' for s in keys) + ' }')}: "
+            out.append(f"- {code('{ ' + ', '.join(f'{s.name} = ...' for s in keys) + ' }')}: "
                        + "; ".join(esc(s.doc) for s in keys))
     if k.kind == "map" and k.item is not None:
         out.append(f"- each value: {esc(kind_text(k.item))}, {esc(k.item.doc)}"

@@ -53,7 +53,7 @@ class Selector:
     axis: int = 0
     at: float = 0.0
     direction: tuple = ()          # normal: the unit direction; oblique: the plane's unit normal
-    within_deg: float = 5.0
+    within_deg: float = SEL_WITHIN.default
     origin: tuple = ()             # oblique: a point on the plane
     tolerance: float | None = None
     cavity: int | str = 1          # 1, 2, ... or "all"
@@ -67,11 +67,13 @@ class Selector:
 
     @staticmethod
     def parse(data: Any, key: str, kinds: tuple | None = None) -> "Selector":
-        """A selector from {axis, at}, {box}, {group}, {point} or {line}; `kinds` limits which are allowed."""
+        """A selector from {axis, at}, {box}, {group}, {normal}, {plane}, {cavity}, {face}, {point} or {line};
+        `kinds` limits which are allowed."""
         t = Table(data, key)
         present = [k for k in _SELECTOR_OF if t.has(k)]
         if len(present) != 1:
-            raise InputError(f"{key}: give exactly one of axis/at, box, group, normal, plane, cavity, face, point or line")
+            raise InputError(f"{key}: give exactly one of axis/at, box, group, normal, plane, cavity, face, point "
+                             "or line")
         kind = _SELECTOR_OF[present[0]]
         if kinds is not None and kind not in kinds:
             if kinds == ("box",):
@@ -79,7 +81,7 @@ class Selector:
             if kind in ("point", "line") and kinds == AREA_SELECTORS:
                 raise InputError(f"{key}: a {kind} has no area to carry a traction or pressure; "
                                  "select facets with axis/at, box, group, normal, plane, cavity or face")
-            raise InputError(f"{key}: must be one of {', '.join(kinds)}")
+            raise InputError(f"{key}: must be one of {', '.join(SELECTOR_KEYS[k][0].name for k in kinds)}")
         if kind == "plane":
             sel = Selector("plane", axis=AXES[t.read(SEL_AXIS)], at=t.read(SEL_AT), key=key)
         elif kind == "box":

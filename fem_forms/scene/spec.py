@@ -45,8 +45,8 @@ H_MIN = Key("h_min", "number", "CAD files: the smallest cell gmsh may make", uni
 H_MAX = Key("h_max", "number", "CAD files: the largest cell gmsh may make", unit="m", exclusive_minimum=0,
             default_note="h")
 NEAR = Key("near", "points", "CAD files: finer cells near points, [[x, y, z, r, h], ...]: size h within r of "
-           "(x, y, z), growing to h_max over another r", unit="m", length=5, min_items=1,
-           note="must list [x, y, z, r, h] rows")
+           "(x, y, z), growing to h_max over another r", unit="m", length=5, min_items=1, max_items=100,
+           note="must list 1 to 100 rows [x, y, z, r, h]")
 REPAIR = Key("repair", "boolean", "surface files only: fill holes and remove duplicate, degenerate and "
              "self-intersecting faces with MeshFix before gmsh meshes the surface (results.json mesh.repair "
              "says what changed); without it an open surface is refused", default=False)
@@ -112,10 +112,13 @@ def _mesh_rules(m: MeshSpec, t: Table) -> None:
     for name, value in (("h_min", m.h_min), ("h_max", m.h_max), ("near", m.near)):
         if value is not None and suffix not in CAD_SUFFIXES:
             raise InputError(f"{t.key(name)}: only for CAD files ({', '.join(CAD_SUFFIXES)})")
-    if m.h_min is not None and m.h_max is not None and m.h_min > m.h_max:
-        raise InputError(f"{t.key('h_min')} = {m.h_min}: exceeds h_max = {m.h_max}")
+    for other, value in (("h_max", m.h_max), ("h", m.h)):
+        if m.h_min is not None and value is not None and m.h_min > value:
+            raise InputError(f"{t.key('h_min')} = {m.h_min}: exceeds {other} = {value}")
     if any(r <= 0 or h <= 0 for _, _, _, r, h in m.near or []):
         raise InputError(f"{t.key('near')}: each row's r and h must be positive")
+    if m.h_min is not None and any(h < m.h_min for *_, h in m.near or []):
+        raise InputError(f"{t.key('near')}: a row asks for cells below h_min = {m.h_min}")
     if suffix in (".step", ".stp", ".iges", ".igs") and m.scale is not None:
         raise InputError(f"{t.key('scale')}: a STEP or IGES file declares its length unit (it is read at its "
                          "true size); scale is for files that do not")

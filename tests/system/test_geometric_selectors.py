@@ -45,6 +45,17 @@ def _tilted(gmsh):
     gmsh.model.occ.synchronize()
 
 
+def _half_with_a_cavity(gmsh):
+    """The symmetric half (y >= 0) of a block with a ball-shaped cavity at the origin: the cavity's wall meets the
+    symmetry plane y = 0, which closes it (as an inflation of a half model)."""
+    occ = gmsh.model.occ
+    box = occ.addBox(-0.05, 0, -0.02, 0.1, 0.02, 0.04)
+    ball = occ.addSphere(0, 0, 0, BALL)
+    occ.cut([(3, box)], [(3, ball)])
+    occ.synchronize()
+    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 16)
+
+
 def _two_cavities(gmsh):
     occ = gmsh.model.occ
     box = occ.addBox(0, 0, 0, 0.1, 0.04, 0.04)
@@ -67,6 +78,7 @@ def _two_cavities(gmsh):
 def parts(tmp_path_factory):
     folder = tmp_path_factory.mktemp("parts")
     return {"tilted": _gmsh_part(folder / "tilted.msh", _tilted, 0.01),
+            "half": _gmsh_part(folder / "half.msh", _half_with_a_cavity, 0.008),
             "cavities": _gmsh_part(folder / "cavities.msh", _two_cavities, 0.008)}
 
 
@@ -125,6 +137,28 @@ def test_cavities_are_the_closed_surfaces_inside_ordered_by_volume(parts):
     box = _loaded({"generator": "box", "size": [1, 1, 1], "cells": [2, 2, 2]})
     with pytest.raises(InputError, match="where.cavity: the mesh has no cavity"):
         _facets(box, {"cavity": 1})
+
+
+def test_a_cavity_cut_by_a_symmetry_plane(parts):
+    loaded = _loaded({"generator": "file", "file": str(parts["half"])})
+    found = cavities(loaded.mesh)
+    material = loaded.mesh.comm.allreduce(fem.assemble_scalar(fem.form(1.0 * ufl.dx(loaded.mesh))), op=MPI.SUM)
+    assert len(found) == 1 and found[0][0] == pytest.approx(0.1 * 0.02 * 0.04 - material, rel=1e-9)
+    assert found[0][0] == pytest.approx(2 / 3 * math.pi * BALL**3, rel=0.1)          # the faceted half ball
+
+
+def test_the_facet_counts_are_said_when_solving_starts_or_a_solve_ends():
+    import io
+    from fem_forms.output.progress_line import ProgressLine
+    for ending in ("load_step", "solve_done", "march_done"):
+        log = io.StringIO()
+        line = ProgressLine(stream=log, tty=False)
+        line("selected", key="fix[0].where", facets=12)
+        line("selected", key="fix[0].where", facets=12)                # a rebuild selects again: said once
+        assert log.getvalue() == ""                                     # bad input found now stays one line
+        line(ending, time=0.0, steps=0)
+        assert log.getvalue().startswith("fem-forms: fix[0].where: 12 boundary facets\n"), (ending, log.getvalue())
+        assert log.getvalue().count("boundary facets") == 1
 
 
 def test_cavities_inflated_with_no_groups_the_same_on_two_ranks(parts, tmp_path, capsys):

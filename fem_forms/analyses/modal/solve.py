@@ -20,6 +20,7 @@ import numpy as np
 from petsc4py import PETSc
 import ufl
 
+from fem_forms import progress
 from fem_forms.analyses.static.solve import StaticResult, solve_static
 from fem_forms.errors import InputError, SolveError
 from fem_forms.meshes import bounding_box
@@ -307,4 +308,5 @@ def solve_modal(scene: Scene, material=None, model: Model | None = None) -> Moda
                          static, target, kind, res.converged, res.iterations, res.solve_time, band=band)
     ops.destroy()
     result.wall_time_s = time.perf_counter() - t0
+    progress.report("solve_done", converged=bool(res.converged))
     return result
