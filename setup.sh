@@ -4,11 +4,12 @@
 # Idempotent: a second run installs nothing and takes a second.
 set -euo pipefail
 cd "$(dirname "$0")"
-# clang: FFCx's large forms compile 4.6x faster with it than with gcc (fem_forms/logs.py, FAST_CC)
+# clang: FFCx's large forms compile 4.6x faster with it than with gcc (fem_forms/logs.py, FAST_CC); npm fetches
+# three.js (below); chromium (headless) only for the test suite, which opens report.html in a real browser
 pkgs="python3-dolfinx python3-dolfinx-real python3-ufl python3-petsc4py python3-slepc4py python3-gmsh
 python3-meshio python3-pytest python3-mpi4py openmpi-bin libopenblas0-pthread python3-matplotlib
 python3-scipy python3-pil python3-jsonschema python3-venv python3-setuptools python3-pip python3-pytest-xdist
-python3-sphinx python3-myst-parser furo clang"
+python3-sphinx python3-myst-parser furo clang npm chromium fonts-dejavu-core"
 missing=""
 for p in $pkgs; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing="$missing $p"
@@ -32,6 +33,22 @@ fi
 if ! .venv/bin/python -c "import ipctk" 2>/dev/null; then
   .venv/bin/python -m pip install -q --no-warn-script-location "ipctk>=1.6,<2" >/dev/null 2>&1 \
     || { echo "setup: pip could not install ipctk" >&2; exit 1; }
+fi
+# three.js, report.html's 3D viewer (embedded into each page as it is written), from the npm registry: the 4.8 MB
+# package, of which three files (2.1 MB) and its licence are kept in the venv; none of it is in the repository
+THREE_VERSION=0.187.0
+THREE_DIR=.venv/share/fem_forms/three
+if [ ! -f "$THREE_DIR/OrbitControls.js" ] || ! grep -q "$THREE_VERSION" "$THREE_DIR/VERSION" 2>/dev/null; then
+  tmp=$(mktemp -d)
+  (cd "$tmp" && npm pack --silent "three@$THREE_VERSION" >/dev/null 2>&1) \
+    || { echo "setup: npm could not fetch three.js" >&2; exit 1; }
+  tar xzf "$tmp/three-$THREE_VERSION.tgz" -C "$tmp" package/build/three.module.js package/build/three.core.js \
+    package/examples/jsm/controls/OrbitControls.js package/LICENSE
+  mkdir -p "$THREE_DIR"
+  cp "$tmp"/package/build/three.module.js "$tmp"/package/build/three.core.js \
+    "$tmp"/package/examples/jsm/controls/OrbitControls.js "$tmp"/package/LICENSE "$THREE_DIR"/
+  echo "$THREE_VERSION" > "$THREE_DIR/VERSION"
+  rm -rf "$tmp"
 fi
 # byte-compile the package as a regular pip install would (an editable one does not; with
 # PYTHONDONTWRITEBYTECODE set, every run would compile ~100 modules from source: 0.1 s, measured)

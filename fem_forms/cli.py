@@ -2,7 +2,8 @@
 `fem-forms study SCENE.toml`,
 `fem-forms fit TEST.csv ... --model M [--terms N] [--mode uniaxial|biaxial|shear] [--out DIR]`,
 `fem-forms schema [--out FILE]`, `fem-forms faces CAD_FILE [--units mm] [--out DIR]` (the faces numbered),
-`fem-forms help KEY` (a scene key's reference; error messages about a key end with this command).
+`fem-forms help KEY` (a scene key's reference; error messages about a key end with this command),
+`fem-forms view OUT` (a run's report.html in the browser).
 
 Exit status: 0 solved, 2 bad input (one line on stderr naming the key), 3 no convergence (a static limit
 point included), 1 a form whose compile never finished (a killed run's lock in the form cache), 130
@@ -117,6 +118,9 @@ def _parser() -> argparse.ArgumentParser:
                        "declares its own: the part comes at its true size anyway; a BREP needs it)")
     faces.add_argument("--out", help="output folder (created)")
     faces.set_defaults(verbose=False, quiet=True)
+    view = sub.add_parser("view", help="open a run's report.html (the part in 3D, its numbers) in the browser")
+    view.add_argument("out", help="the run's output folder (or its report.html)")
+    view.set_defaults(verbose=False, quiet=True)
     helper = sub.add_parser("help", help="print a scene key's reference (type, default, range, unit, meaning): "
                             "fem-forms help mesh.h; a table's keys: fem-forms help mesh")
     helper.add_argument("key", nargs="?", default="scene", help="a scene key (mesh.h, load.where) or a table (mesh)")
@@ -169,6 +173,17 @@ def _faces(args) -> int:
     return 0
 
 
+def _view(out: Path) -> int:
+    """`fem-forms view OUT`: the run's report.html opened in the user's browser (its path printed either way)."""
+    page = out if out.suffix == ".html" else out / "report.html"
+    if not page.is_file():
+        raise InputError(f"view {str(out)!r}: no report.html there (a run writes it unless [output] report = false)")
+    import webbrowser
+    opened = webbrowser.open(page.resolve().as_uri())
+    print(f"{page}" + ("" if opened else " (no browser found: open it in one)"))
+    return 0
+
+
 def pointer(message: str) -> str:
     """Where an error about a scene key is explained: `fem-forms help KEY` (always there), and the built manual's
     page once it is built."""
@@ -183,6 +198,8 @@ def _run(args, petsc: dict) -> int:
     if args.command == "help":
         print(help_text(args.key))
         return 0
+    if args.command == "view":
+        return _view(Path(args.out))
     if args.command == "faces":
         return _faces(args)
     if args.command == "fit":

@@ -100,10 +100,12 @@ def gather_cell_values(mesh, values: np.ndarray) -> np.ndarray | None:
     return np.concatenate(parts) if mesh.comm.rank == 0 else None
 
 
-def boundary_surface(u: fem.Function, scalar: fem.Function | None = None):
+def boundary_surface(u: fem.Function, scalar: fem.Function | None = None, marks: list | None = None):
     """Rank 0 gets (points, triangles-or-quads, displacement at points) of the mesh's boundary, and a scalar
-    field's values at those points as a fourth entry when `scalar` is given (the damage of a crack picture);
-    other ranks get None. Gathering is for the picture only."""
+    field's values at those points as a fourth entry when `scalar` is given (the damage of a crack picture), and
+    each polygon's marks as a last entry when `marks` (local facet index arrays) are given: bit i set when the
+    polygon's facet is in marks[i] (a support's or a load's facets in the report); other ranks get None.
+    Gathering is for pictures and the report only."""
     mesh = u.function_space.mesh
     tdim = mesh.topology.dim
     mesh.topology.create_connectivity(tdim - 1, tdim)
@@ -119,17 +121,24 @@ def boundary_surface(u: fem.Function, scalar: fem.Function | None = None):
     values = node_values(u)
     nodes = np.unique(geom)
     extra = node_values(scalar)[nodes, 0] if scalar is not None else np.zeros(len(nodes))
-    local = (mesh.geometry.x[nodes], values[nodes], np.searchsorted(nodes, geom), extra)
+    bits = np.zeros(len(facets), dtype=np.int64)
+    for i, m in enumerate(marks or []):
+        bits |= np.isin(facets, m).astype(np.int64) << i
+    if len(geom) != len(facets):                     # prisms: quadrilateral facets in two triangles: unmarked
+        bits = np.zeros(len(geom), dtype=np.int64)
+    local = (mesh.geometry.x[nodes], values[nodes], np.searchsorted(nodes, geom), extra, bits)
     parts = mesh.comm.gather(local, root=0)
     if mesh.comm.rank != 0:
         return None
-    pts, disp, polys, scalars, off = [], [], [], [], 0
-    for x, d, p, e in parts:
+    pts, disp, polys, scalars, marked, off = [], [], [], [], [], 0
+    for x, d, p, e, b in parts:
         pts.append(x)
         disp.append(d)
         polys.append(p + off)
         scalars.append(e)
+        marked.append(b)
         off += len(x)
     out = np.vstack(pts), np.vstack([p for p in polys if len(p)]), np.vstack(disp)
-    return out if scalar is None else (*out, np.concatenate(scalars))
+    out = out if scalar is None else (*out, np.concatenate(scalars))
+    return out if marks is None else (*out, np.concatenate(marked))
 

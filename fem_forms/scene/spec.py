@@ -336,6 +336,9 @@ OUTPUT_KEYS = (
     Key("probes", "map", "named points where results are reported", default={},
         item=Key("point", "vector", "[x, y, z]", unit="m", length=3)),
     Key("picture", "boolean", "write a PNG picture", default=True),
+    Key("report", "boolean", "write report.html: the part in 3D to turn around in a browser (deformed, coloured by "
+        "|u| or von Mises stress, supports and loads marked), the numbers of results.json, the warnings; "
+        "`fem-forms view OUT` opens it", default=True),
     Key("fields", "selection", "fields for ParaView (XDMF, P1 nodal values of recovered stresses and strains; "
         "material: the material index of each cell, in [[material]] order from 0): "
         "a list of names, true (the default list) or false (none)", default=["displacement", "von_mises"],
@@ -343,7 +346,7 @@ OUTPUT_KEYS = (
 )
 
 
-OutputSpec = spec_class("OutputSpec", "[output]: probes, picture and the fields written for ParaView.",
+OutputSpec = spec_class("OutputSpec", "[output]: probes, picture, report and the fields written for ParaView.",
                         OUTPUT_KEYS, __name__)
 
 

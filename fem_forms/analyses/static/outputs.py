@@ -22,6 +22,7 @@ from fem_forms.output.guard import attempt
 from fem_forms.output.interrupts import Interrupts
 from fem_forms.output.load_path import LoadPath, field_functions
 from fem_forms.output.plastic import plastic_summary, plastic_term
+from fem_forms.output.report import write_model_report
 from fem_forms.output.stl import write_deformed_surface
 from fem_forms.output.strength import summary_line
 from fem_forms.output import fields
@@ -75,6 +76,14 @@ def write_static_outputs(result: StaticResult, out: "Path", path: LoadPath | Non
         files.update(path.finish(summary))
     results.write_newton_history(out / "newton_history.csv", result.report.steps, comm)
     files["newton_history"] = "newton_history.csv"
+    if (result.report.converged or limit) and result.model.scene.output.report:
+        vm = (attempt(summary["warnings"], "von Mises stress", lambda: result.quantities.field("von_mises"))
+              if "von_mises" in (scene.output.fields or []) else None)
+        subtitle = (f"static, {summary['dofs']:,} dofs, {summary['load_steps']} load steps, max |u| "
+                    f"{summary['max_displacement']:.4g} m")
+        if attempt(summary["warnings"], "report.html", lambda: write_model_report(
+                result.model, result.u, vm, out, {**summary, "files": files}, subtitle, pictures.scene_up(scene))):
+            files["report"] = "report.html"
     summary["files"] = files
     if path is not None:
         path.finished = True                          # from here an interrupt leaves this results.json

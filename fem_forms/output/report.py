@@ -1,0 +1,154 @@
+"""report.html: one self-contained page per run, opened in any browser without a network - the part in 3D to turn
+around (rest and deformed, a slider over its load steps, coloured by |u| or von Mises stress with a colour bar
+and units, its supports and loads marked), the numbers of results.json as a table, the warnings.
+
+The viewer is three.js (the npm registry's package, which setup.sh fetches into the venv: share/fem_forms/three),
+embedded into the page as it is written; no third-party code is in the repository. Chosen over pyvista/trame's
+vtk.js export by size: three.js's module build is 2.1 MB, embedded once per page (base64: 2.8 MB); the part is
+its outer surface only, float32 (benchmarks/report_size.md measures pages of large runs). Without three.js the
+page is left out with a warning (results.json says so); `fem-forms view OUT` opens it."""
+from __future__ import annotations
+
+import base64
+from dataclasses import dataclass, field
+import json
+import math
+from pathlib import Path
+import sys
+
+import numpy as np
+
+THREE = Path(sys.prefix) / "share" / "fem_forms" / "three"        # setup.sh unpacks three.js here
+THREE_FILES = ("three.module.js", "three.core.js", "OrbitControls.js")
+TEMPLATE = Path(__file__).with_name("report_page.html")
+MARK_COLOURS = ("#1565c0", "#c62828", "#2e7d32", "#6a1b9a", "#ef6c00", "#00838f")   # supports blue, loads red, ...
+
+
+@dataclass
+class ReportPart:
+    """What the page draws: the outer surface's rest points (n, 3) and triangles (m, 3), the displacement of each
+    frame, scalar fields at the points per frame ({name: (unit, [values per frame])}) and marked triangles."""
+    rest: np.ndarray
+    triangles: np.ndarray
+    frames: list = field(default_factory=list)      # [(label, displacement (n, 3))]
+    fields: dict = field(default_factory=dict)      # name -> (unit, [values (n,) per frame])
+    marks: list = field(default_factory=list)       # [(label, triangle indices)]
+
+
+def viewer_installed() -> bool:
+    return all((THREE / f).is_file() for f in THREE_FILES)
+
+
+def _module_url(text: str) -> str:
+    return "data:text/javascript;base64," + base64.b64encode(text.encode()).decode()
+
+
+def _viewer_urls() -> dict:
+    """The three.js modules as data URLs for the page's import map; three.module.js imports its core by a relative
+    path, which a data URL cannot resolve: it is pointed at the map's name for it."""
+    module, core, orbit = ((THREE / f).read_text() for f in THREE_FILES)
+    return {"__THREE__": _module_url(module.replace("'./three.core.js'", "'three/core'")),
+            "__THREE_CORE__": _module_url(core), "__ORBIT__": _module_url(orbit)}
+
+
+def _b64(a: np.ndarray, dtype) -> str:
+    return base64.b64encode(np.ascontiguousarray(a, dtype=dtype).tobytes()).decode()
+
+
+def _number(v) -> str:
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        return str(v)
+    if isinstance(v, int):
+        return f"{v:,}"
+    return "nan" if math.isnan(v) else f"{v:.6g}"
+
+
+def result_rows(summary: dict, prefix: str = "", depth: int = 0) -> list[tuple[str, str]]:
+    """results.json as (key, value) rows: numbers, words and short lists; nested tables (probes, reactions)
+    with dotted keys; long lists and the file list left to results.json."""
+    rows = []
+    for key, value in summary.items():
+        name = f"{prefix}{key}"
+        if key in ("warnings", "files") or value is None:
+            continue
+        if isinstance(value, dict) and depth < 3:
+            rows += result_rows(value, name + ".", depth + 1)
+        elif isinstance(value, (list, tuple)) and len(value) <= 6 and all(
+                isinstance(v, (int, float, str)) for v in value):
+            rows.append((name, "[" + ", ".join(_number(v) for v in value) + "]"))
+        elif isinstance(value, (int, float, str, bool)):
+            rows.append((name, _number(value)))
+    return rows
+
+
+def write_report(path: Path, title: str, subtitle: str, part: ReportPart, summary: dict, up=(0.0, 0.0, 1.0)) -> None:
+    """The page for `part` and `summary` (results.json's dict) at `path` (written whole, then renamed)."""
+    from fem_forms.output.pictures import VIRIDIS
+    data = {
+        "subtitle": subtitle, "up": [float(c) for c in up],
+        "surface": {"rest": _b64(part.rest, "<f4"), "triangles": _b64(part.triangles, "<u4")},
+        "frames": [{"label": label, "u": _b64(u, "<f4")} for label, u in part.frames],
+        "fields": {name: {"unit": unit, "frames": [_b64(v, "<f4") for v in values]}
+                   for name, (unit, values) in part.fields.items()},
+        "marks": [{"label": label, "colour": MARK_COLOURS[i % len(MARK_COLOURS)], "triangles": _b64(t, "<u4")}
+                  for i, (label, t) in enumerate(part.marks)],
+        "table": result_rows(summary), "warnings": list(summary.get("warnings", [])),
+        "viridis": VIRIDIS.round(4).tolist()}
+    text = TEMPLATE.read_text().replace("__TITLE__", _html(title))
+    for name, url in _viewer_urls().items():
+        text = text.replace(name, url)
+    text = text.replace("__DATA__", json.dumps(data).replace("</", "<\\/"))
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(text)
+    tmp.replace(path)
+
+
+def _html(text: str) -> str:
+    return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;").replace('"', "&quot;")
+
+
+def triangulated(polys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Triangles of triangles or quadrilaterals (a quadrilateral in two), and the polygon each came from."""
+    if polys.shape[1] == 3:
+        return polys, np.arange(len(polys))
+    return np.vstack([polys[:, [0, 1, 2]], polys[:, [0, 2, 3]]]), np.tile(np.arange(len(polys)), 2)
+
+
+def _marked_facets(model) -> list[tuple[str, np.ndarray]]:
+    """(label, local facet indices) of each support and load acting on facets: what the page marks."""
+    from fem_forms.physics.supports import locate_facets
+    from fem_forms.scene.selectors import AREA_SELECTORS
+    from fem_forms.scene.spec import fix_names
+    scene, out = model.scene, []
+    for name, fix in zip(fix_names(scene.fix), scene.fix):
+        if fix.where.kind in AREA_SELECTORS:
+            out.append((f"support {name}", locate_facets(model.loaded, fix.where)))
+    for i, load in enumerate(scene.load):
+        if load.where is not None and load.where.kind in AREA_SELECTORS:
+            out.append((f"{load.type} load[{i}]", locate_facets(model.loaded, load.where)))
+    return out
+
+
+def write_model_report(model, u, von_mises, out: Path, summary: dict, subtitle: str, up=None) -> bool:
+    """report.html of a solved model (a collective call; rank 0 writes): its surface deformed by u, coloured by |u|
+    and, when given, von Mises stress (a P1 field), its supports and loads marked. False (and a warning in
+    summary) when the viewer is not installed."""
+    if not viewer_installed():
+        summary.setdefault("warnings", []).append(
+            "report.html left out: its viewer (three.js) is not installed; run setup.sh")
+        return False
+    marked = _marked_facets(model)
+    from fem_forms.output.fields import boundary_surface
+    surf = boundary_surface(u, von_mises, [facets for _, facets in marked])
+    if model.mesh.comm.rank == 0:
+        points, polys, disp, *rest = surf
+        bits = rest[-1]
+        tris, origin = triangulated(polys)
+        fields = {"|u|": ("m", [np.linalg.norm(disp, axis=1)])}
+        if von_mises is not None:
+            fields["von Mises"] = ("Pa", [rest[0]])
+        marks = [(label, tris[(bits[origin] >> i) & 1 == 1].ravel()) for i, (label, _) in enumerate(marked)]
+        part = ReportPart(points, tris, [("final state", disp)], fields, marks)
+        write_report(out / "report.html", model.scene.title, subtitle, part, summary,
+                     (0.0, 0.0, 1.0) if up is None else up)
+    return True

@@ -1,0 +1,82 @@
+"""report.html in a real browser (headless Chromium, which setup.sh installs for the suite): a static run's page
+opens with no viewer error, its canvas shows the part in the colours of its colour bar, the bar's range is the
+run's |u| range, the results table and the supports' legend are there; without three.js the page is left out with
+a warning; `fem-forms view` names it."""
+import json
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+from fem_forms.cli import main
+from fem_forms.output import report
+from helpers import beam_scene, toml_dumps
+
+SCENE = beam_scene(output={"probes": {"tip": [1.0, 0.05, 0.05]}, "picture": False, "fields": ["displacement",
+                                                                                               "von_mises"]})
+BROWSER = ["--headless=new", "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+           "--virtual-time-budget=8000"]
+
+
+def _browser(*args) -> subprocess.CompletedProcess:
+    chromium = shutil.which("chromium")
+    assert chromium, "Debian's chromium is needed (setup.sh installs it)"
+    return subprocess.run([chromium, *BROWSER, *args], capture_output=True, text=True, timeout=120)
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("report")
+    path = folder / "beam.toml"
+    path.write_text(toml_dumps(SCENE))
+    assert main(["run", str(path), "--out", str(folder / "out"), "-q"]) == 0
+    return folder / "out"
+
+
+def test_the_page_shows_the_part_its_colour_bar_and_numbers(run):
+    res = json.loads((run / "results.json").read_text())
+    page = run / "report.html"
+    assert res["files"]["report"] == "report.html" and page.stat().st_size < 5e6
+    dom = _browser("--dump-dom", page.as_uri()).stdout
+    assert "<title>fem_forms report: ready</title>" in dom and '<p id="error"></p>' in dom
+    assert f"<td>max_displacement</td><td>{res['max_displacement']:.6g}</td>" in dom
+    assert "support fix0" in dom and ">|u| (m)<" in dom
+    top = float(dom.split('<span id="cb-max">')[1].split("<")[0])
+    assert top == pytest.approx(res["max_displacement"], rel=1e-3)          # the bar spans the run's |u|
+    shot = page.parent / "shot.png"
+    _browser("--window-size=1000,700", f"--screenshot={shot}", page.as_uri())
+    import matplotlib.image
+    pixels = matplotlib.image.imread(shot)[60:480, 150:850, :3]             # the 3D view, left of the bar
+    colourful = (pixels.max(axis=2) - pixels.min(axis=2)) > 0.25            # not white, grey or black
+    assert colourful.mean() > 0.02, "the canvas is blank"
+    bar = matplotlib.image.imread(shot)[80:250, 950:990, :3]
+    assert (bar.max(axis=2) - bar.min(axis=2) > 0.25).mean() > 0.3         # the colour bar is drawn
+
+
+def test_without_its_viewer_the_page_is_left_out_with_a_warning(tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(report, "THREE", tmp_path / "nowhere")
+    path = tmp_path / "beam.toml"
+    path.write_text(toml_dumps(SCENE))
+    assert main(["run", str(path), "--out", str(tmp_path / "out"), "-q"]) == 0
+    res = json.loads((tmp_path / "out" / "results.json").read_text())
+    assert "report" not in res["files"] and not (tmp_path / "out" / "report.html").exists()
+    assert any("report.html left out: its viewer (three.js) is not installed" in w for w in res["warnings"])
+
+
+def test_view_names_the_page(run, capsys, monkeypatch):
+    import webbrowser
+    opened = []
+    monkeypatch.setattr(webbrowser, "open", lambda uri: opened.append(uri) or True)
+    assert main(["view", str(run)]) == 0
+    assert opened == [(run / "report.html").resolve().as_uri()]
+    assert main(["view", str(run / "nothing")]) == 2
+    assert "no report.html there" in capsys.readouterr().err
+
+
+def test_rows_of_results(tmp_path):
+    rows = dict(report.result_rows({"a": 1, "b": {"c": [1.0, 2.0]}, "warnings": ["x"], "long": list(range(9)),
+                                    "nan": float("nan")}))
+    assert rows == {"a": "1", "b.c": "[1, 2]", "nan": "nan"}
+    tris, origin = report.triangulated(np.array([[0, 1, 2, 3]]))
+    assert tris.tolist() == [[0, 1, 2], [0, 2, 3]] and origin.tolist() == [0, 0]
