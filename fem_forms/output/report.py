@@ -81,11 +81,13 @@ def result_rows(summary: dict, prefix: str = "", depth: int = 0) -> list[tuple[s
     return rows
 
 
-def write_report(path: Path, title: str, subtitle: str, part: ReportPart, summary: dict, up=(0.0, 0.0, 1.0)) -> None:
-    """The page for `part` and `summary` (results.json's dict) at `path` (written whole, then renamed)."""
+def write_report(path: Path, title: str, subtitle: str, part: ReportPart, summary: dict, up=(0.0, 0.0, 1.0),
+                 scale: str = "1") -> None:
+    """The page for `part` and `summary` (results.json's dict) at `path` (written whole, then renamed), its
+    shapes first shown at `scale` ("1": true scale, "10", "100", "auto")."""
     from fem_forms.output.pictures import VIRIDIS
     data = {
-        "subtitle": subtitle, "up": [float(c) for c in up],
+        "subtitle": subtitle, "up": [float(c) for c in up], "scale": scale,
         "surface": {"rest": _b64(part.rest, "<f4"), "triangles": _b64(part.triangles, "<u4")},
         "frames": [{"label": label, "u": _b64(u, "<f4")} for label, u in part.frames],
         "fields": {name: {"unit": unit, "frames": [_b64(v, "<f4") for v in values]}
@@ -129,26 +131,39 @@ def _marked_facets(model) -> list[tuple[str, np.ndarray]]:
     return out
 
 
-def write_model_report(model, u, von_mises, out: Path, summary: dict, subtitle: str, up=None) -> bool:
-    """report.html of a solved model (a collective call; rank 0 writes): its surface deformed by u, coloured by |u|
-    and, when given, von Mises stress (a P1 field), its supports and loads marked. False (and a warning in
-    summary) when the viewer is not installed."""
+def surface_frames(frames: list) -> list:
+    """[(label, Function)] -> [(label, displacement of the gathered surface's points)] on rank 0 (a collective
+    call; the same points' order as every boundary_surface gather of that mesh)."""
+    from fem_forms.output.fields import boundary_surface
+    out = []
+    for label, u in frames:
+        surf = boundary_surface(u)
+        out.append((label, None if surf is None else surf[2]))
+    return out
+
+
+def write_model_report(model, u, shapes: list, von_mises, out: Path, summary: dict, subtitle: str, up=None,
+                       scale: str = "1", magnitude: tuple = ("|u|", "m")) -> bool:
+    """report.html of a solved model (a collective call; rank 0 writes): its outer surface gathered with u (and von
+    Mises stress, a P1 field, when given), moved by each of `shapes` ([(label, displacement at the surface's points)]
+    from surface_frames or a run's own gathers; None: u's), coloured by the displacement's magnitude (named and in
+    the unit of `magnitude`) and von Mises stress, its supports and loads marked, shown at `scale` ("1", "10",
+    "100", "auto"). False (and a warning in summary) when the viewer is not installed."""
     if not viewer_installed():
         summary.setdefault("warnings", []).append(
             "report.html left out: its viewer (three.js) is not installed; run setup.sh")
         return False
-    marked = _marked_facets(model)
     from fem_forms.output.fields import boundary_surface
-    surf = boundary_surface(u, von_mises, [facets for _, facets in marked])
+    marked = _marked_facets(model)
+    base = boundary_surface(u, von_mises, [facets for _, facets in marked])
     if model.mesh.comm.rank == 0:
-        points, polys, disp, *rest = surf
-        bits = rest[-1]
+        points, polys, disp, *rest = base
         tris, origin = triangulated(polys)
-        fields = {"|u|": ("m", [np.linalg.norm(disp, axis=1)])}
+        moves = [(label, disp if d is None else d) for label, d in shapes]
+        fields = {magnitude[0]: (magnitude[1], [np.linalg.norm(d, axis=1) for _, d in moves])}
         if von_mises is not None:
             fields["von Mises"] = ("Pa", [rest[0]])
-        marks = [(label, tris[(bits[origin] >> i) & 1 == 1].ravel()) for i, (label, _) in enumerate(marked)]
-        part = ReportPart(points, tris, [("final state", disp)], fields, marks)
-        write_report(out / "report.html", model.scene.title, subtitle, part, summary,
-                     (0.0, 0.0, 1.0) if up is None else up)
+        marks = [(label, tris[(rest[-1][origin] >> i) & 1 == 1].ravel()) for i, (label, _) in enumerate(marked)]
+        write_report(out / "report.html", model.scene.title, subtitle, ReportPart(points, tris, moves, fields, marks),
+                     summary, (0.0, 0.0, 1.0) if up is None else up, scale)
     return True

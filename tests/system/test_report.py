@@ -80,3 +80,43 @@ def test_rows_of_results(tmp_path):
     assert rows == {"a": "1", "b.c": "[1, 2]", "nan": "nan"}
     tris, origin = report.triangulated(np.array([[0, 1, 2, 3]]))
     assert tris.tolist() == [[0, 1, 2], [0, 2, 3]] and origin.tolist() == [0, 0]
+
+
+def _open(page):
+    """The page's DOM after its viewer ran (asserting no viewer error) and a screenshot's share of coloured
+    pixels in the 3D view."""
+    dom = _browser("--dump-dom", page.as_uri()).stdout
+    assert "<title>fem_forms report: ready</title>" in dom and '<p id="error"></p>' in dom, dom[-500:]
+    shot = page.parent / "shot.png"
+    _browser("--window-size=1000,700", f"--screenshot={shot}", page.as_uri())
+    import matplotlib.image
+    pixels = matplotlib.image.imread(shot)[100:480, 150:850, :3]
+    return dom, ((pixels.max(axis=2) - pixels.min(axis=2)) > 0.25).mean()
+
+
+def test_a_modal_page_steps_through_its_modes(tmp_path):
+    scene = dict(SCENE, analysis="modal", load=[], modal={"count": 4})
+    path = tmp_path / "modal.toml"
+    path.write_text(toml_dumps(scene))
+    assert main(["run", str(path), "--out", str(tmp_path / "out"), "-q"]) == 0
+    res = json.loads((tmp_path / "out" / "results.json").read_text())
+    dom, coloured = _open(tmp_path / "out" / "report.html")
+    assert f"mode 1: {res['frequencies_hz'][0]:.4g} Hz" in dom and 'max="3"' in dom        # 4 modes on the slider
+    assert coloured > 0.02 and '<span id="cb-max">1.000</span>' in dom                       # shapes scaled to 1
+
+
+def test_a_dynamic_contact_page_steps_through_time(tmp_path):
+    scene = {"title": "block dropped on a floor", "analysis": "dynamic",
+             "mesh": {"generator": "box", "size": [0.1, 0.1, 0.1], "cells": [2, 2, 2]},
+             "material": {"E": 1e6, "nu": 0.3, "rho": 1000.0}, "discretization": {"degree": 1},
+             "load": [{"type": "gravity"}], "dynamic": {"duration": 0.02, "dt": 2e-3, "output_every": 2},
+             "contact": {"obstacle": [{"name": "floor", "shape": "plane", "point": [0, 0, -1e-3],
+                                       "normal": [0, 0, 1]}]},
+             "output": {"picture": False, "fields": False, "probes": {"c": [0.05, 0.05, 0.1]}}}
+    path = tmp_path / "drop.toml"
+    path.write_text(toml_dumps(scene))
+    assert main(["run", str(path), "--out", str(tmp_path / "out"), "-q"]) == 0
+    res = json.loads((tmp_path / "out" / "results.json").read_text())
+    dom, coloured = _open(tmp_path / "out" / "report.html")
+    assert res["files"]["report"] == "report.html" and coloured > 0.02
+    assert "t = 0.02 s" in dom and "<td>intersection_free</td><td>True</td>" in dom

@@ -18,6 +18,8 @@ from fem_forms.errors import SolveError
 from fem_forms.output import results
 from fem_forms.output.guard import attempt
 from fem_forms.output.interrupts import Interrupts
+from fem_forms.output.pictures import scene_up
+from fem_forms.output.report import write_model_report
 from fem_forms.output.summary import header
 from fem_forms.output.plastic import plastic_summary
 from fem_forms.output.quantities import Quantities
@@ -26,6 +28,8 @@ from fem_forms.scene import Scene
 from fem_forms.solvers.thermal_step import max_value
 
 __all__ = ["DynamicResult", "run", "solve_dynamic"]
+
+REPORT_FRAMES = 100            # report.html shows at most this many of the motion's frames (evenly taken)
 
 
 def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> dict:
@@ -41,7 +45,7 @@ def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> d
         nonlocal writer
         if writer is None:
             writer = MotionWriter(out, system.model.mesh, restart is not None, scene.output.fields,
-                                  scene.output.picture)
+                                  scene.output.picture or scene.output.report)
         writer(system, t, step)
 
     recorder = ImpactRecorder(scene.sound) if scene.sound is not None else None   # [sound.impact]
@@ -85,6 +89,15 @@ def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> d
         if attempt(warnings, "history.png", lambda: write_history_png(out / "history.png", result) or True):
             files["picture"] = "history.png"
     files = comm.bcast(files, root=0)
+    if scene.output.report and writer is not None:
+        shown = writer.frames[::-(-len(writer.frames) // REPORT_FRAMES)] if writer.frames else []
+        subtitle = (f"dynamic ({scene.dynamic.scheme}), {summary['dofs']:,} dofs, {summary['steps']} steps to t = "
+                    f"{summary['time_reached']:.4g} s")
+        if attempt(warnings, "report.html", lambda: write_model_report(
+                result.system.model, result.system.u,
+                [(f"t = {t:.4g} s", surf[2]) for t, surf in shown] or [("final state", None)], None,
+                out, {**summary, "files": files}, subtitle, scene_up(scene))):
+            files["report"] = "report.html"
     summary["files"] = files
     results.write_json_atomic(out / "results.json", summary, comm)
     if echo and comm.rank == 0:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from dolfinx import fem
 from mpi4py import MPI
 import numpy as np
 
@@ -12,6 +13,8 @@ from fem_forms.analyses.static.solve import max_norm
 from fem_forms.analyses.modal.solve import ModalResult, solve_modal
 from fem_forms.output import fields, results, sound
 from fem_forms.output.guard import attempt
+from fem_forms.output.pictures import scene_up
+from fem_forms.output.report import surface_frames, write_model_report
 from fem_forms.scene import Scene
 
 
@@ -55,6 +58,13 @@ def modes_picture(path: Path, result: ModalResult, count: int = 6) -> None:
     comm.barrier()
 
 
+def _unit_shape(mode: fem.Function) -> fem.Function:
+    """A copy of a mode shape scaled to a largest displacement of 1."""
+    shape = fem.Function(mode.function_space, name=mode.name)
+    shape.x.array[:] = mode.x.array / max(max_norm(mode), 1e-300)
+    return shape
+
+
 def write_modal_outputs(result: ModalResult, out: Path) -> dict:
     """Mode shapes (XDMF, P1, unit largest displacement), picture, sound; results.json last."""
 
@@ -84,6 +94,14 @@ def write_modal_outputs(result: ModalResult, out: Path) -> dict:
         if heard is not None:
             summary["sound"] = heard
             files["sound"], files["spectrogram"] = heard["wav"], heard["spectrogram"]
+    if scene.output.report and result.modes:
+        frames = [(f"mode {k + 1}: {hz:.4g} Hz", _unit_shape(f)) for k, (f, hz) in enumerate(
+            zip(result.modes, result.frequencies_hz))]
+        subtitle = f"modal, {summary['dofs']:,} dofs, {len(frames)} modes (shapes scaled: pick a mode with frame)"
+        if attempt(warnings, "report.html", lambda: write_model_report(
+                result.model, frames[0][1], surface_frames(frames), None, out, {**summary, "files": files},
+                subtitle, scene_up(scene), "auto", ("|mode shape|", "largest 1"))):
+            files["report"] = "report.html"
     summary["files"] = files
     results.write_json_atomic(out / "results.json", summary, comm)
     return summary
