@@ -10,7 +10,7 @@ page is left out with a warning (results.json says so); `fem-forms view OUT` ope
 from __future__ import annotations
 
 import base64
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 import json
 import math
 from pathlib import Path
@@ -33,6 +33,7 @@ class ReportPart:
     frames: list = field(default_factory=list)      # [(label, displacement (n, 3))]
     fields: dict = field(default_factory=dict)      # name -> (unit, [values (n,) per frame])
     marks: list = field(default_factory=list)       # [(label, triangle indices)]
+    obstacles: list = field(default_factory=list)   # [{name, shape and its keys}]: the rigid obstacles at rest
 
 
 def viewer_installed() -> bool:
@@ -84,7 +85,8 @@ def result_rows(summary: dict, prefix: str = "", depth: int = 0) -> list[tuple[s
 def write_report(path: Path, title: str, subtitle: str, part: ReportPart, summary: dict, up=(0.0, 0.0, 1.0),
                  scale: str = "1") -> None:
     """The page for `part` and `summary` (results.json's dict) at `path` (written whole, then renamed), its
-    shapes first shown at `scale` ("1": true scale, "10", "100", "auto")."""
+    shapes first shown at `scale` ("1": true scale, "10", "100", "auto"), with the run's plots already in its
+    folder (the PNGs its results.json lists: load path, histories and energies, spectrum, modes) embedded."""
     from fem_forms.output.pictures import VIRIDIS
     data = {
         "subtitle": subtitle, "up": [float(c) for c in up], "scale": scale,
@@ -95,6 +97,8 @@ def write_report(path: Path, title: str, subtitle: str, part: ReportPart, summar
         "marks": [{"label": label, "colour": MARK_COLOURS[i % len(MARK_COLOURS)], "triangles": _b64(t, "<u4")}
                   for i, (label, t) in enumerate(part.marks)],
         "table": result_rows(summary), "warnings": list(summary.get("warnings", [])),
+        "plots": _plots(path.parent, summary.get("files", {})),
+        "obstacles": part.obstacles,
         "viridis": VIRIDIS.round(4).tolist()}
     text = TEMPLATE.read_text().replace("__TITLE__", _html(title))
     for name, url in _viewer_urls().items():
@@ -103,6 +107,16 @@ def write_report(path: Path, title: str, subtitle: str, part: ReportPart, summar
     tmp = path.with_name(path.name + ".tmp")
     tmp.write_text(text)
     tmp.replace(path)
+
+
+def _plots(folder: Path, files: dict) -> list[dict]:
+    """The run's PNG plots (not its deformed-part picture: the page shows the part) as data URLs, with names."""
+    out = []
+    for key, name in files.items():
+        p = folder / str(name)
+        if str(name).endswith(".png") and name != "deformed.png" and p.is_file():
+            out.append({"name": name, "src": "data:image/png;base64," + base64.b64encode(p.read_bytes()).decode()})
+    return out
 
 
 def _html(text: str) -> str:
@@ -114,6 +128,25 @@ def triangulated(polys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     if polys.shape[1] == 3:
         return polys, np.arange(len(polys))
     return np.vstack([polys[:, [0, 1, 2]], polys[:, [0, 2, 3]]]), np.tile(np.arange(len(polys)), 2)
+
+
+def obstacles(scene) -> list[dict]:
+    """The scene's rigid obstacles as the page draws them (where they start): a plane, a sphere, a box, a cylinder
+    by their keys; a surface file by its triangles."""
+    if scene.contact is None:
+        return []
+    from fem_forms.meshes.surfaces import read_surface
+    out = []
+    for ob in scene.contact.obstacle:
+        keys = asdict(ob)
+        row = {"name": ob.name, "shape": ob.shape,
+               **{k: keys[k] for k in ("point", "normal", "center", "radius", "min", "max", "axis")
+                  if keys.get(k) is not None}}
+        if ob.shape == "file":
+            points, triangles = read_surface(Path(ob.file), f"contact.obstacle {ob.name}.file")
+            row["points"], row["triangles"] = _b64(points, "<f4"), _b64(triangles, "<u4")
+        out.append(row)
+    return out
 
 
 def _marked_facets(model) -> list[tuple[str, np.ndarray]]:
@@ -164,6 +197,7 @@ def write_model_report(model, u, shapes: list, von_mises, out: Path, summary: di
         if von_mises is not None:
             fields["von Mises"] = ("Pa", [rest[0]])
         marks = [(label, tris[(rest[-1][origin] >> i) & 1 == 1].ravel()) for i, (label, _) in enumerate(marked)]
-        write_report(out / "report.html", model.scene.title, subtitle, ReportPart(points, tris, moves, fields, marks),
+        write_report(out / "report.html", model.scene.title, subtitle,
+                     ReportPart(points, tris, moves, fields, marks, obstacles(model.scene)),
                      summary, (0.0, 0.0, 1.0) if up is None else up, scale)
     return True

@@ -1,7 +1,8 @@
 """report.html in a real browser (headless Chromium, which setup.sh installs for the suite): a static run's page
 opens with no viewer error, its canvas shows the part in the colours of its colour bar, the bar's range is the
 run's |u| range, the results table and the supports' legend are there; without three.js the page is left out with
-a warning; `fem-forms view` names it."""
+a warning; `fem-forms view` names it; a modal page steps through its modes, a dynamic contact page through
+time with its obstacle drawn."""
 import json
 import shutil
 import subprocess
@@ -120,3 +121,4 @@ def test_a_dynamic_contact_page_steps_through_time(tmp_path):
     dom, coloured = _open(tmp_path / "out" / "report.html")
     assert res["files"]["report"] == "report.html" and coloured > 0.02
     assert "t = 0.02 s" in dom and "<td>intersection_free</td><td>True</td>" in dom
+    assert "obstacle floor" in dom and "history.png" not in dom              # picture = false: no plot to embed
