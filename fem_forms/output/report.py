@@ -21,6 +21,7 @@ import numpy as np
 THREE = Path(sys.prefix) / "share" / "fem_forms" / "three"        # setup.sh unpacks three.js here
 THREE_FILES = ("three.module.js", "three.core.js", "OrbitControls.js")
 TEMPLATE = Path(__file__).with_name("report_page.html")
+FRAME_BYTES = 12e6             # report.html's frames (displacements, magnitudes) share this; a page stays < 20 MB
 MARK_COLOURS = ("#1565c0", "#c62828", "#2e7d32", "#6a1b9a", "#ef6c00", "#00838f")   # supports blue, loads red, ...
 
 
@@ -164,6 +165,17 @@ def _marked_facets(model) -> list[tuple[str, np.ndarray]]:
     return out
 
 
+def within_budget(frames: list, points: int, budget: float = FRAME_BYTES) -> list:
+    """As many frames as fit `budget` bytes (a point's displacement and magnitude: 16 bytes, 4/3 of it in base64),
+    evenly spread from the first to the last: a long motion of a large part stays a page to send."""
+    fit = max(1, int(budget // (16 * points * 4 / 3)))
+    if len(frames) <= fit:
+        return frames
+    if fit == 1:
+        return frames[-1:]
+    return [frames[i] for i in sorted(set(np.linspace(0, len(frames) - 1, fit).round().astype(int).tolist()))]
+
+
 def surface_frames(frames: list) -> list:
     """[(label, Function)] -> [(label, displacement of the gathered surface's points)] on rank 0 (a collective
     call; the same points' order as every boundary_surface gather of that mesh)."""
@@ -192,7 +204,7 @@ def write_model_report(model, u, shapes: list, von_mises, out: Path, summary: di
     if model.mesh.comm.rank == 0:
         points, polys, disp, *rest = base
         tris, origin = triangulated(polys)
-        moves = [(label, disp if d is None else d) for label, d in shapes]
+        moves = within_budget([(label, disp if d is None else d) for label, d in shapes], len(points))
         fields = {magnitude[0]: (magnitude[1], [np.linalg.norm(d, axis=1) for _, d in moves])}
         if von_mises is not None:
             fields["von Mises"] = ("Pa", [rest[0]])

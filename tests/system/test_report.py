@@ -75,6 +75,13 @@ def test_view_names_the_page(run, capsys, monkeypatch):
     assert "no report.html there" in capsys.readouterr().err
 
 
+def test_a_long_motion_of_a_large_part_keeps_within_the_budget():
+    frames = [(f"t{i}", i) for i in range(500)]
+    kept = report.within_budget(frames, points=100_000)                 # 2.1 MB a frame: 5 of them in 12 MB
+    assert len(kept) <= 6 and kept[0] == frames[0] and kept[-1] == frames[-1]
+    assert report.within_budget(frames[:3], points=100) == frames[:3]
+
+
 def test_rows_of_results(tmp_path):
     rows = dict(report.result_rows({"a": 1, "b": {"c": [1.0, 2.0]}, "warnings": ["x"], "long": list(range(9)),
                                     "nan": float("nan")}))
