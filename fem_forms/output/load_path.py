@@ -20,6 +20,7 @@ import numpy as np
 from fem_forms.output import fields, probes, results
 from fem_forms.output.guard import attempt
 from fem_forms.output.plastic import plastic_fields
+from fem_forms.output.report import surface_frames
 from fem_forms.output.quantities import Quantities, output_fields
 from fem_forms.output.reactions import support_forces
 from fem_forms.output.summary import header
@@ -59,6 +60,7 @@ class LoadPath:
         self.files: dict[str, str] = {}        # what is complete on disk
         self.last: dict | None = None          # the last accepted step as written (rank 0 answers from it)
         self.finished = False                  # the final results.json is being written: no interrupted one
+        self.shapes: list = []                 # each step's surface displacement for report.html (rank 0)
 
     def attach(self, model, span: float, interrupts=None) -> None:
         self.model, self.span, self.interrupts = model, span, interrupts
@@ -87,6 +89,8 @@ class LoadPath:
             if self.comm.rank == 0:
                 self.out.mkdir(parents=True, exist_ok=True)
             self.comm.barrier()
+        if self.stepping and self.scene.output.report:
+            self.shapes += surface_frames([(f"load factor {lam:.4g}", model.u)])
         if self.stepping:
             self._write_fields(lam * self.span)
             probes.write_table(self.out / "probes.csv", self.head(), self.rows, self.comm)

@@ -206,8 +206,8 @@ def write_model_report(model, u, shapes: list, von_mises, out: Path, summary: di
         tris, origin = triangulated(polys)
         moves = within_budget([(label, disp if d is None else d) for label, d in shapes], len(points))
         fields = {magnitude[0]: (magnitude[1], [np.linalg.norm(d, axis=1) for _, d in moves])}
-        if von_mises is not None:
-            fields["von Mises"] = ("Pa", [rest[0]])
+        if von_mises is not None:                    # known at the end only: shown with the last frame
+            fields["von Mises" if len(moves) == 1 else "von Mises (last frame)"] = ("Pa", [rest[0]])
         marks = [(label, tris[(rest[-1][origin] >> i) & 1 == 1].ravel()) for i, (label, _) in enumerate(marked)]
         write_report(out / "report.html", model.scene.title, subtitle,
                      ReportPart(points, tris, moves, fields, marks, obstacles(model.scene)),

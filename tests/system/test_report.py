@@ -15,7 +15,8 @@ from fem_forms.output import report
 from helpers import beam_scene, toml_dumps
 
 SCENE = beam_scene(output={"probes": {"tip": [1.0, 0.05, 0.05]}, "picture": False, "fields": ["displacement",
-                                                                                               "von_mises"]})
+                                                                                               "von_mises"]},
+                   solver={"steps": 2, "max_step": 0.5})
 BROWSER = ["--headless=new", "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
            "--virtual-time-budget=8000"]
 
@@ -43,6 +44,8 @@ def test_the_page_shows_the_part_its_colour_bar_and_numbers(run):
     assert "<title>fem_forms report: ready</title>" in dom and '<p id="error"></p>' in dom
     assert f"<td>max_displacement</td><td>{res['max_displacement']:.6g}</td>" in dom
     assert "support fix0" in dom and ">|u| (m)<" in dom
+    assert 'max="1"' in dom and "load factor 1</span>" in dom            # two load steps on the slider, the last shown
+    assert "von Mises (last frame)" in dom
     top = float(dom.split('<span id="cb-max">')[1].split("<")[0])
     assert top == pytest.approx(res["max_displacement"], rel=1e-3)          # the bar spans the run's |u|
     shot = page.parent / "shot.png"
@@ -103,7 +106,7 @@ def _open(page):
 
 
 def test_a_modal_page_steps_through_its_modes(tmp_path):
-    scene = dict(SCENE, analysis="modal", load=[], modal={"count": 4})
+    scene = dict(SCENE, analysis="modal", load=[], modal={"count": 4}, solver={})
     path = tmp_path / "modal.toml"
     path.write_text(toml_dumps(scene))
     assert main(["run", str(path), "--out", str(tmp_path / "out"), "-q"]) == 0

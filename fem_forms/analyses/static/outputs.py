@@ -82,8 +82,8 @@ def write_static_outputs(result: StaticResult, out: "Path", path: LoadPath | Non
         subtitle = (f"static, {summary['dofs']:,} dofs, {summary['load_steps']} load steps, max |u| "
                     f"{summary['max_displacement']:.4g} m")
         if attempt(summary["warnings"], "report.html", lambda: write_model_report(
-                result.model, result.u, [("final state", None)], vm, out, {**summary, "files": files}, subtitle,
-                pictures.scene_up(scene))):
+                result.model, result.u, (path.shapes if path is not None else []) or [("final state", None)], vm,
+                out, {**summary, "files": files}, subtitle, pictures.scene_up(scene))):
             files["report"] = "report.html"
     summary["files"] = files
     if path is not None:
