@@ -1,7 +1,8 @@
-"""What a scene file may ask for without the user's say-so: caps on mesh cells, load steps, time steps, modes,
-probes, sound samples and obstacle triangles, and on the scene file itself (its size and nesting, checked before
-and while it is parsed). A shared scene is data: it cannot make a run that fills a 24 GB machine or runs for days
-unless the user lifts the caps with `--no-limits` (Python: `Scene.from_file(path, limits=NO_LIMITS)`).
+"""What a scene file may ask for without the user's say-so: caps on mesh cells, load steps (and their halvings),
+iterations, time steps, modes, probes, sound samples and obstacle triangles, and on the scene file itself (its size
+and nesting, checked before and while it is parsed). A shared scene is data: it cannot make a run that fills a 24 GB
+machine or runs for days unless the user lifts the caps with `--no-limits` (Python: `Scene.from_file(path,
+limits=NO_LIMITS)`).
 
 Each cap sits well above what this package's demos, benchmarks and verification cases use, and below what a
 24 GB machine can hold (2 million P2 tetrahedra on the iterative path: about 8 million dofs, 2.7 GiB per million
