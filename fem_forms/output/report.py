@@ -10,6 +10,7 @@ page is left out with a warning (results.json says so); `fem-forms view OUT` ope
 from __future__ import annotations
 
 import base64
+import functools
 from dataclasses import asdict, dataclass, field
 import json
 import math
@@ -45,6 +46,7 @@ def _module_url(text: str) -> str:
     return "data:text/javascript;base64," + base64.b64encode(text.encode()).decode()
 
 
+@functools.lru_cache(maxsize=1)
 def _viewer_urls() -> dict:
     """The three.js modules as data URLs for the page's import map; three.module.js imports its core by a relative
     path, which a data URL cannot resolve: it is pointed at the map's name for it."""
@@ -151,17 +153,23 @@ def obstacles(scene) -> list[dict]:
 
 
 def _marked_facets(model) -> list[tuple[str, np.ndarray]]:
-    """(label, local facet indices) of each support and load acting on facets: what the page marks."""
+    """(label, local facet indices) of each support and load acting on facets: what the page marks. A selector
+    the solve took cannot fail here; should one (a body load's cells), it is left unmarked, not the run failed."""
+    from fem_forms.errors import InputError
     from fem_forms.physics.supports import locate_facets
     from fem_forms.scene.selectors import AREA_SELECTORS
     from fem_forms.scene.spec import fix_names
-    scene, out = model.scene, []
-    for name, fix in zip(fix_names(scene.fix), scene.fix):
-        if fix.where.kind in AREA_SELECTORS:
-            out.append((f"support {name}", locate_facets(model.loaded, fix.where)))
-    for i, load in enumerate(scene.load):
-        if load.where is not None and load.where.kind in AREA_SELECTORS:
-            out.append((f"{load.type} load[{i}]", locate_facets(model.loaded, load.where)))
+    scene = model.scene
+    wanted = [(f"support {name}", fix.where) for name, fix in zip(fix_names(scene.fix), scene.fix)]
+    wanted += [(f"{load.type} load[{i}]", load.where) for i, load in enumerate(scene.load)
+               if load.type != "gravity" and load.where is not None]      # gravity's `where` names cells
+    out = []
+    for label, where in wanted:
+        if where.kind in AREA_SELECTORS:
+            try:
+                out.append((label, locate_facets(model.loaded, where)))
+            except InputError:                 # the same verdict on every rank (locate_facets reduces)
+                continue
     return out
 
 

@@ -103,7 +103,7 @@ def test_time_column_follows_the_load_history(tmp_path, capsys):
 def test_single_step_run_keeps_its_outputs(tmp_path, capsys):
     code, res, err, out = run_scene(tmp_path, bar(steps=1), capsys)
     assert code == 0 and res["load_steps"] == 1
-    assert set(res["files"]) == {"fields", "picture", "surface", "newton_history"}
+    assert set(res["files"]) == {"fields", "picture", "surface", "newton_history", "report"}
     assert not (out / "probes.csv").exists() and not (out / "load_path.png").exists()
     assert xdmf_times(out / "fields.xdmf") == {"displacement": [0.0], "von_mises": [0.0]}   # as before
 
