@@ -26,6 +26,8 @@ from fem_forms.output.reactions import support_forces
 from fem_forms.output.summary import header
 from fem_forms.scene.spec import fix_names
 
+REPORT_STEPS = 50              # report.html shows about this many of a stepped run's load steps, and the last
+
 
 def field_functions(model, quantities: Quantities, names: list[str]) -> list:
     """The fields a static run writes: the asked-for ones, the plastic ones and the temperature, if any."""
@@ -60,7 +62,8 @@ class LoadPath:
         self.files: dict[str, str] = {}        # what is complete on disk
         self.last: dict | None = None          # the last accepted step as written (rank 0 answers from it)
         self.finished = False                  # the final results.json is being written: no interrupted one
-        self.shapes: list = []                 # each step's surface displacement for report.html (rank 0)
+        self.shapes: list = []                 # steps' surface displacements for report.html (rank 0), the
+        self._next_shape = 0.0                 # final state's not among them (the report gathers it)
 
     def attach(self, model, span: float, interrupts=None) -> None:
         self.model, self.span, self.interrupts = model, span, interrupts
@@ -89,7 +92,8 @@ class LoadPath:
             if self.comm.rank == 0:
                 self.out.mkdir(parents=True, exist_ok=True)
             self.comm.barrier()
-        if self.stepping and self.scene.output.report:
+        if self.stepping and self.scene.output.report and self._next_shape <= lam < 1.0 - 1e-12:
+            self._next_shape = lam + 1.0 / REPORT_STEPS         # a gather of the surface: about 50 in a run
             self.shapes += surface_frames([(f"load factor {lam:.4g}", model.u)])
         if self.stepping:
             self._write_fields(lam * self.span)

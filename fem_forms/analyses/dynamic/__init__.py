@@ -29,7 +29,7 @@ from fem_forms.solvers.thermal_step import max_value
 
 __all__ = ["DynamicResult", "run", "solve_dynamic"]
 
-REPORT_FRAMES = 100            # report.html shows at most this many of the motion's frames (evenly taken)
+REPORT_FRAMES = 50             # report.html shows about this many of the motion's frames (evenly in time)
 
 
 def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> dict:
@@ -45,7 +45,8 @@ def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> d
         nonlocal writer
         if writer is None:
             writer = MotionWriter(out, system.model.mesh, restart is not None, scene.output.fields,
-                                  scene.output.picture or scene.output.report)
+                                  scene.output.picture,
+                                  scene.dynamic.duration / REPORT_FRAMES if scene.output.report else None)
         writer(system, t, step)
 
     recorder = ImpactRecorder(scene.sound) if scene.sound is not None else None   # [sound.impact]
@@ -95,7 +96,8 @@ def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> d
                     f"{summary['time_reached']:.4g} s")
         if attempt(warnings, "report.html", lambda: write_model_report(
                 result.system.model, result.system.u,
-                [(f"t = {t:.4g} s", surf[2]) for t, surf in shown] or [("final state", None)], None,
+                [(f"t = {t:.4g} s", surf[2]) for t, surf in shown if t < summary["time_reached"]]
+                + [(f"t = {summary['time_reached']:.4g} s", None)], None,
                 out, {**summary, "files": files}, subtitle, scene_up(scene))):
             files["report"] = "report.html"
     summary["files"] = files

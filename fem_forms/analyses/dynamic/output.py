@@ -53,11 +53,14 @@ def padded(row: list, width: int) -> list:
 
 
 class MotionWriter:
-    """Frames every output_every steps: the XDMF time series and the GIF's boundary snapshots."""
+    """Frames every output_every steps: the XDMF time series and the GIF's boundary snapshots; for report.html
+    alone, a snapshot only every `report_every` seconds of simulated time (each is a gather of the surface)."""
 
-    def __init__(self, out: Path, mesh, append: bool, with_fields: bool, with_picture: bool):
+    def __init__(self, out: Path, mesh, append: bool, with_fields: bool, with_picture: bool,
+                 report_every: float | None = None):
         self.mesh, self.frames = mesh, []
         self.with_picture = with_picture
+        self.report_every, self._next_report = report_every, -float("inf")
         self.xdmf = None
         if with_fields:
             path = out / "motion.xdmf"
@@ -79,8 +82,11 @@ class MotionWriter:
                 self.xdmf.write_function(g, t)
             for f in system.model.terms.output_fields():    # the terms' own (the damage, P1)
                 self.xdmf.write_function(f, t)
-        if self.with_picture:
-            surf = fields.boundary_surface(system.u)
+        due = self.report_every is not None and t >= self._next_report - 1e-12 * abs(t)
+        if self.with_picture or due:
+            if due:
+                self._next_report = t + self.report_every
+            surf = fields.boundary_surface(system.u)       # collective; rank 0 keeps it
             if surf is not None:
                 self.frames.append((t, surf))
 

@@ -82,7 +82,8 @@ def write_static_outputs(result: StaticResult, out: "Path", path: LoadPath | Non
         subtitle = (f"static, {summary['dofs']:,} dofs, {summary['load_steps']} load steps, max |u| "
                     f"{summary['max_displacement']:.4g} m")
         if attempt(summary["warnings"], "report.html", lambda: write_model_report(
-                result.model, result.u, (path.shapes if path is not None else []) or [("final state", None)], vm,
+                result.model, result.u, (path.shapes if path is not None else [])
+                + [(f"load factor {summary.get('load_reached', 1.0):.4g}", None)], vm,
                 out, {**summary, "files": files}, subtitle, pictures.scene_up(scene))):
             files["report"] = "report.html"
     summary["files"] = files
