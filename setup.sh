@@ -9,7 +9,9 @@ cd "$(dirname "$0")"
 pkgs="python3-dolfinx python3-dolfinx-real python3-ufl python3-petsc4py python3-slepc4py python3-gmsh
 python3-meshio python3-pytest python3-mpi4py openmpi-bin libopenblas0-pthread python3-matplotlib
 python3-scipy python3-pil python3-jsonschema python3-venv python3-setuptools python3-pip python3-pytest-xdist
-python3-sphinx python3-myst-parser furo clang npm chromium fonts-dejavu-core"
+python3-sphinx python3-myst-parser furo clang chromium fonts-dejavu-core"
+# npm (to fetch three.js, below): Debian's, unless the machine has one already (Node.js from elsewhere ships its own)
+command -v npm >/dev/null 2>&1 || pkgs="$pkgs npm"
 missing=""
 for p in $pkgs; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing="$missing $p"
