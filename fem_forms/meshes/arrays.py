@@ -86,10 +86,15 @@ def compact(a: MeshArrays) -> MeshArrays:
 def outward_normals(points: np.ndarray, cells: np.ndarray, facets: np.ndarray) -> np.ndarray:
     """Unit normals (n, 3) of boundary triangles (vertex indices into points) of a tetrahedral mesh given as
     arrays, pointing out of the tetrahedron each bounds (before the mesh is distributed: a CAD face's normal)."""
+    if not len(facets):
+        return np.zeros((0, 3))
+    wanted = {tuple(sorted(f[:3].tolist())) for f in facets}
     opposite = {}
-    for c in cells:
+    for c in cells.tolist():                       # the boundary's facets only: one tetrahedron each
         for i in range(4):
-            opposite[tuple(sorted(np.delete(c, i).tolist()))] = c[i]
+            key = tuple(sorted(c[:i] + c[i + 1:]))
+            if key in wanted:
+                opposite[key] = c[i]
     tri = points[facets[:, :3]]
     n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
     n /= np.maximum(np.linalg.norm(n, axis=1), np.finfo(float).tiny)[:, None]

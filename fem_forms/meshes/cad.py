@@ -73,6 +73,11 @@ def _group_faces(gmsh) -> list[int]:
 def face_table(gmsh, arrays: MeshArrays, scale: float) -> list[dict]:
     """Every CAD face: its number, its group (face<N>), its CAD name where the file gives one, its area (m^2),
     centroid (m) and, when flat, its outward normal (from its mesh facets and the tetrahedra they bound)."""
+    groups = {name: f for name, f in arrays.facet_groups.items() if len(f)}
+    every = np.vstack(list(groups.values())) if groups else np.zeros((0, 3), dtype=np.int64)
+    normals = outward_normals(arrays.points, arrays.cells, every)      # one pass over the cells for every face
+    starts = np.cumsum([0] + [len(f) for f in groups.values()])
+    by_group = {name: normals[a:b] for name, a, b in zip(groups, starts[:-1], starts[1:])}
     rows = []
     for tag in sorted(t for _, t in gmsh.model.getEntities(2)):
         row = {"face": tag, "group": f"face{tag}", "area": gmsh.model.occ.getMass(2, tag) * scale**2,
@@ -80,9 +85,8 @@ def face_table(gmsh, arrays: MeshArrays, scale: float) -> list[dict]:
         name = _cad_name(gmsh, 2, tag)
         if name:
             row["name"] = name
-        facets = arrays.facet_groups.get(f"face{tag}")
-        if facets is not None and len(facets):
-            n = outward_normals(arrays.points, arrays.cells, facets)
+        n = by_group.get(f"face{tag}")
+        if n is not None:
             mean = n.mean(axis=0) / np.linalg.norm(n.mean(axis=0))
             if np.all(n @ mean >= 1.0 - FLAT):
                 row["normal"] = [round(float(c), 12) + 0.0 for c in mean]

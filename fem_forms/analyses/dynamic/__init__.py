@@ -90,16 +90,9 @@ def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> d
         if attempt(warnings, "history.png", lambda: write_history_png(out / "history.png", result) or True):
             files["picture"] = "history.png"
     files = comm.bcast(files, root=0)
-    if scene.output.report and writer is not None:
-        shown = writer.frames[::-(-len(writer.frames) // REPORT_FRAMES)] if writer.frames else []
-        subtitle = (f"dynamic ({scene.dynamic.scheme}), {summary['dofs']:,} dofs, {summary['steps']} steps to t = "
-                    f"{summary['time_reached']:.4g} s")
-        if attempt(warnings, "report.html", lambda: write_model_report(
-                result.system.model, result.system.u,
-                [(f"t = {t:.4g} s", surf[2]) for t, surf in shown if t < summary["time_reached"]]
-                + [(f"t = {summary['time_reached']:.4g} s", None)], None,
-                out, {**summary, "files": files}, subtitle, scene_up(scene))):
-            files["report"] = "report.html"
+    if scene.output.report and writer is not None and attempt(
+            warnings, "report.html", lambda: _report(result, writer.frames, summary, files, out)):
+        files["report"] = "report.html"
     summary["files"] = files
     results.write_json_atomic(out / "results.json", summary, comm)
     if echo and comm.rank == 0:
@@ -114,6 +107,17 @@ def run(scene: Scene, out, echo: bool = False, restart: Path | None = None) -> d
     if result.failure is not None:
         raise SolveError(f"{scene.title}: {result.failure}")
     return summary
+
+
+def _report(result: DynamicResult, frames: list, summary: dict, files: dict, out: Path) -> bool:
+    """report.html of the motion: about REPORT_FRAMES of its frames (rank 0's gathered surfaces), the end last."""
+    scene, end = result.system.scene, summary["time_reached"]
+    shown = frames[::-(-len(frames) // REPORT_FRAMES)] if frames else []
+    subtitle = (f"dynamic ({scene.dynamic.scheme}), {summary['dofs']:,} dofs, {summary['steps']} steps to t = "
+                f"{end:.4g} s")
+    shapes = [(f"t = {t:.4g} s", surf[2]) for t, surf in shown if t < end] + [(f"t = {end:.4g} s", None)]
+    return write_model_report(result.system.model, result.system.u, shapes, None, out, {**summary, "files": files},
+                              subtitle, scene_up(scene))
 
 
 def end_state(result: DynamicResult) -> dict:
