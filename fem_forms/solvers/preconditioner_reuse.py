@@ -34,6 +34,14 @@ _SET_LAG = _petsc_library()
 REBUILD_ONCE, KEEP = -2, -1          # PETSc's lag values: rebuild at this Jacobian only / never rebuild
 
 
+def set_lag(snes: PETSc.SNES, lag: int) -> bool:
+    """SNESSetLagPreconditioner(snes, lag) (KEEP: never rebuild, REBUILD_ONCE); False where it is unavailable."""
+    if _SET_LAG is None:
+        return False
+    _SET_LAG(ctypes.c_void_p(snes.handle), lag)
+    return True
+
+
 class PreconditionerReuse:
     """Decides at every Jacobian of an SNES solve whether the Krylov solver rebuilds its preconditioner.
 
@@ -71,8 +79,7 @@ class PreconditionerReuse:
             setup, per_it, fresh_its = self._fresh
             extra = self._last[2] - fresh_its
             rebuild = bool(extra * max(per_it, self._last[1]) > setup)
-        if self.available:
-            _SET_LAG(ctypes.c_void_p(self.snes.handle), REBUILD_ONCE if rebuild else KEEP)
+        set_lag(self.snes, REBUILD_ONCE if rebuild else KEEP)
         self.rebuilds += rebuild
         self._reused_now = not rebuild
         self._t_operator = time.perf_counter()
