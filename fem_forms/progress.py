@@ -4,7 +4,8 @@ The solvers call ``report(event, **fields)``; what is shown, where and how (one 
 terminal, plain lines otherwise, nothing with --quiet or in the Python API by default) is the reporter's
 business. Events: "load_step" (load, step), "newton" (load, iteration, residual), "step_accepted"
 (load, iterations), "step_rejected" (load, why), "time_step" (time, dt, step, total_time, iterations: an
-accepted time step), "march_done" (time, steps, rejected, failed: a time march ended or gave up), "solve_done"
+accepted time step), "step_refined" (time, dt, why: an accepted time step redone shorter for a contact event),
+"march_done" (time, steps, rejected, failed: a time march ended or gave up), "solve_done"
 (converged; a solve ended, so a terminal status line can be cleared before results are printed), "selected"
 (key, facets: how many boundary facets a selector took).
 The reporter shown to users is fem_forms.output.progress_line.ProgressLine.

@@ -129,6 +129,11 @@ class Term:
         """Energies this term stores at x, by the energy account's column (`energy_columns`)."""
         return {}
 
+    def step_event(self, x: PETSc.Vec) -> str:
+        """What happened to this term over the time step ending at x that the march resolves with shorter steps
+        ('impact', 'stick-slip': contact), or '' (the same on every rank)."""
+        return ""
+
     def step_dissipation(self, x: PETSc.Vec) -> float:
         """Energy this term dissipated over the current step up to x (J), for the energy account."""
         return 0.0

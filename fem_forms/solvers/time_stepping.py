@@ -26,6 +26,7 @@ class StepOutcome:
     iterations: int = 0            # Newton iterations (0 for an explicit step)
     why: str = ""                  # why it was rejected
     error: float = math.nan        # local error estimate relative to the tolerance's scale (adaptive)
+    event: str = ""                # what happened over the step that shorter steps resolve ("impact", "stick-slip")
 
 
 class Stepper(Protocol):
@@ -42,21 +43,30 @@ class MarchReport:
     dt_max: float = 0.0
     newton_iterations: int = 0
     rejected: int = 0
+    refined: int = 0               # accepted steps redone shorter for an event (refine_events)
+    next_dt: float = 0.0           # the step the march takes next (a checkpoint's, so a restart goes on alike)
 
 
 def march(stepper: Stepper, t0: float, t_end: float, dt: float, on_accept: Callable[[float, float, int], None],
           *, adaptive: bool = False, tolerance: float = 1e-3, max_cutbacks: int = 10, step0: int = 0,
-          report: MarchReport | None = None, dt_max: float | None = None, stops: tuple = ()) -> MarchReport:
+          report: MarchReport | None = None, dt_max: float | None = None, stops: tuple = (),
+          refine_events: int = 0, first_dt: float | None = None) -> MarchReport:
     """Advance from t0 to t_end. After a rejected step dt is halved (at most `max_cutbacks` times in a
     row, and never below the floor dt / 2^max_cutbacks, `dt` the asked-for step: then SolveError, so a
     step that keeps being cut gives up in bounded time instead of creeping on); with `adaptive`, a step whose error estimate exceeds 2 x tolerance is redone
     smaller and dt follows 0.9 (tolerance / error)^(1/3) (third-order local error), within [dt/2, 2 dt]
     and below dt_max. Every time in `stops` (the corners of load and temperature histories) is a step end,
-    so that no step, cut back or not, steps over a peak. on_accept(t, dt, step) runs after each accepted step."""
+    so that no step, cut back or not, steps over a peak. With `refine_events` N, a step whose outcome tells an
+    event (an impact, a stick-slip transition) is undone and redone at a quarter of its length, down to
+    dt / 2^N, so that the event falls in a short step; the steps then double back. `first_dt`: the first step's
+    size (a restart's next_dt; floors stay dt's). on_accept(t, dt, step) runs after each accepted step, with
+    report.next_dt already the next step's size."""
     rep = report or MarchReport()
     t, cuts, step = t0, 0, step0
     dt_max = dt_max or dt
     dt_floor = dt / 2.0 ** max_cutbacks
+    event_floor = dt / 2.0 ** refine_events
+    dt = first_dt or dt
     eps = 1e-12 * max(t_end, 1.0)
     while t < t_end - eps:
         end = min([t_end] + [s for s in stops if s > t + 1e-9 * dt])
@@ -68,6 +78,12 @@ def march(stepper: Stepper, t0: float, t_end: float, dt: float, on_accept: Calla
             stepper.undo()
             out = StepOutcome(False, out.iterations, f"local error {out.error:.3g} > 2 x tolerance")
         rep.newton_iterations += out.iterations
+        if out.accepted and out.event and refine_events and h > event_floor * (1 + 1e-9):
+            stepper.undo()
+            rep.refined += 1
+            dt = max(0.25 * h, event_floor)
+            progress.report("step_refined", time=t, dt=dt, why=out.event)
+            continue
         if not out.accepted:
             rep.rejected += 1
             cuts += 1
@@ -88,13 +104,14 @@ def march(stepper: Stepper, t0: float, t_end: float, dt: float, on_accept: Calla
         step += 1
         rep.steps, rep.time_reached = rep.steps + 1, t
         rep.dt_min, rep.dt_max = min(rep.dt_min, h), max(rep.dt_max, h)
-        on_accept(t, h, step)                   # booked (and written) before it is said to be accepted
-        progress.report("time_step", time=t, dt=h, step=step, total_time=t_end, iterations=out.iterations)
         if adaptive and math.isfinite(out.error):
             factor = 0.9 * (tolerance / max(out.error, 1e-300)) ** (1 / 3)
             dt = min(dt_max, h * min(2.0, max(0.5, factor)))
         else:
             dt = min(dt_max, max(dt, 2 * h))        # back towards the asked-for step after a cut
+        rep.next_dt = dt
+        on_accept(t, h, step)                   # booked (and written) before it is said to be accepted
+        progress.report("time_step", time=t, dt=h, step=step, total_time=t_end, iterations=out.iterations)
     progress.report("march_done", time=t, steps=rep.steps, rejected=rep.rejected)
     return rep
 

@@ -30,7 +30,8 @@ def save(folder: Path, result, t: float, step: int, dt: float) -> None:
         r = result.report
         meta = {"ranks": comm.size, "time": t, "step": step, "dt": dt,
                 "report": {"steps": r.steps, "time_reached": r.time_reached, "dt_min": r.dt_min,
-                           "dt_max": r.dt_max, "newton_iterations": r.newton_iterations, "rejected": r.rejected},
+                           "dt_max": r.dt_max, "newton_iterations": r.newton_iterations, "rejected": r.rejected,
+                           "refined": r.refined},
                 "energies": [[tt, e.row()] for tt, e in result.energy.history],
                 "probe_rows": result.probe_rows, "wall_time_s": result.elapsed(),
                 "terms": system.model.terms.saved()}

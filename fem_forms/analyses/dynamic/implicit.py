@@ -106,6 +106,7 @@ class ImplicitStepper:
         self.last_why = ""
         self.krylov_iterations = self.preconditioner_builds = 0
         self.u_scale = 0.0                         # the largest displacement seen (the error estimate's scale)
+        self.watch_events = system.scene.contact is not None and system.scene.dynamic.refine_events > 0
 
     @property
     def motion(self) -> "ImplicitStepper":
@@ -164,9 +165,11 @@ class ImplicitStepper:
                            old["acceleration"].x.array)
         s.v.x.array[:] = v
         s.a.x.array[:] = a
-        # the error estimate (two reductions over ranks) only where the march uses it
+        # the error estimate (two reductions over ranks) only where the march uses it; contact's events where it
+        # refines them
         return StepOutcome(True, rec.iterations,
-                           error=self.error_estimate(dt) if s.scene.dynamic.adaptive else math.nan)
+                           error=self.error_estimate(dt) if s.scene.dynamic.adaptive else math.nan,
+                           event=s.model.terms.step_event(s.u.vector) if self.watch_events else "")
 
     def _plain_start(self) -> None:
         """The predictor itself left the domain (a NaN before the first iteration: a contact's chatter left a

@@ -42,7 +42,7 @@ class DynamicResult:
     solver: dict = field(default_factory=dict)        # the implicit step's linear solver and its totals
     failure: str | None = None                        # why the march gave up (results.json converged false)
     strength: dict | None = None                      # the lowest safety factor over the accepted steps
-    last_accepted: tuple | None = None                # (t, step, dt) of the last accepted, committed step
+    last_accepted: tuple | None = None                # (t, step, next dt) at the last accepted, committed step
     probe_columns: list | None = None                 # probes.csv's header, found once
     keepers: tuple = ()                               # step hooks whose history a checkpoint carries (saved/restore)
     started: float = field(default_factory=time.perf_counter)   # this process's start of the run
@@ -63,7 +63,7 @@ class DynamicResult:
             "materials": s.model.materials_report(),
             "steps": r.steps, "time_reached": r.time_reached,
             "dt_min": r.dt_min if r.steps else None, "dt_max": r.dt_max if r.steps else None,
-            "rejected_steps": r.rejected, "newton_iterations": r.newton_iterations,
+            "rejected_steps": r.rejected, "refined_steps": r.refined, "newton_iterations": r.newton_iterations,
             "energy_balance_error": self.energy.balance_error(self.energy.round_off_floor()),
             "energy_imbalance": self.energy.imbalance(),
             "energy_final": {c: self.energy.now.value(c) for c in self.energy.columns()},
@@ -270,7 +270,7 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
             system.state.commit()
             state["t"] = t
             result.probe_rows.append(probe_row(points, system, t, reactions))
-            result.last_accepted = (t, step, h)
+            result.last_accepted = (t, step, result.report.next_dt)     # where a restart goes on from
             if watch is not None:
                 watch.step(t)
             if on_frame and step % dyn.output_every == 0:
@@ -280,15 +280,16 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
             if out is not None:
                 append_rows(out, result, system.model.mesh.comm)
             if out is not None and dyn.checkpoint_every and step % dyn.checkpoint_every == 0:
-                checkpoint.save(out / "checkpoint", result, t, step, h)
+                checkpoint.save(out / "checkpoint", result, t, step, result.report.next_dt)
         if interrupts is not None:
             interrupts.check()                 # several ranks: all stop here together
 
     try:
-        march(stepper, t_start, dyn.duration, dt, on_accept,
+        march(stepper, t_start, dyn.duration, dyn.dt, on_accept, first_dt=dt,
               adaptive=dyn.adaptive and dyn.scheme != "central-difference", tolerance=dyn.tolerance,
               max_cutbacks=scene.solver.max_cutbacks, step0=step0, report=result.report,
-              dt_max=10 * dyn.dt if dyn.adaptive else dyn.dt, stops=history_corners(*_histories(scene)))
+              dt_max=10 * dyn.dt if dyn.adaptive else dyn.dt, stops=history_corners(*_histories(scene)),
+              refine_events=dyn.refine_events if scene.contact is not None else 0)
     except SolveError as e:                  # gave up: the steps so far are still written (exit 3 after)
         result.failure = str(e)
     if isinstance(stepper.motion, ImplicitStepper):           # the staggered heat step wraps the motion

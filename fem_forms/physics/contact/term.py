@@ -15,11 +15,13 @@ from petsc4py import PETSc
 from fem_forms.errors import InputError
 from fem_forms.meshes.boundary_surface import BoundarySurface, boundary_surface
 from fem_forms.physics.contact.barrier import barrier, barrier_first, barrier_second, pressure_at_half, psd_blocks
+from fem_forms.physics.contact.events import StepEvents
 from fem_forms.physics.contact.friction import LaggedFriction, tangent_basis
 from fem_forms.physics.contact.mesh_obstacle import FileObstacle
 from fem_forms.physics.contact.obstacles import make_obstacle
 from fem_forms.physics.contact.pressure import add_pressure_field
 from fem_forms.physics.array_term import ArrayTerm
+from fem_forms.physics.contact.holding import held_motion
 from fem_forms.physics.contact.hessian_blocks import add_node_blocks, add_triangle_hessian
 from fem_forms.physics.terms import Context
 
@@ -52,6 +54,7 @@ class ContactTerm(ArrayTerm):
         self.time = self.start_time = 0.0
         self.friction: list[LaggedFriction] = []
         self._lagged_at = None                     # the state the friction was lagged from
+        self.events = StepEvents(0.0)              # impacts and stick-slip transitions of each time step
         self.set_spec(spec)
 
     def set_spec(self, spec) -> None:
@@ -105,6 +108,7 @@ class ContactTerm(ArrayTerm):
         rest = self.surface.rest
         self.diagonal = float(np.linalg.norm(rest.max(axis=0) - rest.min(axis=0)))
         self.dhat = self.spec.distance or DEFAULT_DISTANCE * self.diagonal
+        self.events = StepEvents(self.dhat)
         e = self.surface.edges()
         h = float(np.mean(np.linalg.norm(rest[e[:, 0]] - rest[e[:, 1]], axis=1)))
         self.kappa = self.kappa0 = self.modulus / (h * pressure_at_half(self.dhat))
@@ -132,6 +136,7 @@ class ContactTerm(ArrayTerm):
         p = self._start_positions = self.surface.positions(self.state)
         if moved:
             self._adapt(self.min_distance(self.state))     # kappa changes between steps only, as in IPC
+            self.events.start(*self._contacts(p), self.friction, p)
         eps = max(SLIP_RATE * self.diagonal * (t - self.start_time), 1e-9 * self.diagonal)
         for c in self.ipc:
             c.lag_friction(p, self.start_time, t, eps, self.spec.friction)
@@ -148,6 +153,15 @@ class ContactTerm(ArrayTerm):
             ob.move_to(t)
             self.friction.append(LaggedFriction(act, lam, tangent_basis(g[act]), p[act], ob.friction, eps,
                                                 ob.offset - start_offset) if ob.friction > 0 and len(act) else None)
+
+    def _contacts(self, p: np.ndarray) -> tuple[list, list]:
+        """At positions p: per obstacle, the surface points' distances to it; per IPC surface, how many pairs."""
+        return [ob.distance(p) for ob in self.obstacles], [len(c.collisions(c.vertices(p))) for c in self.ipc]
+
+    def step_event(self, x: PETSc.Vec) -> str:
+        """'impact', 'stick-slip' or '' for the step from its start to x (events.py), rank 0's on every rank."""
+        p = self.surface.positions(x)
+        return self.surface.comm.bcast(self.events.kind(*self._contacts(p), self.friction, p), root=0)
 
     def start(self, state) -> None:
         """A new solve's pseudo-time (or time) starts at 0."""
@@ -371,19 +385,5 @@ class ContactTerm(ArrayTerm):
         return np.array([self.held_motion(self.surface.displacement(m)) for m in modes]).T
 
     def held_motion(self, values: np.ndarray) -> np.ndarray:
-        """The parts of a motion (its values at the surface nodes, (n, 3)) the obstacles resist at rest, at the
-        nodes nearest each: all of it with friction, its normal component without (no hold on sliding); an
-        obstacle farther than dhat resists nothing (a static solve's first Newton step would be singular)."""
-        rows = []
-        for ob in self.obstacles:
-            d, g = ob.derivatives(self.surface.rest, order=1)
-            if d.min() >= self.dhat:
-                continue                           # beyond the barrier's reach: it holds nothing at the start
-            near = d <= d.min() + 0.5 * self.dhat
-            rows.append(values[near].ravel() if ob.friction > 0 else np.einsum("ij,ij->i", g[near], values[near]))
-        for k, ob in enumerate(self.files):            # a file: the nodes it pushes at rest, along the push
-            push = self.filec.only(self.surface.rest, k)
-            near = np.linalg.norm(push, axis=1) > 0.0
-            n = push[near] / np.linalg.norm(push[near], axis=1)[:, None]
-            rows.append(values[near].ravel() if ob.friction > 0 else np.einsum("ij,ij->i", n, values[near]))
-        return np.concatenate(rows) if rows else np.zeros(0)
+        """The parts of a motion (its values at the surface nodes, (n, 3)) the obstacles resist at rest (holding.py)."""
+        return held_motion(self, values)

@@ -1,0 +1,29 @@
+"""What a part's contacts hold at rest: the parts of a rigid motion its obstacles resist (the supports' check of a
+static scene held by contact alone)."""
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from fem_forms.physics.contact.term import ContactTerm
+
+
+def held_motion(term: "ContactTerm", values: np.ndarray) -> np.ndarray:
+    """The parts of a motion (its values at the surface nodes, (n, 3)) the obstacles resist at rest, at the
+    nodes nearest each: all of it with friction, its normal component without (no hold on sliding); an
+    obstacle farther than dhat resists nothing (a static solve's first Newton step would be singular)."""
+    rows = []
+    for ob in term.obstacles:
+        d, g = ob.derivatives(term.surface.rest, order=1)
+        if d.min() >= term.dhat:
+            continue                           # beyond the barrier's reach: it holds nothing at the start
+        near = d <= d.min() + 0.5 * term.dhat
+        rows.append(values[near].ravel() if ob.friction > 0 else np.einsum("ij,ij->i", g[near], values[near]))
+    for k, ob in enumerate(term.files):            # a file: the nodes it pushes at rest, along the push
+        push = term.filec.only(term.surface.rest, k)
+        near = np.linalg.norm(push, axis=1) > 0.0
+        n = push[near] / np.linalg.norm(push[near], axis=1)[:, None]
+        rows.append(values[near].ravel() if ob.friction > 0 else np.einsum("ij,ij->i", n, values[near]))
+    return np.concatenate(rows) if rows else np.zeros(0)
