@@ -1,6 +1,7 @@
 """Helpers shared by tests/unit and tests/system: scene builders, a TOML writer, the CLI and mpirun
 runners. Test modules import them with `from helpers import ...` (tests/ is on sys.path through
 tests/conftest.py and the `pythonpath` setting in pyproject.toml)."""
+import base64
 import copy
 import json
 import re
@@ -237,3 +238,15 @@ def mpirun(args, n=2):
                OPENBLAS_NUM_THREADS="1")
     cmd = [MPIRUN, "-n", str(n), "--bind-to", "none", "--oversubscribe", sys.executable, *args]
     return subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, env=env, timeout=600)
+
+
+# --- report.html -----------------------------------------------------------------------------------
+def report_data(page) -> tuple[np.ndarray, np.ndarray, dict]:
+    """The page's surface (rest points, triangles) and colour fields {name: (unit, [values per frame])}, decoded
+    from its embedded data."""
+    text = page.read_text()
+    data = json.loads(text.split('<script id="report-data" type="application/json">')[1].split("</script>")[0])
+    decode = lambda b, t: np.frombuffer(base64.b64decode(b), t)              # noqa: E731
+    return (decode(data["surface"]["rest"], "<f4").reshape(-1, 3), decode(data["surface"]["triangles"], "<u4")
+            .reshape(-1, 3), {name: (f["unit"], [decode(v, "<f4") for v in f["frames"]])
+                              for name, f in data["fields"].items()})

@@ -100,9 +100,10 @@ def gather_cell_values(mesh, values: np.ndarray) -> np.ndarray | None:
     return np.concatenate(parts) if mesh.comm.rank == 0 else None
 
 
-def boundary_surface(u: fem.Function, scalar: fem.Function | None = None, marks: list | None = None):
+def boundary_surface(u: fem.Function, scalar: fem.Function | list | None = None, marks: list | None = None):
     """Rank 0 gets (points, triangles-or-quads, displacement at points) of the mesh's boundary, and a scalar
-    field's values at those points as a fourth entry when `scalar` is given (the damage of a crack picture), and
+    field's values at those points as a fourth entry when `scalar` is given (the damage of a crack picture; a
+    list of P1 fields: their values as the columns of an (n, k) array), and
     each polygon's marks as a last entry when `marks` (local facet index arrays) are given: bit i set when the
     polygon's facet is in marks[i] (a support's or a load's facets in the report); other ranks get None.
     Gathering is for pictures and the report only."""
@@ -120,7 +121,10 @@ def boundary_surface(u: fem.Function, scalar: fem.Function | None = None, marks:
         geom = geom[:, [0, 1, 3, 2]]                 # tensor-product order -> polygon order
     values = node_values(u)
     nodes = np.unique(geom)
-    extra = node_values(scalar)[nodes, 0] if scalar is not None else np.zeros(len(nodes))
+    if isinstance(scalar, list):
+        extra = np.column_stack([node_values(f)[nodes, 0] for f in scalar]) if scalar else np.zeros((len(nodes), 0))
+    else:
+        extra = node_values(scalar)[nodes, 0] if scalar is not None else np.zeros(len(nodes))
     bits = np.zeros(len(facets), dtype=np.int64)
     for i, m in enumerate(marks or []):
         bits |= np.isin(facets, m).astype(np.int64) << i

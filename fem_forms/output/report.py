@@ -195,28 +195,48 @@ def surface_frames(frames: list) -> list:
     return out
 
 
+def end_fields(model, von_mises=None) -> list[tuple[str, str, object]]:
+    """The fields a report colours the last frame by besides |u| (a collective call): von Mises stress when given,
+    the damage of a crack, the contact pressure, the material where there are several, as (name, unit, P1
+    Function)."""
+    from dolfinx import fem
+    from fem_forms.output.quantities import term_field
+    out = [("von Mises", "Pa", von_mises)] if von_mises is not None else []
+    out += [("damage", "", f) for f in model.terms.output_fields() if f.name == "damage"]
+    if getattr(model.scene, "contact", None) is not None:
+        out.append(("contact pressure", "Pa", term_field(model, "contact_pressure")))
+    regions = model.context.materials
+    if len(regions.materials) > 1:                   # each vertex takes one of its cells' material (index from 0)
+        p1 = fem.Function(fem.FunctionSpace(model.mesh, ("Lagrange", 1)), name="material")
+        p1.interpolate(regions.field(list(range(len(regions.materials))), "material"))
+        out.append(("material (scene order from 0)", "", p1))
+    return out
+
+
 def write_model_report(model, u, shapes: list, von_mises, out: Path, summary: dict, subtitle: str, up=None,
                        scale: str = "1", magnitude: tuple = ("|u|", "m")) -> bool:
-    """report.html of a solved model (a collective call; rank 0 writes): its outer surface gathered with u (and von
-    Mises stress, a P1 field, when given), moved by each of `shapes` ([(label, displacement at the surface's points)]
-    from surface_frames or a run's own gathers; None: u's), coloured by the displacement's magnitude (named and in
-    the unit of `magnitude`) and von Mises stress, its supports and loads marked, shown at `scale` ("1", "10",
-    "100", "auto"). False (and a warning in summary) when the viewer is not installed."""
+    """report.html of a solved model (a collective call; rank 0 writes): its outer surface gathered with u and the
+    end_fields (von Mises stress when given, damage, contact pressure, material), moved by each of `shapes`
+    ([(label, displacement at the surface's points)] from surface_frames or a run's own gathers; None: u's),
+    coloured by the displacement's magnitude (named and in the unit of `magnitude`) or, on the last frame, by those
+    fields; its supports and loads marked, shown at `scale` ("1", "10", "100", "auto"). False (and a warning in
+    summary) when the viewer is not installed."""
     if not viewer_installed():
         summary.setdefault("warnings", []).append(
             "report.html left out: its viewer (three.js) is not installed; run setup.sh")
         return False
     from fem_forms.output.fields import boundary_surface
     marked = _marked_facets(model)
-    base = boundary_surface(u, von_mises, [facets for _, facets in marked])
+    at_end = end_fields(model, von_mises)
+    base = boundary_surface(u, [f for _, _, f in at_end], [facets for _, facets in marked])
     if model.mesh.comm.rank == 0:
-        points, polys, disp, *rest = base
+        points, polys, disp, values, bits = base
         tris, origin = triangulated(polys)
         moves = within_budget([(label, disp if d is None else d) for label, d in shapes], len(points))
         fields = {magnitude[0]: (magnitude[1], [np.linalg.norm(d, axis=1) for _, d in moves])}
-        if von_mises is not None:                    # known at the end only: shown with the last frame
-            fields["von Mises" if len(moves) == 1 else "von Mises (last frame)"] = ("Pa", [rest[0]])
-        marks = [(label, tris[(rest[-1][origin] >> i) & 1 == 1].ravel()) for i, (label, _) in enumerate(marked)]
+        for k, (name, unit, _) in enumerate(at_end):    # known at the end only: shown with the last frame
+            fields[name if len(moves) == 1 else f"{name} (last frame)"] = (unit, [values[:, k]])
+        marks = [(label, tris[(bits[origin] >> i) & 1 == 1].ravel()) for i, (label, _) in enumerate(marked)]
         write_report(out / "report.html", model.scene.title, subtitle,
                      ReportPart(points, tris, moves, fields, marks, obstacles(model.scene)),
                      summary, (0.0, 0.0, 1.0) if up is None else up, scale)

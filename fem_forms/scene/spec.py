@@ -337,7 +337,8 @@ OUTPUT_KEYS = (
         item=Key("point", "vector", "[x, y, z]", unit="m", length=3)),
     Key("picture", "boolean", "write a PNG picture", default=True),
     Key("report", "boolean", "write report.html: the part in 3D to turn around in a browser (deformed, coloured by "
-        "|u| or von Mises stress, supports and loads marked), the numbers of results.json, the warnings; "
+        "|u|, and at the end by von Mises stress, damage, contact pressure or material; supports and loads marked), "
+        "the numbers of results.json, the warnings; "
         "`fem-forms view OUT` opens it", default=True),
     Key("fields", "selection", "fields for ParaView (XDMF, P1 nodal values of recovered stresses and strains; "
         "material: the material index of each cell, in [[material]] order from 0): "

@@ -18,7 +18,7 @@ import pytest
 
 import fem_forms as ff
 from fem_forms.errors import InputError
-from helpers import run_scene, serial_and_two_ranks
+from helpers import report_data, run_scene, serial_and_two_ranks
 from system.demo_runs import DEMOS, demo  # noqa: F401,F811 (demo: fixture)
 
 E, GC, ELL, K, A = 1.0, 1.0, 0.1, 1.0e-6, 0.01
@@ -304,6 +304,12 @@ def test_torn_silicone_strip_demo(demo):
     assert res["crack_area"] == pytest.approx(width * thick * (1 + 3 * h / (8 * fr["length"])), rel=0.03)
     assert abs(res["crack_center"][1] - h0 / 2) <= h
     assert "Rivlin-Thomas" in text and (out / "crack.png").stat().st_size > 0
+    # report.html colours the torn strip by its damage: broken (1) along the crack, intact beyond AT1's band
+    # (damage only within 2 l of the crack; one cell's interpolation more: measured 0.007 there)
+    rest, _, fields = report_data(out / "report.html")
+    damage = next(values[-1] for name, (_, values) in fields.items() if name.startswith("damage"))
+    assert damage.max() == pytest.approx(1.0, abs=1e-6)
+    assert damage[np.abs(rest[:, 1] - res["crack_center"][1]) > 2 * fr["length"] + h].max() < 0.02
 
 
 def test_a_notch_on_a_surface_group_damages_that_surface(tmp_path):

@@ -12,7 +12,7 @@ import pytest
 
 from fem_forms.cli import main
 from fem_forms.output import report
-from helpers import beam_scene, toml_dumps
+from helpers import beam_scene, report_data, toml_dumps
 
 SCENE = beam_scene(output={"probes": {"tip": [1.0, 0.05, 0.05]}, "picture": False, "fields": ["displacement",
                                                                                                "von_mises"]},
@@ -132,3 +132,33 @@ def test_a_dynamic_contact_page_steps_through_time(tmp_path):
     assert res["files"]["report"] == "report.html" and coloured > 0.02
     assert "t = 0.02 s" in dom and "<td>intersection_free</td><td>True</td>" in dom
     assert "obstacle floor" in dom and "history.png" not in dom              # picture = false: no plot to embed
+
+
+def test_a_page_colours_by_contact_pressure_and_material(tmp_path):
+    """A two-material block resting on a floor: the page's contact pressure, integrated over the bottom face as
+    the P1 field it is (triangle area x mean of its corners), carries the block's weight m g; it is zero away
+    from the bottom; its material field holds the two indices."""
+    scene = {"title": "two-material block on a floor", "mesh": {"generator": "box", "size": [0.1, 0.1, 0.1],
+                                                               "cells": [3, 3, 3]},
+             "material": [{"name": "soft", "E": 1e5, "nu": 0.3, "rho": 1000.0},
+                          {"name": "stiff", "E": 1e6, "nu": 0.3, "rho": 1000.0,
+                           "where": {"box": [[-1, -1, 0.05], [1, 1, 1]]}}],
+             "discretization": {"degree": 1}, "load": [{"type": "gravity"}],
+             "contact": {"obstacle": [{"name": "floor", "shape": "plane", "point": [0, 0, -5e-5],
+                                       "normal": [0, 0, 1], "friction": 0.5}]},
+             "output": {"picture": False, "fields": False}}
+    path = tmp_path / "block.toml"
+    path.write_text(toml_dumps(scene))
+    assert main(["run", str(path), "--out", str(tmp_path / "out"), "-q"]) == 0
+    res = json.loads((tmp_path / "out" / "results.json").read_text())
+    rest, tris, fields = report_data(tmp_path / "out" / "report.html")
+    unit, (pressure,) = fields["contact pressure"]
+    bottom = (np.abs(rest[tris][:, :, 2]) < 1e-9).all(axis=1)
+    area = 0.5 * np.linalg.norm(np.cross(rest[tris[:, 1]] - rest[tris[:, 0]], rest[tris[:, 2]] - rest[tris[:, 0]]),
+                                axis=1)
+    weight = 1000.0 * 0.1 ** 3 * 9.81
+    assert unit == "Pa" and (area * pressure[tris].mean(axis=1))[bottom].sum() == pytest.approx(weight, rel=1e-5)
+    assert res["contact"]["floor"]["force"][2] == pytest.approx(weight, rel=1e-6)
+    assert np.all(pressure[np.abs(rest[:, 2]) > 1e-9] == 0.0)                 # the floor pushes the bottom only
+    unit, (material,) = fields["material (scene order from 0)"]
+    assert unit == "" and set(np.unique(material)) == {0.0, 1.0}
