@@ -192,3 +192,42 @@ def test_normals_of_hexahedra_and_a_plane_across_a_box():
         0.2 * 0.1 + 2 * (0.3 * 0.2 + 0.3 * 0.1), rel=1e-12)      # the +x face and the four it is square to
     side = _facets(loaded, {"plane": [[0.3, 0.0, 0.0], [2, 0, 0]], "tolerance": 1e-9})
     assert _key_set(loaded, side) == _key_set(loaded, _facets(loaded, {"axis": "x", "at": 0.3}))
+
+
+def resting_block(where: dict | None = None, **contact) -> dict:
+    """A soft block resting by its weight on a frictional floor (no [[fix]]); contact `where` when given."""
+    floor = {"name": "floor", "shape": "plane", "point": [0, 0, -5e-5], "normal": [0, 0, 1], "friction": 0.5}
+    return {"title": "block on a floor", "mesh": {"generator": "box", "size": [0.1, 0.1, 0.1], "cells": [3, 3, 3]},
+            "material": {"E": 1e5, "nu": 0.3, "rho": 1000.0}, "discretization": {"degree": 1},
+            "load": [{"type": "gravity"}],
+            "contact": {"obstacle": [floor], **({"where": where} if where else {}), **contact},
+            "output": {"picture": False, "fields": False, "probes": {"top": [0.05, 0.05, 0.1]}}}
+
+
+def test_contact_where_leaves_the_obstacles_the_selected_facets_only(tmp_path, capsys):
+    """The floor touches the block's sole only: selected by its normal, the answer is the whole surface's to
+    round-off and the floor carries the weight; offered the top face only, nothing holds the block (one line,
+    exit 2); self-contact takes the whole surface, so `where` beside it is refused when the scene is read."""
+    from helpers import run_scene
+    answers = []
+    for name, where in (("all", None), ("sole", {"normal": [0, 0, -1]})):
+        (tmp_path / name).mkdir()
+        code, res, err, _ = run_scene(tmp_path / name, resting_block(where), capsys)
+        assert code == 0, err
+        assert res["contact"]["floor"]["force"][2] == pytest.approx(1000.0 * 0.1 ** 3 * 9.81, rel=1e-8)
+        answers.append(res["probes"]["top"]["displacement"])
+    assert answers[1] == pytest.approx(answers[0], rel=1e-10, abs=1e-16)
+    (tmp_path / "top").mkdir()
+    code, res, err, _ = run_scene(tmp_path / "top", resting_block({"normal": [0, 0, 1]}), capsys)
+    assert code == 2 and "supports leave the body free (translation z)" in err and "Traceback" not in err
+    (tmp_path / "self").mkdir()
+    code, _, err, _ = run_scene(tmp_path / "self", resting_block({"normal": [0, 0, -1]}, self=True), capsys)
+    assert code == 2 and "contact.where: only with plane, sphere, box and cylinder obstacles" in err
+
+
+@pytest.mark.mpi
+def test_contact_where_on_two_ranks(tmp_path):
+    from helpers import serial_and_two_ranks
+    one, two = serial_and_two_ranks(tmp_path, resting_block({"normal": [0, 0, -1]}))
+    assert two["probes"]["top"]["displacement"] == pytest.approx(one["probes"]["top"]["displacement"], rel=1e-8)
+    assert two["contact"]["floor"]["active_points"] == one["contact"]["floor"]["active_points"] == 16

@@ -1,13 +1,30 @@
-"""What a part's contacts hold at rest: the parts of a rigid motion its obstacles resist (the supports' check of a
-static scene held by contact alone)."""
+"""What of the part touches and holds: the surface points [contact] where leaves to the obstacles, and the parts of a
+rigid motion the obstacles resist at rest (the supports' check of a static scene held by contact alone)."""
 from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from dolfinx import cpp
+from mpi4py import MPI
 import numpy as np
+from scipy.spatial import cKDTree
 
 if TYPE_CHECKING:
     from fem_forms.physics.contact.term import ContactTerm
+
+
+def surface_points(surface, loaded, where) -> np.ndarray:
+    """(n,) bool: the surface's points on the boundary facets `where` selects (any rank's), the same on every rank."""
+    from fem_forms.physics.supports import locate_facets
+    mesh = loaded.mesh
+    facets = locate_facets(loaded, where)
+    nodes = np.unique(cpp.mesh.entities_to_geometry(mesh._mesh, mesh.topology.dim - 1, facets, False))
+    dist, index = cKDTree(surface.rest).query(mesh.geometry.x[nodes]) if len(nodes) else (np.zeros(0), np.zeros(0, int))
+    span = float(np.linalg.norm(surface.rest.max(axis=0) - surface.rest.min(axis=0)))
+    only = np.zeros(surface.size, np.int32)
+    only[index[dist <= 1e-9 * span]] = 1
+    mesh.comm.Allreduce(MPI.IN_PLACE, only, op=MPI.MAX)
+    return only.astype(bool)
 
 
 def held_motion(term: "ContactTerm", values: np.ndarray) -> np.ndarray:

@@ -18,7 +18,9 @@ def _unit(v) -> np.ndarray:
 
 class Obstacle:
     """One rigid obstacle: `distance_terms(p)` gives the signed distance d, grad d and the Hessian of d at the
-    points p (n, 3) with the obstacle at its current offset (`move_to(t)`)."""
+    points p (n, 3) with the obstacle at its current offset (`move_to(t)`). With `only` (a mask of the surface's
+    points: [contact] where) the other points are infinitely far from it, wherever the whole surface is asked."""
+    only: np.ndarray | None = None
 
     def __init__(self, spec):
         self.name, self.shape, self.friction = spec.name, spec.shape, float(spec.friction)
@@ -34,12 +36,17 @@ class Obstacle:
     def move_to(self, t: float) -> None:
         self.offset = self.offset_at(t)
 
+    def _seen(self, p: np.ndarray, d: np.ndarray) -> np.ndarray:
+        """d with the points `only` leaves out at infinity (when p is the whole surface)."""
+        return d if self.only is None or len(p) != len(self.only) else np.where(self.only, d, np.inf)
+
     def distance(self, p: np.ndarray) -> np.ndarray:
-        return self.distance_terms(p - self.offset, order=0)[0]
+        return self._seen(p, self.distance_terms(p - self.offset, order=0)[0])
 
     def derivatives(self, p: np.ndarray, order: int = 2):
         """d, grad d (n, 3) and (order 2) Hessian of d (n, 3, 3) at the points p."""
-        return self.distance_terms(p - self.offset, order=order)
+        d, *rest = self.distance_terms(p - self.offset, order=order)
+        return (self._seen(p, d), *rest)
 
     def distance_terms(self, p: np.ndarray, order: int):
         raise NotImplementedError

@@ -21,7 +21,7 @@ from fem_forms.physics.contact.mesh_obstacle import FileObstacle
 from fem_forms.physics.contact.obstacles import make_obstacle
 from fem_forms.physics.contact.pressure import add_pressure_field
 from fem_forms.physics.array_term import ArrayTerm
-from fem_forms.physics.contact.holding import held_motion
+from fem_forms.physics.contact.holding import held_motion, surface_points
 from fem_forms.physics.contact.hessian_blocks import add_node_blocks, add_triangle_hessian
 from fem_forms.physics.terms import Context
 
@@ -55,6 +55,7 @@ class ContactTerm(ArrayTerm):
         self.friction: list[LaggedFriction] = []
         self._lagged_at = None                     # the state the friction was lagged from
         self.events = StepEvents(0.0)              # impacts and stick-slip transitions of each time step
+        self.only = None                           # the surface points [contact] where leaves to the obstacles
         self.set_spec(spec)
 
     def set_spec(self, spec) -> None:
@@ -65,6 +66,8 @@ class ContactTerm(ArrayTerm):
                       for i in self.file_index]
         for ob in self.obstacles + self.files:
             ob.move_to(self.time)
+        for ob in self.obstacles:
+            ob.only = self.only
 
     @property
     def ipc(self) -> list[IpcSurfaces]:
@@ -79,6 +82,10 @@ class ContactTerm(ArrayTerm):
         if not isinstance(ctx.u, fem.Function) or ctx.rest_map is not None or ctx.deformation is not None:
             raise InputError("contact: available with formulation = 'displacement' in forward analyses only")
         self.surface = boundary_surface(ctx.u.function_space)
+        if self.spec.where is not None:
+            self.only = surface_points(self.surface, ctx.loaded, self.spec.where)
+            for ob in self.obstacles:
+                ob.only = self.only
         self.state = ctx.u.vector                       # the state `record` reports after each accepted step
         self.friction_at_start = np.zeros((self.surface.size, 3))
         self._start_positions = self.surface.rest.copy()

@@ -7,6 +7,7 @@ from __future__ import annotations
 from fem_forms.keys import spec_class
 from fem_forms.errors import InputError
 from fem_forms.scene.reader import Key, Section, Table
+from fem_forms.scene.selectors import AREA_SELECTORS, where
 
 SHAPES = ("plane", "sphere", "box", "cylinder", "file")
 # shape -> the keys that place it (all required for that shape)
@@ -39,6 +40,8 @@ CONTACT_KEYS = (
         default_note="1e-3 x the part's bounding-box diagonal"),
     Key("obstacle", "tables", "rigid obstacles [[contact.obstacle]]: name, shape and the keys that place it, "
         "friction, motion", default=[], keys=OBSTACLE_KEYS),
+    where("the part's boundary facets that may touch the obstacles (a sole, a fingertip; default: the whole "
+          "surface); plane, sphere, box and cylinder obstacles only", required=False, kinds=AREA_SELECTORS),
 )
 
 
@@ -88,6 +91,9 @@ def _contact_rules(spec: ContactSpec, t: Table) -> None:
     if not spec.self and not spec.obstacle:
         raise InputError(f"{t.key('self')}: [contact] with neither self = true nor a [[contact.obstacle]] has "
                          "nothing to touch")
+    if spec.where is not None and (spec.self or any(ob.shape == "file" for ob in spec.obstacle)):
+        raise InputError(f"{t.key('where')}: only with plane, sphere, box and cylinder obstacles (self-contact and "
+                         "obstacle files take the whole surface); leave where out")
     if spec.friction > 0.0 and not spec.self:
         raise InputError(f"{t.key('friction')}: the friction of self-contact needs self = true (an obstacle's "
                          "friction is its own key)")
