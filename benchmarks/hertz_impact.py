@@ -124,7 +124,7 @@ def main() -> None:
     coarse = quarter_ball(work / "ball-1mm.msh", 1e-3, 4e-3, 8e-3)
     fine = quarter_ball(work / "ball-0.5mm.msh", 5e-4, 4e-3, 8e-3)
     runs = [("1 m/s, P1, 1 mm, dt 0.1 ms, refine_events 0", scene(coarse, 1, 0)),
-            ("1 m/s, P1, 1 mm, dt 0.1 ms, refine_events 4 (default)", scene(coarse, 1, 4)),
+            ("1 m/s, P1, 1 mm, dt 0.1 ms, refine_events 4", scene(coarse, 1, 4)),
             ("1 m/s, P1, 1 mm, dt 0.4 ms, refine_events 0", scene(coarse, 1, 0, dt=4e-4)),
             ("1 m/s, P1, 1 mm, dt 0.4 ms, refine_events 4", scene(coarse, 1, 4, dt=4e-4)),
             ("1 m/s, P1, 0.5 mm, dt 0.1 ms", scene(fine, 1, 4)),

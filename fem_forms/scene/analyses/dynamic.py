@@ -26,8 +26,9 @@ DYNAMIC_KEYS = (
     Key("adaptive", "boolean", "error-controlled step size (implicit schemes)", default=False),
     Key("tolerance", "number", "adaptive: local error per step relative to the largest displacement",
         default=1e-3, exclusive_minimum=0),
-    Key("refine_events", "integer", "with contact (implicit schemes): a step with an impact or a stick-slip "
-        "transition is redone shorter, down to dt / 2^N, then the step grows back (0: never)", default=4,
+    Key("refine_events", "integer", "with contact (implicit schemes): a step with an impact, a bounce or a "
+        "stick-slip transition is redone shorter, down to dt / 2^N, then the step grows back (0: never; 4 locates "
+        "a first touch to dt / 16, but a rule firing at every step can pump energy into Newmark)", default=0,
         minimum=0, maximum=10),
     Key("output_every", "integer", "fields and animation frames every N steps (probes, energies every step)",
         default=10, exclusive_minimum=0),
