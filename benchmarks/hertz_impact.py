@@ -14,6 +14,7 @@ Run: `.venv/bin/python benchmarks/hertz_impact.py` (about 10 minutes). Writes be
 """
 from __future__ import annotations
 
+import importlib.util
 import json
 import math
 import os
@@ -24,6 +25,8 @@ import time
 from pathlib import Path
 
 import numpy as np
+
+from contact_schemes import one      # the same one-run entry: a scene run as `fem-forms run` does
 
 HERE = Path(__file__).resolve().parent
 R, E, NU, RHO, V, GAP = 0.02, 1e6, 0.4, 1100.0, 1.0, 2e-4
@@ -38,33 +41,13 @@ def hertz(v: float = V) -> tuple[float, float]:
 
 
 def quarter_ball(path: Path, fine: float, coarse: float, zone: float) -> Path:
-    """The part x >= 0, y >= 0 of the ball of radius R centred at (0, 0, R), graded toward its lowest point."""
-    import gmsh
-    gmsh.initialize()
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        occ = gmsh.model.occ
-        ball = occ.addSphere(0, 0, R, R)
-        occ.cut([(3, ball)], [(3, occ.addBox(-2 * R, -2 * R, -R, 2 * R, 4 * R, 4 * R))])
-        occ.cut([(3, ball)], [(3, occ.addBox(-2 * R, -2 * R, -R, 4 * R, 2 * R, 4 * R))])
-        lowest = occ.addPoint(0, 0, 0)
-        occ.synchronize()
-        gmsh.model.addPhysicalGroup(3, [v[1] for v in gmsh.model.getEntities(3)], 1)
-        f = gmsh.model.mesh.field
-        f.add("Distance", 1)
-        f.setNumbers(1, "PointsList", [lowest])
-        f.add("Threshold", 2)
-        f.setNumber(2, "InField", 1)
-        for key, value in (("SizeMin", fine), ("SizeMax", coarse), ("DistMin", zone), ("DistMax", 3 * zone)):
-            f.setNumber(2, key, value)
-        f.setAsBackgroundMesh(2)
-        for key in ("Mesh.MeshSizeExtendFromBoundary", "Mesh.MeshSizeFromPoints", "Mesh.MeshSizeFromCurvature"):
-            gmsh.option.setNumber(key, 0)
-        gmsh.model.mesh.generate(3)
-        gmsh.write(str(path))
-    finally:
-        gmsh.finalize()
-    return path
+    """The part x >= 0, y >= 0 of the ball of radius R centred at (0, 0, R), graded toward its lowest point (the
+    verification manual's Hertz geometry, not cut at the equator)."""
+    spec = importlib.util.spec_from_file_location("hertz_hemisphere", HERE.parent / "verification" / "geometry" /
+                                                  "hertz_hemisphere.py")
+    geometry = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(geometry)
+    return geometry.build(path, R, fine, coarse, zone, whole_ball=True, spread=3.0)
 
 
 def scene(mesh: Path, degree: int, refine: int, v: float = V, dt: float = 1e-4) -> dict:
@@ -136,13 +119,6 @@ def main() -> None:
         lines.append(row(label, sc, work / f"run{i}"))
         print(lines[-1], flush=True)
     (HERE / "hertz_impact.md").write_text("\n".join(lines) + "\n")
-
-
-def one(scene_json: str, out: str) -> None:
-    import fem_forms as ff
-    from fem_forms.analyses import run_analysis
-    ff.quiet_jit()
-    run_analysis(ff.Scene.from_dict(json.loads(Path(scene_json).read_text())), Path(out))
 
 
 if __name__ == "__main__":
