@@ -105,6 +105,9 @@ class TermList:
                 out[k] = out.get(k, 0.0) + v
         return out
 
+    def watch_events(self) -> None:
+        self._each("watch_events")
+
     def step_event(self, x: PETSc.Vec) -> str:
         """The first term's event over the time step ending at x ('' if none)."""
         return next((e for t in self.all if (e := t.step_event(x))), "")

@@ -129,6 +129,9 @@ class Term:
         """Energies this term stores at x, by the energy account's column (`energy_columns`)."""
         return {}
 
+    def watch_events(self) -> None:
+        """A time march will ask step_event after each step: remember what it needs from each step's start."""
+
     def step_event(self, x: PETSc.Vec) -> str:
         """What happened to this term over the time step ending at x that the march resolves with shorter steps
         ('impact', 'stick-slip': contact), or '' (the same on every rank)."""

@@ -66,13 +66,15 @@ def polish(driver, reason: int) -> tuple[int, int, int]:
     # a Krylov solve preconditioned by a factor kept through the solve (REUSED_FACTOR) keeps it for the polish too:
     # the operator is the fresh tangent, so the steps are still Newton's (a contact step's polish: one MatSolve or
     # two instead of a new factor, 70 ms at 7.7k P2 dofs)
-    lag = driver.options.get("snes_lag_preconditioner")
-    keep = driver.options.get("ksp_type") not in (None, "preonly") and lag and driver.pc_reuse is None
-    if keep:
-        preconditioner_reuse.set_lag(driver.snes, preconditioner_reuse.KEEP)
-    driver.snes.solve(None, driver.x)
-    if keep:
-        preconditioner_reuse.set_lag(driver.snes, int(lag))
+    keep = (driver.reuse_factor is True and driver.options.get("ksp_type") not in (None, "preonly")
+            and "snes_lag_preconditioner" not in driver.user_options and driver.pc_reuse is None)
+    try:
+        if keep:
+            preconditioner_reuse.set_lag(driver.snes, preconditioner_reuse.KEEP)
+        driver.snes.solve(None, driver.x)
+    finally:
+        if keep:                                # the options' lag again (rebuilt at the next solve's start)
+            preconditioner_reuse.set_lag(driver.snes, int(driver.options["snes_lag_preconditioner"]))
     polished = driver.snes.getConvergedReason()
     its, kits = driver.snes.getIterationNumber(), driver.snes.getLinearSolveIterations()
     driver.set_line_search(driver.options["snes_linesearch_type"])

@@ -66,7 +66,7 @@ def march(stepper: Stepper, t0: float, t_end: float, dt: float, on_accept: Calla
     dt_max = dt_max or dt
     dt_floor = dt / 2.0 ** max_cutbacks
     event_floor = dt / 2.0 ** refine_events
-    dt = first_dt or dt
+    dt = min(first_dt or dt, dt_max)
     eps = 1e-12 * max(t_end, 1.0)
     while t < t_end - eps:
         end = min([t_end] + [s for s in stops if s > t + 1e-9 * dt])

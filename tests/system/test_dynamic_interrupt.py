@@ -72,6 +72,7 @@ def test_a_stopped_dynamic_run_keeps_its_steps_and_continues_to_the_same_end(tmp
     a, b = (json.loads((d / "results.json").read_text()) for d in (tmp_path / "whole", out))
     # the same steps (the bounce's impacts refined alike: the checkpoint holds the next step's size), the same end
     assert b["steps"] == a["steps"] and b["refined_steps"] == a["refined_steps"] and "interrupted" not in b
+    assert steps < a["steps"]                                # it was stopped before the end
     assert b["time_reached"] == pytest.approx(duration)
     assert b["probes"]["tip"]["displacement"] == pytest.approx(a["probes"]["tip"]["displacement"], rel=1e-6, abs=1e-12)
     assert len((out / "probes.csv").read_text().splitlines()) == a["steps"] + 2

@@ -194,29 +194,34 @@ def test_normals_of_hexahedra_and_a_plane_across_a_box():
     assert _key_set(loaded, side) == _key_set(loaded, _facets(loaded, {"axis": "x", "at": 0.3}))
 
 
-def resting_block(where: dict | None = None, **contact) -> dict:
+def resting_block(where: dict | None = None, degree: int = 1, **contact) -> dict:
     """A soft block resting by its weight on a frictional floor (no [[fix]]); contact `where` when given."""
     floor = {"name": "floor", "shape": "plane", "point": [0, 0, -5e-5], "normal": [0, 0, 1], "friction": 0.5}
     return {"title": "block on a floor", "mesh": {"generator": "box", "size": [0.1, 0.1, 0.1], "cells": [3, 3, 3]},
-            "material": {"E": 1e5, "nu": 0.3, "rho": 1000.0}, "discretization": {"degree": 1},
+            "material": {"E": 1e5, "nu": 0.3, "rho": 1000.0}, "discretization": {"degree": degree},
             "load": [{"type": "gravity"}],
             "contact": {"obstacle": [floor], **({"where": where} if where else {}), **contact},
             "output": {"picture": False, "fields": False, "probes": {"top": [0.05, 0.05, 0.1]}}}
 
 
-def test_contact_where_leaves_the_obstacles_the_selected_facets_only(tmp_path, capsys):
+@pytest.mark.parametrize("degree", [1, 2])
+def test_contact_where_leaves_the_obstacles_the_selected_facets_only(tmp_path, capsys, degree):
     """The floor touches the block's sole only: selected by its normal, the answer is the whole surface's to
-    round-off and the floor carries the weight; offered the top face only, nothing holds the block (one line,
-    exit 2); self-contact takes the whole surface, so `where` beside it is refused when the scene is read."""
+    round-off (P2: the sole's edge nodes touch too) and the floor carries the weight; offered the top face only,
+    nothing holds the block (one line, exit 2); self-contact takes the whole surface, so `where` beside it is
+    refused when the scene is read."""
     from helpers import run_scene
     answers = []
     for name, where in (("all", None), ("sole", {"normal": [0, 0, -1]})):
         (tmp_path / name).mkdir()
-        code, res, err, _ = run_scene(tmp_path / name, resting_block(where), capsys)
+        code, res, err, _ = run_scene(tmp_path / name, resting_block(where, degree), capsys)
         assert code == 0, err
         assert res["contact"]["floor"]["force"][2] == pytest.approx(1000.0 * 0.1 ** 3 * 9.81, rel=1e-8)
-        answers.append(res["probes"]["top"]["displacement"])
-    assert answers[1] == pytest.approx(answers[0], rel=1e-10, abs=1e-16)
+        answers.append((res["probes"]["top"]["displacement"], res["contact"]["floor"]["active_points"]))
+    assert answers[1][0] == pytest.approx(answers[0][0], rel=1e-10, abs=1e-16)
+    assert answers[1][1] == answers[0][1] == (3 * degree + 1) ** 2          # the sole's nodes: 3 x 3 cells
+    if degree == 2:
+        return                                  # the refusals below do not depend on the degree
     (tmp_path / "top").mkdir()
     code, res, err, _ = run_scene(tmp_path / "top", resting_block({"normal": [0, 0, 1]}), capsys)
     assert code == 2 and "supports leave the body free (translation z)" in err and "Traceback" not in err

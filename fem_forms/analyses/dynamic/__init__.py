@@ -157,6 +157,8 @@ def keep_interrupted(result, scene: Scene, out: Path, comm) -> None:
     result.system.state.rollback()                         # the step in progress leaves no trace
     t, step, dt = result.last_accepted
     result.report.steps, result.report.time_reached = step, t
+    if result.counts_accepted is not None:                 # nor do its attempts count
+        result.report.rejected, result.report.refined, result.report.newton_iterations = result.counts_accepted
     write_csvs(out, result, comm)
     checkpoint.save(out / "checkpoint", result, t, step, dt)
     summary = result.summary()

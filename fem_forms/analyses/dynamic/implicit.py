@@ -107,6 +107,8 @@ class ImplicitStepper:
         self.krylov_iterations = self.preconditioner_builds = 0
         self.u_scale = 0.0                         # the largest displacement seen (the error estimate's scale)
         self.watch_events = system.scene.contact is not None and system.scene.dynamic.refine_events > 0
+        if self.watch_events:
+            m.terms.watch_events()
 
     @property
     def motion(self) -> "ImplicitStepper":

@@ -43,6 +43,7 @@ class DynamicResult:
     failure: str | None = None                        # why the march gave up (results.json converged false)
     strength: dict | None = None                      # the lowest safety factor over the accepted steps
     last_accepted: tuple | None = None                # (t, step, next dt) at the last accepted, committed step
+    counts_accepted: tuple | None = None              # (rejected, refined, Newton iterations) at that step
     probe_columns: list | None = None                 # probes.csv's header, found once
     keepers: tuple = ()                               # step hooks whose history a checkpoint carries (saved/restore)
     started: float = field(default_factory=time.perf_counter)   # this process's start of the run
@@ -271,6 +272,8 @@ def solve_dynamic(scene: Scene, out: Path | None = None, restart: Path | None = 
             state["t"] = t
             result.probe_rows.append(probe_row(points, system, t, reactions))
             result.last_accepted = (t, step, result.report.next_dt)     # where a restart goes on from
+            r = result.report                  # the counts at this step (an interrupt undoes a later attempt's)
+            result.counts_accepted = (r.rejected, r.refined, r.newton_iterations)
             if watch is not None:
                 watch.step(t)
             if on_frame and step % dyn.output_every == 0:

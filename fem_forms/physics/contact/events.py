@@ -16,7 +16,8 @@ TRANSITION_POINTS = 3     # fewer points in contact than this: no transition is 
 def impact(before: np.ndarray, after: np.ndarray, dhat: float) -> bool:
     """Whether a point in contact at the step's end (closer than dhat: `after`) approached by more than
     IMPACT_LAYERS dhat since its start (`before`): the step jumped the barrier's layer instead of resolving it."""
-    return bool(np.any((after < dhat) & (before - after > IMPACT_LAYERS * dhat)))
+    near = after < dhat                     # finite: a point left out by [contact] where is at infinity
+    return bool(np.any(before[near] - after[near] > IMPACT_LAYERS * dhat))
 
 
 def release(before: np.ndarray, after: np.ndarray, dhat: float) -> bool:
@@ -44,8 +45,9 @@ class StepEvents:
     distances to each obstacle and the number of pairs of each IPC surface; which points slid over the step
     before."""
 
-    def __init__(self, dhat: float):
+    def __init__(self, dhat: float, watched: bool = False):
         self.dhat = dhat
+        self.watched = watched         # a time march refines the events (else nothing is remembered)
         self.distances: list[np.ndarray] = []
         self.pairs: list[int] = []
         self.slid: dict[int, tuple[np.ndarray, np.ndarray]] = {}

@@ -4,27 +4,24 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from dolfinx import cpp
-from mpi4py import MPI
+from dolfinx import fem
 import numpy as np
-from scipy.spatial import cKDTree
 
 if TYPE_CHECKING:
     from fem_forms.physics.contact.term import ContactTerm
 
 
-def surface_points(surface, loaded, where) -> np.ndarray:
-    """(n,) bool: the surface's points on the boundary facets `where` selects (any rank's), the same on every rank."""
+def surface_points(surface, V, loaded, where) -> np.ndarray:
+    """(n,) bool: the surface's points on the boundary facets `where` selects (their corner and, on P2, edge nodes:
+    the displacement's dofs there; any rank's), the same on every rank."""
     from fem_forms.physics.supports import locate_facets
     mesh = loaded.mesh
     facets = locate_facets(loaded, where)
-    nodes = np.unique(cpp.mesh.entities_to_geometry(mesh._mesh, mesh.topology.dim - 1, facets, False))
-    dist, index = cKDTree(surface.rest).query(mesh.geometry.x[nodes]) if len(nodes) else (np.zeros(0), np.zeros(0, int))
-    span = float(np.linalg.norm(surface.rest.max(axis=0) - surface.rest.min(axis=0)))
-    only = np.zeros(surface.size, np.int32)
-    only[index[dist <= 1e-9 * span]] = 1
-    mesh.comm.Allreduce(MPI.IN_PLACE, only, op=MPI.MAX)
-    return only.astype(bool)
+    local = fem.locate_dofs_topological(V, mesh.topology.dim - 1, facets)
+    imap = V.dofmap.index_map
+    chosen = imap.local_to_global(np.asarray(local, dtype=np.int32)).astype(np.int64)
+    chosen = np.unique(np.concatenate(mesh.comm.allgather(chosen)))
+    return np.isin(surface.blocks, chosen)
 
 
 def held_motion(term: "ContactTerm", values: np.ndarray) -> np.ndarray:

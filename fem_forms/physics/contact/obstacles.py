@@ -37,7 +37,8 @@ class Obstacle:
         self.offset = self.offset_at(t)
 
     def _seen(self, p: np.ndarray, d: np.ndarray) -> np.ndarray:
-        """d with the points `only` leaves out at infinity (when p is the whole surface)."""
+        """d with the points `only` leaves out at infinity, when p is the whole surface (a caller passes either the
+        whole surface or a subset it chose by these distances, which holds no left-out point)."""
         return d if self.only is None or len(p) != len(self.only) else np.where(self.only, d, np.inf)
 
     def distance(self, p: np.ndarray) -> np.ndarray:

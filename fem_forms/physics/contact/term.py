@@ -83,7 +83,7 @@ class ContactTerm(ArrayTerm):
             raise InputError("contact: available with formulation = 'displacement' in forward analyses only")
         self.surface = boundary_surface(ctx.u.function_space)
         if self.spec.where is not None:
-            self.only = surface_points(self.surface, ctx.loaded, self.spec.where)
+            self.only = surface_points(self.surface, ctx.u.function_space, ctx.loaded, self.spec.where)
             for ob in self.obstacles:
                 ob.only = self.only
         self.state = ctx.u.vector                       # the state `record` reports after each accepted step
@@ -115,7 +115,7 @@ class ContactTerm(ArrayTerm):
         rest = self.surface.rest
         self.diagonal = float(np.linalg.norm(rest.max(axis=0) - rest.min(axis=0)))
         self.dhat = self.spec.distance or DEFAULT_DISTANCE * self.diagonal
-        self.events = StepEvents(self.dhat)
+        self.events = StepEvents(self.dhat, self.events.watched)
         e = self.surface.edges()
         h = float(np.mean(np.linalg.norm(rest[e[:, 0]] - rest[e[:, 1]], axis=1)))
         self.kappa = self.kappa0 = self.modulus / (h * pressure_at_half(self.dhat))
@@ -143,7 +143,8 @@ class ContactTerm(ArrayTerm):
         p = self._start_positions = self.surface.positions(self.state)
         if moved:
             self._adapt(self.min_distance(self.state))     # kappa changes between steps only, as in IPC
-            self.events.start(*self._contacts(p), self.friction, p)
+            if self.events.watched:
+                self.events.start(*self._contacts(p), self.friction, p)
         eps = max(SLIP_RATE * self.diagonal * (t - self.start_time), 1e-9 * self.diagonal)
         for c in self.ipc:
             c.lag_friction(p, self.start_time, t, eps, self.spec.friction)
@@ -164,6 +165,9 @@ class ContactTerm(ArrayTerm):
     def _contacts(self, p: np.ndarray) -> tuple[list, list]:
         """At positions p: per obstacle, the surface points' distances to it; per IPC surface, how many pairs."""
         return [ob.distance(p) for ob in self.obstacles], [len(c.collisions(c.vertices(p))) for c in self.ipc]
+
+    def watch_events(self) -> None:
+        self.events.watched = True
 
     def step_event(self, x: PETSc.Vec) -> str:
         """'impact', 'stick-slip' or '' for the step from its start to x (events.py), rank 0's on every rank."""
@@ -186,7 +190,7 @@ class ContactTerm(ArrayTerm):
     def resume(self, t: float) -> None:
         """Continue from a restored state at time t (a dynamic --restart): the next step starts there, with the
         barrier's stiffness the checkpoint restored and the friction from no force at the start."""
-        self.time, self._lagged_at = t, None
+        self.time, self._lagged_at, self.friction = t, None, []
         for ob in self.obstacles + self.files:
             ob.move_to(t)
 
