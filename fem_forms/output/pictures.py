@@ -13,6 +13,7 @@ from dolfinx import fem
 import numpy as np
 
 from fem_forms.output.fields import boundary_surface
+from fem_forms.output.obstacle_shapes import obstacle_surfaces
 
 VIEW = (15.0, -75.0)         # elevation, azimuth in degrees (mplot3d's view_init convention)
 # matplotlib's viridis at 0, 1/16, ..., 1 (interpolated linearly: within 0.02 of the full table)
@@ -159,9 +160,10 @@ class Canvas:
         self.image.reduce(self.s).save(path)
 
 
-def picture(path: Path, u: fem.Function, title: str, scale: float = 1.0, up=None) -> None:
+def picture(path: Path, u: fem.Function, title: str, scale: float = 1.0, up=None, model=None) -> None:
     """PNG of the deformed boundary coloured by displacement magnitude, undeformed outline in grey; `up`
-    (against gravity, default +z) drawn vertical."""
+    (against gravity, default +z) drawn vertical; with `model`, its contact obstacles where they are now, in
+    translucent grey behind the part, named in the legend."""
     surf = boundary_surface(u)
     if surf is None:
         u.function_space.mesh.comm.barrier()
@@ -173,6 +175,12 @@ def picture(path: Path, u: fem.Function, title: str, scale: float = 1.0, up=None
     view = view_axes(up=up)
     canvas = Canvas(900, 500)
     to_px = canvas.fit((10, 40, 760, 480), np.vstack([X, x]) @ view[0].T)
+    shown = obstacle_surfaces(model, x) if model is not None else []
+    for name, points, triangles in shown:
+        canvas.surface(to_px, points, triangles, (0.55, 0.57, 0.62, 0.35), (0.3, 0.3, 0.35, 0.3), view=view)
+    if shown:
+        canvas.text((20, 20), "obstacles (grey): " + ", ".join(name for name, _, _ in shown), 11, anchor="lm",
+                    fill=(90, 90, 100))
     canvas.surface(to_px, X, polys, (0.6, 0.6, 0.6, 0.08), (0.4, 0.4, 0.4, 0.15), view=view)
     canvas.surface(to_px, x, polys, shade(x, polys, viridis(mag[polys].mean(axis=1) / vmax), view[1]),
                    (0, 0, 0, 0.15), view=view)

@@ -162,3 +162,27 @@ def test_a_page_colours_by_contact_pressure_and_material(tmp_path):
     assert np.all(pressure[np.abs(rest[:, 2]) > 1e-9] == 0.0)                 # the floor pushes the bottom only
     unit, (material,) = fields["material (scene order from 0)"]
     assert unit == "" and set(np.unique(material)) == {0.0, 1.0}
+
+
+def test_the_deformed_picture_draws_the_obstacles_where_they_are(tmp_path):
+    """deformed.png of a block resting on a floor: the floor drawn in translucent grey (named in the legend), and,
+    the picture's up being +z, lying below the block (its grey pixels' centre under the coloured part's), as a
+    floor does; without contact nothing grey is drawn there."""
+    import matplotlib.image
+    scene = {"title": "block on a floor", "mesh": {"generator": "box", "size": [0.1, 0.1, 0.1], "cells": [2, 2, 2]},
+             "material": {"E": 1e5, "nu": 0.3, "rho": 1000.0}, "discretization": {"degree": 1},
+             "load": [{"type": "gravity"}],
+             "contact": {"obstacle": [{"name": "floor", "shape": "plane", "point": [0, 0, -5e-5],
+                                       "normal": [0, 0, 1], "friction": 0.5}]},
+             "output": {"picture": True, "fields": False, "report": False}}
+    path = tmp_path / "block.toml"
+    path.write_text(toml_dumps(scene))
+    assert main(["run", str(path), "--out", str(tmp_path / "out"), "-q"]) == 0
+    pixels = matplotlib.image.imread(tmp_path / "out" / "deformed.png")[..., :3]
+    spread = pixels.max(axis=2) - pixels.min(axis=2)
+    coloured = spread > 0.25                                                   # the part, in viridis
+    grey = (spread < 0.08) & (pixels.mean(axis=2) > 0.5) & (pixels.mean(axis=2) < 0.95)
+    grey[:60] = False                                                          # not the title's and legend's text
+    rows = np.arange(pixels.shape[0])[:, None]
+    assert coloured.mean() > 0.02 and grey.mean() > 0.05
+    assert (rows * grey).sum() / grey.sum() > (rows * coloured).sum() / coloured.sum()   # below the part

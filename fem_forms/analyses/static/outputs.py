@@ -63,7 +63,8 @@ def write_static_outputs(result: StaticResult, out: "Path", path: LoadPath | Non
                     float(vm.x.array.max()) if vm.x.array.size else 0.0, op=MPI.MAX)
         if scene.output.picture and attempt(warnings, "deformed.png",
                                             lambda: pictures.picture(out / "deformed.png", result.u, scene.title,
-                                                                     up=pictures.scene_up(scene)) or True):
+                                                                     up=pictures.scene_up(scene),
+                                                                     model=result.model) or True):
             files["picture"] = "deformed.png"
         if attempt(warnings, "deformed.stl", lambda: write_deformed_surface(result.model, out / "deformed.stl")):
             files["surface"] = "deformed.stl"
