@@ -21,7 +21,8 @@ def _sphere(center, radius) -> tuple:
     theta = np.linspace(0.0, np.pi, ROUND // 2 + 1)
     phi = np.linspace(0.0, 2 * np.pi, ROUND, endpoint=False)
     th, ph = np.meshgrid(theta, phi, indexing="ij")
-    points = center + radius * np.stack([np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.cos(th)], -1).reshape(-1, 3)
+    unit = np.stack([np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.cos(th)], -1).reshape(-1, 3)
+    points = center + radius * unit
     return points, _grid(len(theta), len(phi))
 
 

@@ -2,13 +2,8 @@
 rigid motion the obstacles resist at rest (the supports' check of a static scene held by contact alone)."""
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 from dolfinx import fem
 import numpy as np
-
-if TYPE_CHECKING:
-    from fem_forms.physics.contact.term import ContactTerm
 
 
 def surface_points(surface, V, loaded, where) -> np.ndarray:
@@ -24,9 +19,9 @@ def surface_points(surface, V, loaded, where) -> np.ndarray:
     return np.isin(surface.blocks, chosen)
 
 
-def held_motion(term: "ContactTerm", values: np.ndarray) -> np.ndarray:
-    """The parts of a motion (its values at the surface nodes, (n, 3)) the obstacles resist at rest, at the
-    nodes nearest each: all of it with friction, its normal component without (no hold on sliding); an
+def held_motion(term, values: np.ndarray) -> np.ndarray:
+    """The parts of a motion (its values at the surface nodes, (n, 3)) the contact term's obstacles resist at rest,
+    at the nodes nearest each: all of it with friction, its normal component without (no hold on sliding); an
     obstacle farther than dhat resists nothing (a static solve's first Newton step would be singular)."""
     rows = []
     for ob in term.obstacles:
