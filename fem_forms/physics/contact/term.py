@@ -170,7 +170,7 @@ class ContactTerm(ArrayTerm):
         self.events.watched = True
 
     def step_event(self, x: PETSc.Vec) -> str:
-        """'impact', 'stick-slip' or '' for the step from its start to x (events.py), rank 0's on every rank."""
+        """'impact', 'release', 'stick-slip' or '' for the step from its start to x (events.py), rank 0's everywhere."""
         p = self.surface.positions(x)
         return self.surface.comm.bcast(self.events.kind(*self._contacts(p), self.friction, p), root=0)
 
