@@ -12,8 +12,6 @@ import math
 
 from petsc4py import PETSc
 
-from fem_forms.solvers import preconditioner_reuse
-
 NEAR = 1e-6          # of the load scale: below it a failed line search is near an equilibrium (acceptance's bar)
 FINISH_MOVE = 1e-6   # of max |u|: what finishing a solve may move u; more is a jump to another equilibrium
 MAX_STEPS = 3
@@ -63,18 +61,8 @@ def polish(driver, reason: int) -> tuple[int, int, int]:
     driver.history = []
     if driver.pc_reuse is not None and not driver.keep_preconditioner:
         driver.pc_reuse.start_solve()
-    # a Krylov solve preconditioned by a factor kept through the solve (REUSED_FACTOR) keeps it for the polish too:
-    # the operator is the fresh tangent, so the steps are still Newton's (a contact step's polish: one MatSolve or
-    # two instead of a new factor, 70 ms at 7.7k P2 dofs)
-    keep = (driver.reuse_factor is True and driver.options.get("ksp_type") not in (None, "preonly")
-            and "snes_lag_preconditioner" not in driver.user_options and driver.pc_reuse is None)
-    try:
-        if keep:
-            preconditioner_reuse.set_lag(driver.snes, preconditioner_reuse.KEEP)
+    with driver.factor_kept():                 # the step's kept LU factor, not a new one (snes.py)
         driver.snes.solve(None, driver.x)
-    finally:
-        if keep:                                # the options' lag again (rebuilt at the next solve's start)
-            preconditioner_reuse.set_lag(driver.snes, int(driver.options["snes_lag_preconditioner"]))
     polished = driver.snes.getConvergedReason()
     its, kits = driver.snes.getIterationNumber(), driver.snes.getLinearSolveIterations()
     driver.set_line_search(driver.options["snes_linesearch_type"])

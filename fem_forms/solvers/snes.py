@@ -2,7 +2,7 @@
 nonlinear problem, with the energy as line-search objective where one exists."""
 from __future__ import annotations
 
-from contextlib import nullcontext
+from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass, field
 import itertools
 import math
@@ -22,6 +22,7 @@ from fem_forms.solvers import bounds as vi, linear, pc_matrix, pmultigrid, polis
 from fem_forms.solvers.linear import roundoff_floor  # noqa: F401 (snes.roundoff_floor, used by the inverse check)
 from fem_forms.solvers.array_terms import ArrayTerms
 from fem_forms.solvers.bordered import Bordered
+from fem_forms.solvers import preconditioner_reuse
 from fem_forms.solvers.preconditioner_reuse import PreconditionerReuse
 from fem_forms.solvers.reports import SolveReport, StepRecord  # noqa: F401 (snes.SolveReport: the drivers' reports)
 from fem_forms.state import State
@@ -369,6 +370,22 @@ class SNESDriver:
             else:
                 opts.delValue(self.prefix + k)
         self.arrays.install(self.snes)           # a new type may drop the step cap (seen: a polish crossed)
+
+    @contextmanager
+    def factor_kept(self):
+        """SNES solves inside keep the LU factor that preconditions this driver's Krylov solve (REUSED_FACTOR: one
+        factor per load or time step) instead of factoring anew at their start: a polish after a stalled line search
+        is still Newton on the fresh tangent (contact steps: 76 -> 50 factorizations in 50 steps, 70 ms each at 7.7k
+        P2 dofs). Without such a factor (LU per iteration, multigrid, a lag the user set) nothing changes."""
+        keep = (self.reuse_factor is True and self.options.get("ksp_type") not in (None, "preonly")
+                and "snes_lag_preconditioner" not in self.user_options and self.pc_reuse is None)
+        if keep:
+            preconditioner_reuse.set_lag(self.snes, preconditioner_reuse.KEEP)
+        try:
+            yield
+        finally:
+            if keep:                            # the options' lag again (a new factor at the next solve's start)
+                preconditioner_reuse.set_lag(self.snes, int(self.options["snes_lag_preconditioner"]))
 
     def stale_preconditioner_failed(self) -> bool:
         """Whether the last linear solve ran with a kept preconditioner (its failure is no reason
