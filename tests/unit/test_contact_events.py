@@ -35,15 +35,15 @@ def friction(nodes, start, eps=1e-6):
 def test_step_events_tell_a_block_that_starts_to_slide():
     """Four corners rest on a floor: a step in which they stick (slip below eps) then one in which all slide."""
     p0 = np.array([[0, 0, 5e-5], [1, 0, 5e-5], [0, 1, 5e-5], [1, 1, 5e-5]], float)
-    ev = StepEvents(DHAT)
+    ev = StepEvents()
     f1 = friction(range(4), p0)
     ev.start([p0[:, 2]], [], [None], p0)
     p1 = p0 + [1e-8, 0, 0]                                   # crept: sticking
-    assert ev.kind([p1[:, 2]], [], [f1], p1) == ""
+    assert ev.kind([p1[:, 2]], [], [f1], p1, DHAT) == ""
     ev.start([p1[:, 2]], [], [f1], p1)                       # the last step's friction: nobody slid
     f2 = friction(range(4), p1)
     p2 = p1 + [1e-3, 0, 0]                                   # all four slide
-    assert ev.kind([p2[:, 2]], [], [f2], p2) == "stick-slip"
-    assert ev.kind([p2[:, 2]], [0], [f2], p2) == "stick-slip"
+    assert ev.kind([p2[:, 2]], [], [f2], p2, DHAT) == "stick-slip"
+    assert ev.kind([p2[:, 2]], [0], [f2], p2, DHAT) == "stick-slip"
     ev.start([p1[:, 2]], [0], [None], p1)
-    assert ev.kind([p1[:, 2]], [3], [None], p1) == "impact"  # an obstacle file's first pairs
+    assert ev.kind([p1[:, 2]], [3], [None], p1, DHAT) == "impact"  # an obstacle file's first pairs

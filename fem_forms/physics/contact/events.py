@@ -45,9 +45,8 @@ class StepEvents:
     distances to each obstacle and the number of pairs of each IPC surface; which points slid over the step
     before."""
 
-    def __init__(self, dhat: float, watched: bool = False):
-        self.dhat = dhat
-        self.watched = watched         # a time march refines the events (else nothing is remembered)
+    def __init__(self):
+        self.watched = False           # a time march refines the events (else nothing is remembered)
         self.distances: list[np.ndarray] = []
         self.pairs: list[int] = []
         self.slid: dict[int, tuple[np.ndarray, np.ndarray]] = {}
@@ -58,13 +57,14 @@ class StepEvents:
         self.slid = {i: (f.nodes, sliding(f.slip(p), f.eps)) for i, f in enumerate(friction) if f is not None}
         self.distances, self.pairs = distances, pairs
 
-    def kind(self, distances: list[np.ndarray], pairs: list[int], friction: list, p: np.ndarray) -> str:
+    def kind(self, distances: list[np.ndarray], pairs: list[int], friction: list, p: np.ndarray,
+             dhat: float) -> str:
         """'impact', 'release', 'stick-slip' or '' for the step ending at positions p with `distances` and
-        `pairs`."""
-        if any(impact(b, a, self.dhat) for b, a in zip(self.distances, distances)) or \
+        `pairs`, the barrier's layer dhat thick."""
+        if any(impact(b, a, dhat) for b, a in zip(self.distances, distances)) or \
                 any(before == 0 < after for before, after in zip(self.pairs, pairs)):
             return "impact"
-        if any(release(b, a, self.dhat) for b, a in zip(self.distances, distances)):
+        if any(release(b, a, dhat) for b, a in zip(self.distances, distances)):
             return "release"
         for i, f in enumerate(friction):
             if f is not None and i in self.slid and transition(*self.slid[i], f.nodes, sliding(f.slip(p), f.eps)):

@@ -54,7 +54,7 @@ class ContactTerm(ArrayTerm):
         self.time = self.start_time = 0.0
         self.friction: list[LaggedFriction] = []
         self._lagged_at = None                     # the state the friction was lagged from
-        self.events = StepEvents(0.0)              # impacts and stick-slip transitions of each time step
+        self.events = StepEvents()                 # impacts and stick-slip transitions of each time step
         self.only = None                           # the surface points [contact] where leaves to the obstacles
         self.set_spec(spec)
 
@@ -115,7 +115,6 @@ class ContactTerm(ArrayTerm):
         rest = self.surface.rest
         self.diagonal = float(np.linalg.norm(rest.max(axis=0) - rest.min(axis=0)))
         self.dhat = self.spec.distance or DEFAULT_DISTANCE * self.diagonal
-        self.events = StepEvents(self.dhat, self.events.watched)
         e = self.surface.edges()
         h = float(np.mean(np.linalg.norm(rest[e[:, 0]] - rest[e[:, 1]], axis=1)))
         self.kappa = self.kappa0 = self.modulus / (h * pressure_at_half(self.dhat))
@@ -172,7 +171,8 @@ class ContactTerm(ArrayTerm):
     def step_event(self, x: PETSc.Vec) -> str:
         """'impact', 'release', 'stick-slip' or '' for the step from its start to x (events.py), rank 0's everywhere."""
         p = self.surface.positions(x)
-        return self.surface.comm.bcast(self.events.kind(*self._contacts(p), self.friction, p), root=0)
+        return self.surface.comm.bcast(self.events.kind(*self._contacts(p), self.friction, p, self.dhat),
+                                     root=0)
 
     def start(self, state) -> None:
         """A new solve's pseudo-time (or time) starts at 0."""
