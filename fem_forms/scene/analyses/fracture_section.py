@@ -41,8 +41,7 @@ FRACTURE_KEYS = (
     Key("stable_path", "boolean", "static runs: accept only stable states (after each converged step, the "
         "energy's Hessian on the damaging set is checked with SLEPc and a saddle is pushed along its unstable "
         "mode: a homogeneous bar cracks in one band, a symmetric part on one side); false keeps what the alternate "
-        "minimization converged to (the homogeneous solution past its peak; the default until notched parts take "
-        "the check as bars do)", default=False),
+        "minimization converged to (a homogeneous bar stays homogeneous past its peak: a saddle)", default=True),
     Key("notch", "tables", "initial cracks [[fracture.notch]]: where", default=[], keys=NOTCH_KEYS),
 )
 
@@ -58,7 +57,7 @@ class FractureSpec:
     tolerance: float = 1.0e-4
     max_iterations: int = 500
     over_relaxation: float = 1.0
-    stable_path: bool = False
+    stable_path: bool = True
     notch: list = field(default_factory=list)       # [{"where": Selector}, ...]
 
 
