@@ -13,6 +13,7 @@ from dolfinx import fem
 import numpy as np
 
 from fem_forms.output.fields import boundary_surface
+from fem_forms.output.marks import mark_rgb, marked_facets
 from fem_forms.output.obstacle_shapes import obstacle_surfaces
 
 VIEW = (15.0, -75.0)         # elevation, azimuth in degrees (mplot3d's view_init convention)
@@ -163,12 +164,14 @@ class Canvas:
 def picture(path: Path, u: fem.Function, title: str, scale: float = 1.0, up=None, model=None) -> None:
     """PNG of the deformed boundary coloured by displacement magnitude, undeformed outline in grey; `up`
     (against gravity, default +z) drawn vertical; with `model`, its contact obstacles where they are now, in
-    translucent grey behind the part, named in the legend."""
-    surf = boundary_surface(u)
+    translucent grey behind the part, and its supports and loads as translucent patches in report.html's colours
+    over it (seen through the part where they face away), both named in the legend."""
+    marked = marked_facets(model) if model is not None else []
+    surf = boundary_surface(u, None, [facets for _, facets in marked]) if marked else boundary_surface(u)
     if surf is None:
         u.function_space.mesh.comm.barrier()
         return
-    X, polys, d = surf
+    X, polys, d = surf[:3]
     x = X + scale * d
     mag = np.linalg.norm(d, axis=1)
     vmax = mag.max() if mag.max() > 0 else 1.0
@@ -184,8 +187,24 @@ def picture(path: Path, u: fem.Function, title: str, scale: float = 1.0, up=None
     canvas.surface(to_px, X, polys, (0.6, 0.6, 0.6, 0.08), (0.4, 0.4, 0.4, 0.15), view=view)
     canvas.surface(to_px, x, polys, shade(x, polys, viridis(mag[polys].mean(axis=1) / vmax), view[1]),
                    (0, 0, 0, 0.15), view=view)
+    _marks(canvas, to_px, x, polys, surf[3] if marked else None, [label for label, _ in marked], view)
     canvas.colorbar((775, 100, 795, 400), vmax, "|u| [m]")
     canvas.triad((45, 455), view)
     canvas.text((450, 20), title + ("" if scale == 1.0 else f" (displacement x{scale:g})"), 14)
     canvas.save(path)
     u.function_space.mesh.comm.barrier()
+
+
+def _marks(canvas: Canvas, to_px, x: np.ndarray, polys: np.ndarray, bits, labels: list[str], view) -> None:
+    """The supports' and loads' polygons (bit i of `bits` per polygon: labels[i]) as translucent patches in their
+    mark colours, over the part, and a legend line of coloured squares under the title."""
+    at = 160.0
+    for i, label in enumerate(labels):
+        rgb = mark_rgb(i)
+        chosen = (bits >> i) & 1 == 1
+        if chosen.any():
+            canvas.surface(to_px, x, polys[chosen], (*rgb, 0.5), (*rgb, 0.9), view=view)
+        canvas.draw.rectangle([at * canvas.s, 33 * canvas.s, (at + 9) * canvas.s, 42 * canvas.s],
+                              fill=tuple(int(round(255 * c)) for c in rgb))
+        canvas.text((at + 13, 38), label, 11, anchor="lm", fill=(60, 60, 60))
+        at += 22 + 6.5 * len(label)

@@ -19,11 +19,12 @@ import sys
 
 import numpy as np
 
+from fem_forms.output.marks import mark_colour, marked_facets
+
 THREE = Path(sys.prefix) / "share" / "fem_forms" / "three"        # setup.sh unpacks three.js here
 THREE_FILES = ("three.module.js", "three.core.js", "OrbitControls.js")
 TEMPLATE = Path(__file__).with_name("report_page.html")
 FRAME_BYTES = 12e6             # report.html's frames (displacements, magnitudes) share this; a page stays < 20 MB
-MARK_COLOURS = ("#1565c0", "#c62828", "#2e7d32", "#6a1b9a", "#ef6c00", "#00838f")   # supports blue, loads red, ...
 
 
 @dataclass
@@ -97,7 +98,7 @@ def write_report(path: Path, title: str, subtitle: str, part: ReportPart, summar
         "frames": [{"label": label, "u": _b64(u, "<f4")} for label, u in part.frames],
         "fields": {name: {"unit": unit, "frames": [_b64(v, "<f4") for v in values]}
                    for name, (unit, values) in part.fields.items()},
-        "marks": [{"label": label, "colour": MARK_COLOURS[i % len(MARK_COLOURS)], "triangles": _b64(t, "<u4")}
+        "marks": [{"label": label, "colour": mark_colour(i), "triangles": _b64(t, "<u4")}
                   for i, (label, t) in enumerate(part.marks)],
         "table": result_rows(summary), "warnings": list(summary.get("warnings", [])),
         "plots": _plots(path.parent, summary.get("files", {})),
@@ -149,27 +150,6 @@ def obstacles(scene) -> list[dict]:
             points, triangles = read_surface(Path(ob.file), f"contact.obstacle {ob.name}.file")
             row["points"], row["triangles"] = _b64(points, "<f4"), _b64(triangles, "<u4")
         out.append(row)
-    return out
-
-
-def _marked_facets(model) -> list[tuple[str, np.ndarray]]:
-    """(label, local facet indices) of each support and load acting on facets: what the page marks. A selector
-    the solve took cannot fail here; should one (a body load's cells), it is left unmarked, not the run failed."""
-    from fem_forms.errors import InputError
-    from fem_forms.physics.supports import locate_facets
-    from fem_forms.scene.selectors import AREA_SELECTORS
-    from fem_forms.scene.spec import fix_names
-    scene = model.scene
-    wanted = [(f"support {name}", fix.where) for name, fix in zip(fix_names(scene.fix), scene.fix)]
-    wanted += [(f"{load.type} load[{i}]", load.where) for i, load in enumerate(scene.load)
-               if load.type != "gravity" and load.where is not None]      # gravity's `where` names cells
-    out = []
-    for label, where in wanted:
-        if where.kind in AREA_SELECTORS:
-            try:
-                out.append((label, locate_facets(model.loaded, where)))
-            except InputError:                 # the same verdict on every rank (locate_facets reduces)
-                continue
     return out
 
 
@@ -226,7 +206,7 @@ def write_model_report(model, u, shapes: list, von_mises, out: Path, summary: di
             "report.html left out: its viewer (three.js) is not installed; run setup.sh")
         return False
     from fem_forms.output.fields import boundary_surface
-    marked = _marked_facets(model)
+    marked = marked_facets(model)
     at_end = end_fields(model, von_mises)
     base = boundary_surface(u, [f for _, _, f in at_end], [facets for _, facets in marked])
     if model.mesh.comm.rank == 0:

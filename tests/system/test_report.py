@@ -186,3 +186,38 @@ def test_the_deformed_picture_draws_the_obstacles_where_they_are(tmp_path):
     rows = np.arange(pixels.shape[0])[:, None]
     assert coloured.mean() > 0.02 and grey.mean() > 0.05
     assert (rows * grey).sum() / grey.sum() > (rows * coloured).sum() / coloured.sum()   # below the part
+
+
+def test_the_deformed_picture_marks_the_supports_and_the_loads_where_they_act(tmp_path):
+    """deformed.png of a cantilever clamped at x = 0 and pulled down at x = L: against the same picture without the
+    model (nothing marked), the pixels the marks change are at the part's two ends only (the picture's x axis runs
+    to the right), bluer at the clamped end (the first mark, report.html's blue) and redder at the loaded one (its
+    yellow turns red: less green)."""
+    import matplotlib.image
+    import fem_forms as ff
+    from fem_forms.analyses.static.solve import solve_static
+    from fem_forms.output import pictures
+    scene = ff.Scene.from_dict({
+        "title": "cantilever", "mesh": {"generator": "box", "size": [0.2, 0.02, 0.02], "cells": [20, 2, 2]},
+        "material": {"E": 1e6, "nu": 0.3}, "fix": [{"name": "wall", "where": {"axis": "x", "at": 0.0}}],
+        "load": [{"type": "traction", "where": {"axis": "x", "at": 0.2}, "value": [0.0, 0.0, -200.0]}]})
+    result = solve_static(scene)
+    pictures.picture(tmp_path / "marked.png", result.u, "cantilever", model=result.model)
+    pictures.picture(tmp_path / "plain.png", result.u, "cantilever")
+    marked, plain = (matplotlib.image.imread(tmp_path / f)[..., :3] for f in ("marked.png", "plain.png"))
+    marked, plain = marked[60:], plain[60:]                                     # below the title and the legend
+    changed = np.abs(marked - plain).max(axis=2) > 0.05
+    part = (plain.max(axis=2) - plain.min(axis=2)) > 0.1                       # the part, in viridis
+    part[:, 700:] = False                                                       # not the colour bar
+    columns = np.flatnonzero(part.any(axis=0))
+    left, right = columns.min(), columns.max()
+    near = 0.06 * (right - left)
+    cols = np.nonzero(changed)[1]
+    assert changed.sum() > 200
+    assert np.all((cols <= left + near) | (cols >= right - near))              # at the ends only
+    assert (cols <= left + near).any() and (cols >= right - near).any()        # both ends
+    change = marked - plain
+    at_wall, at_load = change[:, : left + int(near)][changed[:, : left + int(near)]], \
+        change[:, right - int(near):][changed[:, right - int(near):]]
+    assert (at_wall[:, 2] - at_wall[:, 0]).mean() > 0.15                       # bluer (measured 0.33)
+    assert (at_load[:, 0] - at_load[:, 1]).mean() > 0.15                       # redder against green (0.32)
