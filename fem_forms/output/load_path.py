@@ -64,6 +64,7 @@ class LoadPath:
         self.finished = False                  # the final results.json is being written: no interrupted one
         self.shapes: list = []                 # steps' surface displacements for report.html (rank 0), the
         self._next_shape = 0.0                 # final state's not among them (the report gathers it)
+        self.shape_times: list = []            # their pseudo-times (load factor x span: obstacles move with it)
 
     def attach(self, model, span: float, interrupts=None) -> None:
         self.model, self.span, self.interrupts = model, span, interrupts
@@ -95,6 +96,7 @@ class LoadPath:
         if self.stepping and self.scene.output.report and self._next_shape <= lam < 1.0 - 1e-12:
             self._next_shape = lam + 1.0 / REPORT_STEPS         # a gather of the surface: about 50 in a run
             self.shapes += surface_frames([(f"load factor {lam:.4g}", model.u)])
+            self.shape_times.append(lam * self.span)
         if self.stepping:
             self._write_fields(lam * self.span)
             probes.write_table(self.out / "probes.csv", self.head(), self.rows, self.comm)

@@ -36,7 +36,7 @@ class ReportPart:
     frames: list = field(default_factory=list)      # [(label, displacement (n, 3))]
     fields: dict = field(default_factory=dict)      # name -> (unit, [values (n,) per frame])
     marks: list = field(default_factory=list)       # [(label, triangle indices)]
-    obstacles: list = field(default_factory=list)   # [{name, shape and its keys}]: the rigid obstacles at rest
+    obstacles: list = field(default_factory=list)   # [{name, shape, its keys, offsets}]: the rigid obstacles
 
 
 def viewer_installed() -> bool:
@@ -134,18 +134,23 @@ def triangulated(polys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.vstack([polys[:, [0, 1, 2]], polys[:, [0, 2, 3]]]), np.tile(np.arange(len(polys)), 2)
 
 
-def obstacles(scene) -> list[dict]:
-    """The scene's rigid obstacles as the page draws them (where they start): a plane, a sphere, a box, a cylinder
-    by their keys; a surface file by its triangles."""
+def obstacles(scene, times: list | None = None) -> list[dict]:
+    """The scene's rigid obstacles as the page draws them: a plane, a sphere, a box, a cylinder by their keys; a
+    surface file by its triangles; one that moves with its translation at each frame's time (`offsets`, `times`
+    one per frame: dynamic time or the load steps' pseudo-time) and at time 0 (`offset0`, the rest shape's)."""
     if scene.contact is None:
         return []
     from fem_forms.meshes.surfaces import read_surface
+    from fem_forms.physics.contact.obstacles import translation
     out = []
     for ob in scene.contact.obstacle:
         keys = asdict(ob)
         row = {"name": ob.name, "shape": ob.shape,
                **{k: keys[k] for k in ("point", "normal", "center", "radius", "min", "max", "axis")
                   if keys.get(k) is not None}}
+        if ob.motion:
+            row["offset0"] = translation(ob.motion, 0.0).tolist()
+            row["offsets"] = [translation(ob.motion, t).tolist() for t in (times or [])]
         if ob.shape == "file":
             points, triangles = read_surface(Path(ob.file), f"contact.obstacle {ob.name}.file")
             row["points"], row["triangles"] = _b64(points, "<f4"), _b64(triangles, "<u4")
@@ -194,12 +199,13 @@ def end_fields(model, von_mises=None) -> list[tuple[str, str, object]]:
 
 
 def write_model_report(model, u, shapes: list, von_mises, out: Path, summary: dict, subtitle: str, up=None,
-                       scale: str = "1", magnitude: tuple = ("|u|", "m")) -> bool:
+                       scale: str = "1", magnitude: tuple = ("|u|", "m"), times: list | None = None) -> bool:
     """report.html of a solved model (a collective call; rank 0 writes): its outer surface gathered with u and the
     end_fields (von Mises stress when given, damage, contact pressure, material), moved by each of `shapes`
     ([(label, displacement at the surface's points)] from surface_frames or a run's own gathers; None: u's),
     coloured by the displacement's magnitude (named and in the unit of `magnitude`) or, on the last frame, by those
-    fields; its supports and loads marked, shown at `scale` ("1", "10", "100", "auto"). False (and a warning in
+    fields; its supports and loads marked, shown at `scale` ("1", "10", "100", "auto"); its moving obstacles where
+    they are at each shape's time (`times`, one per shape; None: where they start). False (and a warning in
     summary) when the viewer is not installed."""
     if not viewer_installed():
         summary.setdefault("warnings", []).append(
@@ -212,12 +218,15 @@ def write_model_report(model, u, shapes: list, von_mises, out: Path, summary: di
     if model.mesh.comm.rank == 0:
         points, polys, disp, values, bits = base
         tris, origin = triangulated(polys)
-        moves = within_budget([(label, disp if d is None else d) for label, d in shapes], len(points))
+        timed = zip(shapes, times if times is not None else [None] * len(shapes))
+        kept = within_budget([(label, disp if d is None else d, t) for (label, d), t in timed], len(points))
+        moves = [(label, d) for label, d, _ in kept]
         fields = {magnitude[0]: (magnitude[1], [np.linalg.norm(d, axis=1) for _, d in moves])}
         for k, (name, unit, _) in enumerate(at_end):    # known at the end only: shown with the last frame
             fields[name if len(moves) == 1 else f"{name} (last frame)"] = (unit, [values[:, k]])
         marks = [(label, tris[(bits[origin] >> i) & 1 == 1].ravel()) for i, (label, _) in enumerate(marked)]
         write_report(out / "report.html", model.scene.title, subtitle,
-                     ReportPart(points, tris, moves, fields, marks, obstacles(model.scene)),
+                     ReportPart(points, tris, moves, fields, marks,
+                                obstacles(model.scene, None if times is None else [t for _, _, t in kept])),
                      summary, (0.0, 0.0, 1.0) if up is None else up, scale)
     return True

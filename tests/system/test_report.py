@@ -221,3 +221,39 @@ def test_the_deformed_picture_marks_the_supports_and_the_loads_where_they_act(tm
         change[:, right - int(near):][changed[:, right - int(near):]]
     assert (at_wall[:, 2] - at_wall[:, 0]).mean() > 0.15                       # bluer (measured 0.33)
     assert (at_load[:, 0] - at_load[:, 1]).mean() > 0.15                       # redder against green (0.32)
+
+
+def test_a_moving_obstacle_follows_its_motion_through_the_frames(tmp_path):
+    """A ball moving 0.2 m along x over a clamped block in two load steps (pseudo-time = load factor): the page
+    holds its translation at each frame's time (0.1 and 0.2 m, its motion's rows interpolated by hand), frames the
+    ball along its way, and report.html#frame=K opens frame K with the ball drawn there: its grey pixels further
+    right in the last frame than in the first (the view's x axis runs to the right)."""
+    import matplotlib.image
+    scene = {"title": "a ball passing over a block", "mesh": {"generator": "box", "size": [0.1, 0.1, 0.1],
+                                                             "cells": [2, 2, 2]},
+             "material": {"E": 1e5, "nu": 0.3, "rho": 1000.0}, "load": [{"type": "gravity"}],
+             "fix": [{"where": {"axis": "z", "at": 0.0}}],
+             "contact": {"obstacle": [{"name": "ball", "shape": "sphere", "center": [-0.05, 0.05, 0.2],
+                                       "radius": 0.03, "motion": [[0, 0, 0, 0], [1, 0.2, 0, 0]]}]},
+             "solver": {"steps": 2, "max_step": 0.5}, "output": {"picture": False, "fields": False}}
+    path = tmp_path / "ball.toml"
+    path.write_text(toml_dumps(scene))
+    assert main(["run", str(path), "--out", str(tmp_path / "out"), "-q"]) == 0
+    page = tmp_path / "out" / "report.html"
+    data = json.loads(page.read_text().split('<script id="report-data" type="application/json">')[1]
+                      .split("</script>")[0])
+    (ball,) = data["obstacles"]
+    assert [f["label"] for f in data["frames"]] == ["load factor 0.5", "load factor 1"]
+    assert ball["offset0"] == [0, 0, 0] and np.allclose(ball["offsets"], [[0.1, 0, 0], [0.2, 0, 0]], atol=1e-12)
+    centres = []
+    for k in (0, 1):
+        shot = tmp_path / f"frame{k}.png"
+        _browser("--window-size=1000,700", f"--screenshot={shot}", page.as_uri() + f"#frame={k}")
+        pixels = matplotlib.image.imread(shot)[100:460, 150:850, :3]
+        grey = (pixels.max(axis=2) - pixels.min(axis=2) < 0.05) & (pixels.mean(axis=2) > 0.6) & \
+            (pixels.mean(axis=2) < 0.9)
+        assert grey.sum() > 500, f"frame {k}: no ball drawn"
+        centres.append(np.nonzero(grey)[1].mean())
+    assert centres[1] > centres[0] + 40
+    dom = _browser("--dump-dom", page.as_uri() + "#frame=0").stdout
+    assert '<p id="error"></p>' in dom and "load factor 0.5</span>" in dom

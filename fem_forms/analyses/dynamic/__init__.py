@@ -116,8 +116,9 @@ def _report(result: DynamicResult, frames: list, summary: dict, files: dict, out
     subtitle = (f"dynamic ({scene.dynamic.scheme}), {summary['dofs']:,} dofs, {summary['steps']} steps to t = "
                 f"{end:.4g} s")
     shapes = [(f"t = {t:.4g} s", surf[2]) for t, surf in shown if t < end] + [(f"t = {end:.4g} s", None)]
+    times = [t for t, _ in shown if t < end] + [end]
     return write_model_report(result.system.model, result.system.u, shapes, None, out, {**summary, "files": files},
-                              subtitle, scene_up(scene))
+                              subtitle, scene_up(scene), times=times)
 
 
 def end_state(result: DynamicResult) -> dict:

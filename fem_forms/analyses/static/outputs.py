@@ -82,10 +82,13 @@ def write_static_outputs(result: StaticResult, out: "Path", path: LoadPath | Non
               if "von_mises" in (scene.output.fields or []) else None)
         subtitle = (f"static, {summary['dofs']:,} dofs, {summary['load_steps']} load steps, max |u| "
                     f"{summary['max_displacement']:.4g} m")
+        reached = summary.get("load_reached", 1.0)
+        span = path.span if path is not None else 1.0
         if attempt(summary["warnings"], "report.html", lambda: write_model_report(
                 result.model, result.u, (path.shapes if path is not None else [])
-                + [(f"load factor {summary.get('load_reached', 1.0):.4g}", None)], vm,
-                out, {**summary, "files": files}, subtitle, pictures.scene_up(scene))):
+                + [(f"load factor {reached:.4g}", None)], vm,
+                out, {**summary, "files": files}, subtitle, pictures.scene_up(scene),
+                times=(path.shape_times if path is not None else []) + [reached * span])):
             files["report"] = "report.html"
     summary["files"] = files
     if path is not None:

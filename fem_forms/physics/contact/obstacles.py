@@ -16,6 +16,13 @@ def _unit(v) -> np.ndarray:
     return v / np.linalg.norm(v)
 
 
+def translation(motion: list | None, t: float) -> np.ndarray:
+    """A rigid obstacle's translation at time t from its `motion` rows [t, dx, dy, dz], piecewise linear, held
+    after the last row (zero without a motion)."""
+    if not motion:
+        return np.zeros(3)
+    return np.array([piecewise_linear([[r[0], r[1 + k]] for r in motion], t) for k in range(3)])
+
 class Obstacle:
     """One rigid obstacle: `distance_terms(p)` gives the signed distance d, grad d and the Hessian of d at the
     points p (n, 3) with the obstacle at its current offset (`move_to(t)`). With `only` (a mask of the surface's
@@ -29,9 +36,7 @@ class Obstacle:
 
     def offset_at(self, t: float) -> np.ndarray:
         """The obstacle's translation at time t (zero without a motion; held after the last row)."""
-        if not self.motion:
-            return np.zeros(3)
-        return np.array([piecewise_linear([[r[0], r[1 + k]] for r in self.motion], t) for k in range(3)])
+        return translation(self.motion, t)
 
     def move_to(self, t: float) -> None:
         self.offset = self.offset_at(t)
