@@ -1,5 +1,6 @@
 """Run demos and store what the manual's tutorial pages show: the printed output (docs/demos/<name>.txt) and
-the pictures (docs/demos/<name>/*.png, *.gif, scaled down to at most 900 px wide).
+the pictures (docs/demos/<name>/*.png, *.gif, scaled down to at most 900 px wide), and a screenshot of the report.html
+it wrote (headless Chromium, as the browser tests).
 
     .venv/bin/python docs/refresh_demos.py            # every demo (about 10 minutes on 2 cores)
     .venv/bin/python docs/refresh_demos.py bent_spoon struck_bar
@@ -25,6 +26,7 @@ sys.path.insert(0, str(DOCS))
 from demo_transcripts import TRANSCRIPTS, normalise, transcript_path  # noqa: E402
 
 WIDTH = 900                    # px: pictures wider than this are scaled down
+REPORT_SHOT = "report_html.png"   # the report's screenshot (docs/_ext/demo_pages.py shows it under its own heading)
 MAX_GIF = 2_500_000            # bytes: larger animations are scaled down by a further factor of 2
 
 
@@ -56,6 +58,26 @@ def store_picture(src: Path, dest: Path) -> None:
     frames[0].save(dest, save_all=True, append_images=frames[1:], duration=durations, loop=0, optimize=True)
 
 
+def report_shot(out: Path, dest: Path) -> bool:
+    """A screenshot of the demo's report.html (the one nearest its output folder's top) by headless Chromium, as
+    the browser tests take theirs; False where the demo wrote none (or Chromium is missing)."""
+    pages = sorted(out.rglob("report.html"), key=lambda p: (len(p.parts), str(p)))
+    chromium = shutil.which("chromium")
+    if not pages or chromium is None:
+        return False
+    shot = out / "report_shot.png"
+    subprocess.run([chromium, "--headless=new", "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+                    "--virtual-time-budget=8000", "--hide-scrollbars", "--window-size=1000,700",
+                    f"--screenshot={shot}", pages[0].as_uri()], capture_output=True, timeout=120)
+    if not shot.is_file():
+        return False
+    with Image.open(shot) as im:              # full colour: 256 would shift the marks' and the bar's colours
+        im = im.convert("RGB")
+        im.resize((WIDTH, round(im.height * WIDTH / im.width)), Image.LANCZOS).save(dest, optimize=True)
+    shot.unlink()
+    return True
+
+
 def refresh(name: str) -> float:
     """Run demos/<name>.py, store its transcript and pictures; returns its wall time."""
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
@@ -74,6 +96,7 @@ def refresh(name: str) -> float:
         folder.mkdir(parents=True)
         for src in pictures(out):
             store_picture(src, folder / "_".join(src.relative_to(out).parts))
+        report_shot(out, folder / REPORT_SHOT)
     return wall
 
 

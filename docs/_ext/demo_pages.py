@@ -20,6 +20,7 @@ ROOT = DOCS.parent
 DEMOS = ROOT / "demos"
 STORED = DOCS / "demos"
 OUT = DOCS / "tutorials"
+REPORT_SHOT = "report_html.png"           # docs/refresh_demos.py's screenshot of the demo's report.html
 logger = logging.getLogger(__name__)
 
 
@@ -41,7 +42,22 @@ def scenes_of(source: str, name: str) -> list[Path]:
     return [DEMOS / "scenes" / f"{n}.toml" for n in names if (DEMOS / "scenes" / f"{n}.toml").is_file()]
 
 
-def page_text(name: str) -> str:
+def checks() -> dict[str, tuple[str, str, str]]:
+    """demo -> (test file, test name, its docstring): the test the suite checks each demo with (the CHECKS table of
+    tests/system/demo_runs.py, read without importing the tests)."""
+    tests = ROOT / "tests" / "system"
+    tree = ast.parse((tests / "demo_runs.py").read_text())
+    table = next(ast.literal_eval(n.value) for n in tree.body
+                 if isinstance(n, ast.Assign) and getattr(n.targets[0], "id", "") == "CHECKS")
+    found = {}
+    for path in sorted(tests.glob("test_*.py")):
+        for node in ast.parse(path.read_text()).body:
+            if isinstance(node, ast.FunctionDef) and node.name in table.values():
+                found[node.name] = (path.name, node.name, " ".join((ast.get_docstring(node) or "").split()))
+    return {demo: found[test] for demo, test in table.items() if test in found}
+
+
+def page_text(name: str, checked: tuple[str, str, str] | None = None) -> str:
     source = (DEMOS / f"{name}.py").read_text()
     title, body = split_docstring(source, name)
     lines = [f"(tutorial-{name})=", f"# {title}", "", body, "", "## Run it", "", "```sh",
@@ -52,7 +68,17 @@ def page_text(name: str) -> str:
     else:
         logger.warning(f"demos/{name}.py has no transcript docs/demos/{name}.txt: "
                        f"run `python docs/refresh_demos.py {name}`")
-    pictures = sorted((STORED / name).glob("*.png")) + sorted((STORED / name).glob("*.gif"))
+    if checked is not None and checked[2]:
+        lines += ["## What it is checked against", "", checked[2], "",
+                  f"The test suite runs the demo and checks this: `tests/system/{checked[0]}::{checked[1]}`.", ""]
+    else:
+        logger.warning(f"demos/{name}.py: no test with a docstring checks it (tests/system/demo_runs.py CHECKS)")
+    shot = STORED / name / REPORT_SHOT
+    if shot.is_file():
+        lines += ["## Its report.html", "", "The run's page in the browser (`fem-forms view OUT`), as the demo left it:",
+                  "", f"```{{figure}} ../demos/{name}/{REPORT_SHOT}", ":alt: report.html", "```", ""]
+    pictures = [p for p in sorted((STORED / name).glob("*.png")) + sorted((STORED / name).glob("*.gif"))
+                if p.name != REPORT_SHOT]
     if pictures:
         lines += ["## Pictures", ""]
         for p in pictures:
@@ -77,8 +103,9 @@ def generate(app: Sphinx) -> None:
     for old in OUT.glob("*.md"):
         if old.name not in wanted:
             old.unlink()
+    checked = checks()
     for name in names:
-        text = page_text(name)
+        text = page_text(name, checked.get(name))
         path = OUT / f"{name}.md"
         if not path.is_file() or path.read_text() != text:
             path.write_text(text)
