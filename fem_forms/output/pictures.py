@@ -197,14 +197,17 @@ def picture(path: Path, u: fem.Function, title: str, scale: float = 1.0, up=None
 
 def _marks(canvas: Canvas, to_px, x: np.ndarray, polys: np.ndarray, bits, labels: list[str], view) -> None:
     """The supports' and loads' polygons (bit i of `bits` per polygon: labels[i]) as translucent patches in their
-    mark colours, over the part, and a legend line of coloured squares under the title."""
-    at = 160.0
+    mark colours, over the part, and a legend of coloured squares under the title (as many rows as it needs)."""
+    at, row = 160.0, 38.0
     for i, label in enumerate(labels):
         rgb = mark_rgb(i)
         chosen = (bits >> i) & 1 == 1
         if chosen.any():
             canvas.surface(to_px, x, polys[chosen], (*rgb, 0.5), (*rgb, 0.9), view=view)
-        canvas.draw.rectangle([at * canvas.s, 33 * canvas.s, (at + 9) * canvas.s, 42 * canvas.s],
+        width = 22 + 6.5 * len(label)
+        if at + width > 760 and at > 160.0:
+            at, row = 160.0, row + 15
+        canvas.draw.rectangle([at * canvas.s, (row - 5) * canvas.s, (at + 9) * canvas.s, (row + 4) * canvas.s],
                               fill=tuple(int(round(255 * c)) for c in rgb))
-        canvas.text((at + 13, 38), label, 11, anchor="lm", fill=(60, 60, 60))
-        at += 22 + 6.5 * len(label)
+        canvas.text((at + 13, row), label, 11, anchor="lm", fill=(60, 60, 60))
+        at += width

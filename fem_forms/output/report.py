@@ -218,7 +218,7 @@ def write_model_report(model, u, shapes: list, von_mises, out: Path, summary: di
     if model.mesh.comm.rank == 0:
         points, polys, disp, values, bits = base
         tris, origin = triangulated(polys)
-        timed = zip(shapes, times if times is not None else [None] * len(shapes))
+        timed = zip(shapes, times if times is not None else [None] * len(shapes), strict=True)
         kept = within_budget([(label, disp if d is None else d, t) for (label, d), t in timed], len(points))
         moves = [(label, d) for label, d, _ in kept]
         fields = {magnitude[0]: (magnitude[1], [np.linalg.norm(d, axis=1) for _, d in moves])}

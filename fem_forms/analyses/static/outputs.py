@@ -83,7 +83,7 @@ def write_static_outputs(result: StaticResult, out: "Path", path: LoadPath | Non
         subtitle = (f"static, {summary['dofs']:,} dofs, {summary['load_steps']} load steps, max |u| "
                     f"{summary['max_displacement']:.4g} m")
         reached = summary.get("load_reached", 1.0)
-        span = path.span if path is not None else 1.0
+        span = path.span if path is not None else load_span(result.model)
         if attempt(summary["warnings"], "report.html", lambda: write_model_report(
                 result.model, result.u, (path.shapes if path is not None else [])
                 + [(f"load factor {reached:.4g}", None)], vm,

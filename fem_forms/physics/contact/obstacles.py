@@ -23,6 +23,7 @@ def translation(motion: list | None, t: float) -> np.ndarray:
         return np.zeros(3)
     return np.array([piecewise_linear([[r[0], r[1 + k]] for r in motion], t) for k in range(3)])
 
+
 class Obstacle:
     """One rigid obstacle: `distance_terms(p)` gives the signed distance d, grad d and the Hessian of d at the
     points p (n, 3) with the obstacle at its current offset (`move_to(t)`). With `only` (a mask of the surface's
