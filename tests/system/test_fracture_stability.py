@@ -98,3 +98,15 @@ def test_two_ranks_take_the_same_stable_path(tmp_path):
     assert two["bifurcations"][0]["at"] == pytest.approx(one["bifurcations"][0]["at"], abs=1e-9)
     for key in ("damage_max", "crack_area"):
         assert two[key] == pytest.approx(one[key], rel=1e-5), key
+
+
+def test_an_iterative_solver_leaves_the_check_out_and_says_so(tmp_path):
+    """The check factorizes the energy's Hessian, which a run on an iterative solver cannot afford: not checked,
+    stable_path false and a warning saying why."""
+    d = bar(2 * ELL, 20, 1.1 * EPS_C, 4)
+    d["solver"]["linear"] = "iterative"
+    code, res, err, _ = run_scene(tmp_path, d)
+    assert code == 0, err
+    assert res["stable_path"] is False and "bifurcations" not in res
+    assert any(w.startswith("fracture.stable_path: not checked, the run's linear solver is iterative")
+               for w in res["warnings"])

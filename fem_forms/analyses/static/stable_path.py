@@ -3,9 +3,10 @@ state of the alternate minimization is a stationary point of E(u, d), not necess
 past its elastic limit stays homogeneous under the staggered solve, a saddle once the bar is longer than about
 pi l sqrt(2/3) (AT1); a symmetric specimen damages both sides alike. After each converged step the energy's
 Hessian [[K_uu, K_ud], [K_du, K_dd]] is restricted to the active set (free displacement dofs, damage dofs strictly
-between their bounds d_old and 1), scaled by its diagonal, and its inertia counted (MUMPS LDL^T); with a negative
-eigenvalue, SLEPc's spectrum slicing gives the most negative one's mode, the state is pushed along it (the damage
-growing where the mode is largest, kept within its bounds) and the step solved again from there."""
+between their bounds d_old and 1; displacement nodes on a crack's line left out), scaled by its diagonal, and its
+inertia counted (MUMPS LDL^T); with a negative eigenvalue, SLEPc's spectrum slicing gives the most negative one's
+mode, the state is pushed along it (the damage growing where the mode is largest, kept within its bounds) and the
+step solved again from there."""
 from __future__ import annotations
 
 from dolfinx import fem
@@ -17,6 +18,7 @@ import ufl
 
 from fem_forms.errors import SolveError
 from fem_forms.model import Model
+from fem_forms.solvers import linear
 from fem_forms.solvers.slicing import eigensolve_interval, inertia_below
 
 ACTIVE = 1e-6        # a damage dof is active this far inside its bounds (d_old + ACTIVE < d < 1 - ACTIVE)
@@ -26,12 +28,19 @@ CRACK_LINE = 0.8     # displacement nodes with d at least this (g(d) <= 0.04 of 
 
 
 def stable_path(model: Model) -> StablePath | None:
-    """The check of a static run's phase field; None without one, or with fracture.stable_path = false (the
-    run's report then says stable_path: false)."""
+    """The check of a static run's phase field; None without one, with fracture.stable_path = false, or where the
+    run's linear solver is iterative (the check factorizes the energy's Hessian, which a run too large for a direct
+    solver cannot afford: said in a warning); the run's report then says stable_path: false."""
     fracture = getattr(model.scene, "fracture", None)
     if fracture is None or not model.sub_problems():
         return None
-    if not fracture.stable_path:
+    V = model.u.function_space
+    dofs = V.dofmap.index_map.size_global * V.dofmap.index_map_bs
+    iterative = linear.choose(model.scene.solver.linear, dofs) == "iterative"
+    if not fracture.stable_path or iterative:
+        if fracture.stable_path:
+            model.warnings.append("fracture.stable_path: not checked, the run's linear solver is iterative (the "
+                                  "check factorizes the energy's Hessian; solver.linear = \"direct\" checks it)")
         for t in model.terms:
             if "damage" in t.state_fields():
                 t.stable_path, t.bifurcations = False, []

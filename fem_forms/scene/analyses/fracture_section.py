@@ -38,10 +38,11 @@ FRACTURE_KEYS = (
     Key("over_relaxation", "number", "the alternate minimization's over-relaxation omega: each sweep moves the "
         "damage omega times its step, within its bounds (Farrell & Maurini 2017; 1: plain alternate minimization; "
         "the fixed point is the same)", default=1.0, minimum=1, exclusive_maximum=2),
-    Key("stable_path", "boolean", "static runs: accept only stable states (after each converged step, the "
-        "energy's Hessian on the damaging set is checked with SLEPc and a saddle is pushed along its unstable "
-        "mode: a homogeneous bar cracks in one band, a symmetric part on one side); false keeps what the alternate "
-        "minimization converged to (a homogeneous bar stays homogeneous past its peak: a saddle)", default=True),
+    Key("stable_path", "boolean", "static runs with a direct linear solver: accept only stable states (after each "
+        "converged step, the energy's Hessian on the damaging set, the crack's own line left out, is checked with "
+        "SLEPc and a saddle is pushed along its unstable mode: a homogeneous bar cracks in one band, a symmetric "
+        "part on one side); false keeps what the alternate minimization converged to (a homogeneous bar stays "
+        "homogeneous past its peak: a saddle)", default=True),
     Key("notch", "tables", "initial cracks [[fracture.notch]]: where", default=[], keys=NOTCH_KEYS),
 )
 
