@@ -2,35 +2,25 @@
 
     python demos/floating_boat.py OUT_DIR
 
-The boat (a box hull 0.24 x 0.10 x 0.06 m with a cabin 0.08 x 0.06 x 0.05 m set towards the bow) is
-meshed with gmsh, in wood (600 kg/m^3). Solid, it is too heavy for the 3 cm waterline asked and its centre
-of mass is off the buoyancy vertical, so it would trim by the bow. `goal = "swim"` carves the interior
-(an 8 mm wall kept) so that its mass equals the water displaced at the waterline, its CoM lies on the
-vertical through the centre of buoyancy, and the metacentric height GM = KB + BM - KG is positive (at
-least 1 % of its size). Prints the mass against the displaced water, the CoM and GM.
+The boat (a box hull 0.24 x 0.10 x 0.06 m with a cabin 0.08 x 0.06 x 0.05 m set towards the bow) is meshed by
+gmsh from its CAD file demos/scenes/boat.brep, in wood (600 kg/m^3). Solid, it is too heavy for the 3 cm
+waterline asked and its centre of mass is off the buoyancy vertical, so it would trim by the bow. `goal =
+"swim"` carves the interior (an 8 mm wall kept) so that its mass equals the water displaced at the waterline,
+its CoM lies on the vertical through the centre of buoyancy, and the metacentric height GM = KB + BM - KG is
+positive (at least 1 % of its size). Prints the mass against the displaced water, the CoM and GM.
 """
 from pathlib import Path
 import sys
 
 import fem_forms as ff
 from fem_forms.analyses import run_analysis
-from fem_forms.meshes.occ_parts import write_part
 
-
-def boat(occ) -> list:
-    """The hull, and the cabin towards the bow fused on its deck (gmsh dim-tags)."""
-    hull = occ.addBox(0, 0, 0, 0.24, 0.10, 0.06)
-    cabin = occ.addBox(0.13, 0.02, 0.06, 0.08, 0.06, 0.05)
-    return occ.fuse([(3, hull)], [(3, cabin)])[0]
+SCENE = Path(__file__).parent / "scenes" / "floating_boat.toml"
 
 
 def main(out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
-    scene = {"title": "floating boat", "analysis": "balance",
-             "mesh": {"generator": "file", "file": str(write_part(out / "boat.msh", boat, 0.008))},
-             "material": {"model": "neo-hookean", "E": 1e10, "nu": 0.3, "rho": 600.0},
-             "balance": {"goal": "swim", "waterline": 0.03, "water_density": 1000.0, "shell": 0.008}}
-    d = run_analysis(ff.Scene.from_dict(scene), out / "swim")
+    d = run_analysis(ff.Scene.from_file(SCENE), out / "swim")
     b = d["before"]
     fmt = lambda v: "(" + ", ".join(f"{x:.6f}" for x in v) + ")"
     print(f"solid: mass {b['mass']:.6f} kg, CoM {fmt(b['center_of_mass'])} m")

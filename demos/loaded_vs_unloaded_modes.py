@@ -10,7 +10,6 @@ tangent there. The picture shows the loaded modes drawn on the sagged shape.
 Run: `.venv/bin/python demos/loaded_vs_unloaded_modes.py [OUT_DIR]` (about 20 s).
 """
 import sys
-import tomllib
 from pathlib import Path
 
 from mpi4py import MPI
@@ -21,12 +20,10 @@ here = Path(__file__).parent
 out = Path(sys.argv[1]) if len(sys.argv) > 1 else Path("out/loaded_vs_unloaded_modes")
 
 ff.quiet_jit()
-data = tomllib.loads((here / "scenes" / "sagging_beam.toml").read_text())
-data["analysis"] = "modal"
 summaries = {}
-for name, prestress in (("unloaded", False), ("loaded", True)):
-    data["modal"] = {"count": 6, "prestress": prestress}
-    scene = ff.Scene.from_dict(data, base_dir=here / "scenes")
+for name, prestress in (("unloaded", False), ("loaded", True)):      # the sagging beam's scene, as modal runs
+    scene = ff.Scene.from_file(here / "scenes" / "sagging_beam.toml",
+                               {"analysis": "modal", "modal.count": 6, "modal.prestress": prestress})
     summaries[name] = ff.write_modal_outputs(ff.solve_modal(scene), out / name)
 
 if MPI.COMM_WORLD.rank == 0:

@@ -2,7 +2,8 @@
 
     python demos/roly_poly.py OUT_DIR
 
-The toy (a hemisphere of radius 5 cm resting on its dome, under a cylinder 4 cm tall) is meshed with gmsh.
+The toy (a hemisphere of radius 5 cm resting on its dome, under a cylinder 4 cm tall) is meshed by gmsh from
+its CAD file, demos/scenes/roly_poly.brep.
 Tilted, it rolls on its dome about the dome's centre: it comes back only if its centre of mass lies below
 that centre. Solid, the CoM is above it (the toy falls over); `goal = "swing"` fits a sphere to the
 contact region (the rocking surface), then carves the interior (a 3 mm wall kept) so that the CoM lies on
@@ -18,27 +19,14 @@ import sys
 
 import fem_forms as ff
 from fem_forms.analyses import run_analysis
-from fem_forms.meshes.occ_parts import write_part
 
-
+SCENE = Path(__file__).parent / "scenes" / "roly_poly.toml"
 STEEL = 7850.0            # kg/m^3: the ballast filling the carved cavity of the taller toy
-
-
-def toy(occ, R: float = 0.05, H: float = 0.04) -> list:
-    """The lower half of a sphere of radius R under a cylinder of radius R and height H (gmsh dim-tags)."""
-    ball = occ.addSphere(0, 0, 0, R)
-    top = occ.addBox(-2 * R, -2 * R, 0, 4 * R, 4 * R, 2 * R)
-    dome, _ = occ.cut([(3, ball)], [(3, top)])
-    return occ.fuse(dome, [(3, occ.addCylinder(0, 0, 0, 0, 0, H, R))])[0]
 
 
 def main(out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
-    scene = {"title": "roly-poly toy", "analysis": "balance",
-             "mesh": {"generator": "file", "file": str(write_part(out / "toy.msh", toy, 0.006))},
-             "material": {"model": "neo-hookean", "E": 2e9, "nu": 0.35, "rho": 1200.0},
-             "balance": {"goal": "swing", "margin_angle": 5.0, "shell": 0.003, "contact_tolerance": 0.01}}
-    d = run_analysis(ff.Scene.from_dict(scene), out / "swing")
+    d = run_analysis(ff.Scene.from_file(SCENE), out / "swing")
     b = d["before"]
     c = d["curvature_center"]
     print(f"rocking surface: centre ({c[0]:.3e}, {c[1]:.3e}, {c[2]:.3e}) m, radius {d['curvature_radius']:.6f} m")
@@ -48,11 +36,9 @@ def main(out: Path) -> None:
           f"{d['carved_fraction']:.4f}")
     print(f"picture: {out / 'swing' / 'balance.png'}")
     # a taller toy (H = 5 cm): no hollowing brings its CoM low enough; a steel ballast in a carved cavity does
-    tall = {**scene, "title": "tall roly-poly, steel ballast",
-            "mesh": {"generator": "file", "file": str(write_part(out / "tall.msh", lambda occ: toy(occ, H=0.05),
-                                                                   0.006))},
-            "balance": {**scene["balance"], "fill_density": STEEL}}
-    d = run_analysis(ff.Scene.from_dict(tall), out / "ballast")
+    tall = {"title": "tall roly-poly, steel ballast", "mesh.file": "roly_poly_tall.brep",
+            "balance.fill_density": STEEL}
+    d = run_analysis(ff.Scene.from_file(SCENE, tall), out / "ballast")
     print(f"ballasted (H = 5 cm, steel {STEEL:.0f} kg/m^3 in the cavity): CoM depth below the centre "
           f"{d['com_depth_below_center']:.6f} m, off its vertical {d['com_offset_from_center_vertical']:.3e} m, "
           f"mass {d['mass']:.6f} kg, ballast fraction {d['carved_fraction']:.4f} -> {out / 'ballast' / 'void.stl'}")

@@ -2,7 +2,7 @@
 
     python demos/sag_and_stand.py OUT_DIR
 
-The target is the leaning figure (demos/leaning_figure.py: a foot and a column leaning 8.5 cm out over the
+The target is the leaning figure (demos/scenes/figure_lean85.brep: a foot and a column leaning 8.5 cm out over the
 foot's edge) in a soft silicone (E 0.15 MPa, nu 0.4, 1100 kg/m^3), its sole clamped to the ground, under
 its own weight. `analysis = "inverse"` designs the rest shape to cast so that it sags into the target; as a
 solid part that target topples (`[balance] goal = "check"` reports it: the sagged shape is the target, so
@@ -18,24 +18,14 @@ import sys
 
 import fem_forms as ff
 from fem_forms.analyses import run_analysis
-from fem_forms.meshes.occ_parts import write_part
-from leaning_figure import figure
 
-LEAN = 0.085
+SCENE = Path(__file__).parent / "scenes" / "sag_and_stand.toml"
 
 
 def main(out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
-    mesh = write_part(out / "figure.msh", lambda occ: figure(occ, lean=LEAN), 0.004)
-    scene = {"title": "sag and stand", "analysis": "inverse", "mesh": {"generator": "file", "file": str(mesh)},
-             "inverse": {"target": str(mesh)},
-             "material": {"model": "neo-hookean", "E": 1.5e5, "nu": 0.4, "rho": 1100.0},
-             "discretization": {"degree": 1}, "fix": [{"where": {"axis": "z", "at": 0.0}}],
-             "load": [{"type": "gravity", "g": [0.0, 0.0, -9.81]}],
-             "balance": {"goal": "stand", "margin_angle": 2.0, "shell": 0.003}}
-    solid = run_analysis(ff.Scene.from_dict(dict(scene, balance=dict(scene["balance"], goal="check"))),
-                         out / "solid")
-    carved = run_analysis(ff.Scene.from_dict(scene), out / "carved")
+    solid = run_analysis(ff.Scene.from_file(SCENE, {"balance.goal": "check"}), out / "solid")
+    carved = run_analysis(ff.Scene.from_file(SCENE), out / "carved")
     fmt = lambda v: "(" + ", ".join(f"{x:.6f}" for x in v) + ")"
     for label, r in (("solid", solid), ("carved", carved)):
         b = r["balance"]

@@ -3,7 +3,7 @@ stands again when its interior is carved for the sagged shape (`elastic = true`)
 
     python demos/soft_figure.py OUT_DIR
 
-The figure is the leaning figure's shape (demos/leaning_figure.py) leaning less (6 cm), in a soft
+The figure is the leaning figure's shape (demos/scenes/figure_lean60.brep) leaning less (6 cm), in a soft
 silicone (E 0.15 MPa, nu 0.4, 1100 kg/m^3), its sole clamped to the ground. `goal = "check"` with
 `elastic = true` reports the rigid numbers and, side by side under "deformed", those of the shape sagged
 under gravity (P2 tetrahedra). `goal = "stand"` with `elastic = true` starts from the rigid design, solves
@@ -15,22 +15,14 @@ import sys
 
 import fem_forms as ff
 from fem_forms.analyses import run_analysis
-from fem_forms.meshes.occ_parts import write_part
-from leaning_figure import figure
 
-LEAN = 0.06
+SCENE = Path(__file__).parent / "scenes" / "soft_figure.toml"
 
 
 def main(out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
-    mesh = write_part(out / "figure.msh", lambda occ: figure(occ, lean=LEAN), 0.008)
-    scene = {"title": "soft figure", "analysis": "balance", "mesh": {"generator": "file", "file": str(mesh)},
-             "material": {"model": "neo-hookean", "E": 1.5e5, "nu": 0.4, "rho": 1100.0},
-             "discretization": {"degree": 2}, "fix": [{"where": {"axis": "z", "at": 0.0}}],
-             "balance": {"goal": "stand", "margin_angle": 2.0, "shell": 0.003, "elastic": True}}
-    check = run_analysis(ff.Scene.from_dict(dict(scene, balance=dict(scene["balance"], goal="check"))),
-                         out / "check")
-    d = run_analysis(ff.Scene.from_dict(scene), out / "stand")
+    check = run_analysis(ff.Scene.from_file(SCENE, {"balance.goal": "check"}), out / "check")
+    d = run_analysis(ff.Scene.from_file(SCENE), out / "stand")
     fmt = lambda v: "(" + ", ".join(f"{x:.6f}" for x in v) + ")"
     for label, r in (("solid", check), ("carved", d)):
         s = r["deformed"]

@@ -2,7 +2,8 @@
 
     python demos/spinning_top.py OUT_DIR
 
-The top (a cone standing on its tip, a disc on it and an off-axis lump on the disc) is meshed with gmsh;
+The top (a cone standing on its tip, a disc on it and an off-axis lump on the disc) is meshed by gmsh from its
+CAD file (demos/scenes/spinning_top.brep);
 solid, its centre of mass lies off the spin axis (the z axis through the tip), so it wobbles. `goal =
 "spin"` carves the interior (a 3 mm wall kept) so that the CoM lies on the axis, the axis is a principal
 axis of inertia, and the ratio of the spin moment to the other principal moments is as large as it gets.
@@ -13,24 +14,13 @@ import sys
 
 import fem_forms as ff
 from fem_forms.analyses import run_analysis
-from fem_forms.meshes.occ_parts import write_part
 
-
-def top(occ) -> list:
-    """A cone on its tip at the origin, a disc on it and an off-axis lump on the disc (gmsh dim-tags)."""
-    cone = occ.addCone(0, 0, 0.03, 0, 0, -0.03, 0.04, 0)
-    disc = occ.addCylinder(0, 0, 0.03, 0, 0, 0.03, 0.04)
-    lump = occ.addBox(0.005, -0.01, 0.06, 0.02, 0.02, 0.01)
-    return occ.fuse([(3, cone)], [(3, disc), (3, lump)])[0]
+SCENE = Path(__file__).parent / "scenes" / "spinning_top.toml"
 
 
 def main(out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
-    scene = {"title": "spinning top", "analysis": "balance",
-             "mesh": {"generator": "file", "file": str(write_part(out / "top.msh", top, 0.005))},
-             "material": {"model": "neo-hookean", "E": 2e9, "nu": 0.35, "rho": 1200.0},
-             "balance": {"goal": "spin", "kind": "top", "axis": [0.0, 0.0, 1.0], "shell": 0.003}}
-    d = run_analysis(ff.Scene.from_dict(scene), out / "spin")
+    d = run_analysis(ff.Scene.from_file(SCENE), out / "spin")
     b = d["before"]
     off = lambda c: (c[0] ** 2 + c[1] ** 2) ** 0.5
     print(f"solid: CoM {off(b['center_of_mass']):.4e} m off the axis, mass {b['mass']:.6f} kg")

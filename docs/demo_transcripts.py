@@ -27,6 +27,7 @@ from pathlib import Path
 
 DOCS = Path(__file__).resolve().parent
 TRANSCRIPTS = DOCS / "demos"
+REPORT_SHOT = "report_html.png"      # refresh_demos.py's screenshot of a demo's report.html, its page's own heading
 NUMBER = re.compile(r"[-+]?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?")
 ROUNDOFF = 1e-8                                     # a residual force, a round-trip mismatch: noise
 TIMING = re.compile(r"^\d+(?:\.\d\d?)? s\b")      # a wall time: "36.2 s", "2.72 s" (not "0.866 s", a period)

@@ -23,10 +23,9 @@ from PIL import Image
 DOCS = Path(__file__).resolve().parent
 ROOT = DOCS.parent
 sys.path.insert(0, str(DOCS))
-from demo_transcripts import TRANSCRIPTS, normalise, transcript_path  # noqa: E402
+from demo_transcripts import REPORT_SHOT, TRANSCRIPTS, normalise, transcript_path  # noqa: E402
 
 WIDTH = 900                    # px: pictures wider than this are scaled down
-REPORT_SHOT = "report_html.png"   # the report's screenshot (docs/_ext/demo_pages.py shows it under its own heading)
 MAX_GIF = 2_500_000            # bytes: larger animations are scaled down by a further factor of 2
 
 
@@ -66,9 +65,13 @@ def report_shot(out: Path, dest: Path) -> bool:
     if not pages or chromium is None:
         return False
     shot = out / "report_shot.png"
-    subprocess.run([chromium, "--headless=new", "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
-                    "--virtual-time-budget=8000", "--hide-scrollbars", "--window-size=1000,700",
-                    f"--screenshot={shot}", pages[0].as_uri()], capture_output=True, timeout=120)
+    try:
+        subprocess.run([chromium, "--headless=new", "--no-sandbox", "--use-angle=swiftshader",
+                        "--enable-unsafe-swiftshader", "--virtual-time-budget=8000", "--hide-scrollbars",
+                        "--window-size=1000,700", f"--screenshot={shot}", pages[0].as_uri()],
+                       capture_output=True, timeout=120)
+    except subprocess.TimeoutExpired:
+        return False
     if not shot.is_file():
         return False
     with Image.open(shot) as im:              # full colour: 256 would shift the marks' and the bar's colours

@@ -10,17 +10,20 @@ from __future__ import annotations
 
 import ast
 import re
+import sys
 from pathlib import Path
 
 from sphinx.application import Sphinx
 from sphinx.util import logging
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from demo_transcripts import REPORT_SHOT  # noqa: E402
 
 DOCS = Path(__file__).resolve().parents[1]
 ROOT = DOCS.parent
 DEMOS = ROOT / "demos"
 STORED = DOCS / "demos"
 OUT = DOCS / "tutorials"
-REPORT_SHOT = "report_html.png"           # docs/refresh_demos.py's screenshot of the demo's report.html
 logger = logging.getLogger(__name__)
 
 
@@ -35,8 +38,9 @@ def split_docstring(source: str, name: str) -> tuple[str, str]:
 
 
 def scenes_of(source: str, name: str) -> list[Path]:
-    """The scene files of demos/scenes/ a demo reads (named in its source)."""
-    names = dict.fromkeys(re.findall(r"([A-Za-z0-9_]+)\.toml", source))
+    """The scene files of demos/scenes/ a demo reads (named in its source, with or without ".toml")."""
+    named = re.findall(r"([A-Za-z0-9_]+)\.toml", source) + re.findall(r"[\"']([A-Za-z0-9_]+)[\"']", source)
+    names = dict.fromkeys(named)
     if (DEMOS / "scenes" / f"{name}.toml").is_file():
         names = {name: None, **names}
     return [DEMOS / "scenes" / f"{n}.toml" for n in names if (DEMOS / "scenes" / f"{n}.toml").is_file()]
@@ -75,8 +79,8 @@ def page_text(name: str, checked: tuple[str, str, str] | None = None) -> str:
         logger.warning(f"demos/{name}.py: no test with a docstring checks it (tests/system/demo_runs.py CHECKS)")
     shot = STORED / name / REPORT_SHOT
     if shot.is_file():
-        lines += ["## Its report.html", "", "The run's page in the browser (`fem-forms view OUT`), as the demo left it:",
-                  "", f"```{{figure}} ../demos/{name}/{REPORT_SHOT}", ":alt: report.html", "```", ""]
+        lines += ["## Its report.html", "",
+                  "The run's page in the browser (`fem-forms view OUT`), as the demo left it:", "", f"```{{figure}} ../demos/{name}/{REPORT_SHOT}", ":alt: report.html", "```", ""]
     pictures = [p for p in sorted((STORED / name).glob("*.png")) + sorted((STORED / name).glob("*.gif"))
                 if p.name != REPORT_SHOT]
     if pictures:

@@ -46,6 +46,7 @@ def test_manual_builds_and_opens_offline(html):
         page = (html / "tutorials" / f"{name}.html").read_text()
         assert f"demos/{name}.py" in page and "What it prints" in page and "<img" in page, name
         assert "What it is checked against" in page and "tests/system/test_" in page, name
+        assert "The scene: <code" in page and ".toml</span></code>" in page, f"{name}: no scene file shown"
 
 
 def test_every_scene_key_is_in_the_reference_at_its_anchor(html):
