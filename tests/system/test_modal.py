@@ -139,6 +139,14 @@ def test_wav_spectrum_peaks_at_the_modal_frequencies(tmp_path):
     assert data["sound"]["wav"] == "sound.wav" and data["sound"]["peaks_hz"] == pytest.approx(peaks)
     for name in ("modes.xdmf", "modes.h5", "modes.png", "spectrogram.png"):
         assert (tmp_path / name).stat().st_size > 0
+    import matplotlib.image                          # the mode shapes' colour bar: viridis, dark at 0, yellow at 1
+    pixels = matplotlib.image.imread(tmp_path / "modes.png")[..., :3]
+    strip = pixels[:, int(0.94 * pixels.shape[1]):int(0.96 * pixels.shape[1])]
+    vivid = (strip.max(axis=2) - strip.min(axis=2)) > 0.3
+    column = strip[:, int(np.argmax(vivid.sum(axis=0)))]                  # the bar's middle
+    coloured = np.flatnonzero(vivid[:, int(np.argmax(vivid.sum(axis=0)))])
+    top, bottom = column[coloured[3]], column[coloured[-4]]
+    assert len(coloured) > 0.3 * pixels.shape[0] and top[1] > 0.7 and bottom[1] < 0.2      # yellow over purple
 
 
 @pytest.mark.mpi

@@ -19,7 +19,8 @@ from fem_forms.scene import Scene
 
 
 def modes_picture(path: Path, result: ModalResult, count: int = 6) -> None:
-    """PNG: small multiples of the first modes, each boundary deformed by its scaled mode shape."""
+    """PNG: small multiples of the first modes, each boundary deformed by its scaled mode shape and coloured by its
+    displacement relative to its largest (one colour bar, 0 to 1, for all)."""
     surfaces = [fields.boundary_surface(f) for f in result.modes[:count]]   # collective
     # about a loaded equilibrium the modes are drawn on the deformed shape
     base = fields.boundary_surface(result.model.u) if result.static is not None else None
@@ -52,7 +53,10 @@ def modes_picture(path: Path, result: ModalResult, count: int = 6) -> None:
             ax.view_init(elev=20, azim=-60)
             ax.set_title(f"mode {k + 1}: {freqs[k]:.4g} Hz", fontsize=10)
         fig.suptitle(f"{result.model.scene.title}: mode shapes (scaled)")
-        fig.tight_layout()
+        fig.tight_layout(rect=(0, 0, 0.93, 1))
+        bar = fig.add_axes((0.945, 0.25, 0.012, 0.5))
+        fig.colorbar(plt.cm.ScalarMappable(plt.Normalize(0.0, 1.0), "viridis"), cax=bar,
+                     label="|mode| / its largest")
         fig.savefig(path, dpi=100)
         plt.close(fig)
     comm.barrier()
