@@ -113,6 +113,12 @@ class Model:
         if self.unknown is not self.u:
             self.u.interpolate(self.unknown.sub(0))
 
+    def start_from_displacement(self) -> None:
+        """Copy `u` into a mixed state's displacement part, a start guess (no-op in the displacement formulation)."""
+        if self.unknown is not self.u:
+            self.unknown.sub(0).interpolate(self.u)
+            self.unknown.x.scatter_forward()
+
     def min_jacobian(self) -> float:
         """Smallest det F over the cells' quadrature points (all ranks): < 0 means inverted."""
         if self._det_F is None:                       # compiled once per model, on first use
@@ -231,8 +237,8 @@ def build_model(scene: Scene, material=None, comm: MPI.Comm = MPI.COMM_WORLD,
     `more_fields(V)` adds fields on the displacement space to the State (dynamics: velocity, acceleration).
     `rest`: where the rest shape is not the mesh (inverse design, on the target mesh): "designed", the rest shape is
     mesh + `rest_offset` d (a Function the design sets) and the unknown the displacement; "unknown", the unknown is
-    the rest offset v itself and equilibrium is written on the mesh (inverse elastostatics, u = -v). Both in the
-    displacement formulation (the scene refuses analysis = "inverse" with the mixed one)."""
+    the rest offset v itself (in the mixed formulation: (v, p), `u` then v's copy) and equilibrium is written on the
+    mesh (inverse elastostatics, u = -v); "designed" in the displacement formulation only."""
     if rest not in REST_SHAPES:
         raise ValueError(f"rest = {rest!r}: one of {REST_SHAPES}")
     loaded = loaded or load_mesh(scene.mesh, comm, degree=scene.discretization.degree)
@@ -260,16 +266,19 @@ def build_model(scene: Scene, material=None, comm: MPI.Comm = MPI.COMM_WORLD,
             said = f"nu = {nu}" if soft.nu is not None else f"bulk = {soft.bulk:g} (nu = {nu:.4g})"
             warnings.append(f"{soft.key}.{said}: nearly incompressible in the displacement formulation "
                             "locks (too stiff); set [discretization] formulation = \"mixed\"")
-    rest_offset = rest_map = variation = None
+    rest_offset = offset = rest_map = variation = None
     if rest is not None:
-        rest_offset = fem.Function(V, name="rest_minus_target")
-        rest_map = ufl.Identity(3) + ufl.grad(rest_offset)      # G = dX/dx: the mesh mapped to the rest shape
+        rest_offset = offset = fem.Function(V, name="rest_minus_target")
+        if rest == "unknown" and pressure is not None:         # mixed: v is the state's first part (u: its copy)
+            offset = u_form
+        rest_map = ufl.Identity(3) + ufl.grad(offset)           # G = dX/dx: the mesh mapped to the rest shape
     if rest == "unknown":
         variation = fem.Function(V)                              # d/dw, then w = 0: u = -v (inverse_forms)
-        u = unknown = rest_offset
-        u_form = variation - rest_offset
+        u = rest_offset
+        unknown = unknown if pressure is not None else rest_offset
+        u_form = variation - offset
     physics = scene_physics(scene, loaded, u_form, bc_space, material, pressure=pressure, extra=extra,
-                            rest_map=rest_map, rest_offset=rest_offset, bc_sign=-1.0 if rest == "unknown" else 1.0)
+                            rest_map=rest_map, rest_offset=offset, bc_sign=-1.0 if rest == "unknown" else 1.0)
     context, terms = physics.context, physics.terms
     fields = {"unknown": unknown}
     if scene.thermal is not None:
@@ -279,7 +288,7 @@ def build_model(scene: Scene, material=None, comm: MPI.Comm = MPI.COMM_WORLD,
     warnings += [w for t in terms for w in t.warnings()]
     if rest == "unknown":
         context.deformation = ufl.inv(rest_map) + ufl.grad(variation) * ufl.inv(rest_map)
-        forms = inverse_forms(terms, context, rest_offset, variation)
+        forms = inverse_forms(terms, context, unknown, variation)
     else:
         forms = equilibrium_forms(terms, context, unknown, v)
     # the mixed energy is a saddle in (u, p): no line-search objective there

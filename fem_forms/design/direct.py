@@ -47,11 +47,14 @@ def solve_direct(scene: Scene, material=None, loaded: LoadedMesh | None = None, 
     problem = snes.NonlinearProblem(v, residual, jacobian, bcs, energy=None, set_load=load.set,
                                     inadmissible=inadmissible)
     options = {"snes_linesearch_type": "basic", **scene.solver.petsc}
+    mixed = scene.discretization.formulation == "mixed"       # (v, p): a saddle point, LU as in statics
     report = continuation.solve(problem, options, steps=scene.solver.steps,
-                                max_cutbacks=scene.solver.max_cutbacks, linear_kind=scene.solver.linear,
-                                near_nullspace=lambda: rigid_body_modes(V), prefix="fem_forms_inverse_",
-                                reuse_factor="chord")
-    res = InverseResult("direct", v, loaded, report.converged, report.newton_iterations, report.message,
+                                max_cutbacks=scene.solver.max_cutbacks,
+                                linear_kind="direct" if mixed else scene.solver.linear,
+                                near_nullspace=None if mixed else lambda: rigid_body_modes(V),
+                                prefix="fem_forms_inverse_", reuse_factor="chord")
+    model.sync_displacement()                                  # mixed: the rest offset out of (v, p)
+    res = InverseResult("direct", model.u, loaded, report.converged, report.newton_iterations, report.message,
                         history=[{"load": s.load, "iterations": s.iterations, "accepted": s.accepted,
                                   "reason": s.reason, "note": s.note} for s in report.steps],
                         physics=[t.name for t in terms], residual_scale=report.load_scale)

@@ -170,7 +170,7 @@ def energy_variation(terms: list[Term], ctx: Context, unknown, test, v, scale=1.
     return sum(parts[1:], parts[0]) if parts else None
 
 
-def inverse_forms(terms: list[Term], ctx: Context, rest_offset: fem.Function,
+def inverse_forms(terms: list[Term], ctx: Context, unknown: fem.Function,
                   variation: fem.Function) -> EquilibriumForms:
     """Equilibrium on the deformed (mesh) shape with the rest offset v as unknown: the virtual work of
     every term, its derivative with respect to the displacement. The Context has u = w - v and
@@ -178,9 +178,11 @@ def inverse_forms(terms: list[Term], ctx: Context, rest_offset: fem.Function,
     work (a term's `first_variation` where it has one: P : Grad eta with P by ufl.diff), then w = 0
     leaves the inverse problem's u = -v and F = G^-1 exactly. Measured on the 27,675-dof arm: the
     tangent assembles in 0.147 s CPU, as fast as the former hand-written P : grad(eta) F j form
-    (0.142-0.148 s); a Gateaux derivative with u = -v substituted took 0.166 s."""
-    V = rest_offset.function_space
-    eta, trial = ufl.TestFunction(V), ufl.TrialFunction(V)
+    (0.142-0.148 s); a Gateaux derivative with u = -v substituted took 0.166 s. `unknown`: v, or in the mixed
+    formulation (v, p), whose pressure equation is the energy's derivative in p alone (the direction (0, q))."""
+    W = unknown.function_space
+    test, trial = ufl.TestFunction(W), ufl.TrialFunction(W)
+    eta = test if ctx.pressure is None else ufl.split(test)[0]
     parts = []
     for t in terms:
         if t.energy(ctx) is not None:
@@ -190,5 +192,9 @@ def inverse_forms(terms: list[Term], ctx: Context, rest_offset: fem.Function,
     extra = virtual_work(terms, ctx, eta)
     if extra is not None:
         work = work + extra
+    if ctx.pressure is not None:
+        energy = sum(e for e in (t.energy(ctx) for t in terms) if e is not None)
+        q = ufl.split(test)[1]
+        work = work + ufl.derivative(energy, unknown, ufl.as_vector([0.0] * len(variation) + [q]))
     residual = ufl.replace(work, {variation: ufl.as_vector([0.0] * len(variation))})
-    return EquilibriumForms(None, residual, ufl.derivative(residual, rest_offset, trial), False)
+    return EquilibriumForms(None, residual, ufl.derivative(residual, unknown, trial), False)

@@ -22,7 +22,8 @@ import numpy as np
 from petsc4py import PETSc
 from scipy.spatial import cKDTree
 
-from fem_forms.analyses.inverse.stability import Inertia, assemble_tangent, inertia_of, tangent_inertia
+from fem_forms.analyses.inverse.stability import (Inertia, assemble_tangent, inertia_of, pressure_dofs,
+                                                  tangent_inertia)
 from fem_forms.analyses.static.solve import StaticResult, solve_static
 from fem_forms.meshes import LoadedMesh
 from fem_forms.model import build_model
@@ -121,6 +122,7 @@ def solve_at_target(fscene: Scene, loaded: LoadedMesh, pts_rest: np.ndarray, pts
     model = forward_model(fscene, loaded, carved)
     steps = EQUILIBRIUM_NEWTON_STEPS if fscene.discretization.degree == 1 else CURVED_NEWTON_STEPS
     predicted_displacement(model.u, pts_rest, pts_target)
+    model.start_from_displacement()
     model.load.set(1.0)
     problem = model.problem()
     # full Newton steps: at an equilibrium the energy's changes are round-off, an energy line search sees
@@ -153,10 +155,11 @@ def solve_at_target(fscene: Scene, loaded: LoadedMesh, pts_rest: np.ndarray, pts
         report.message = (f"its residual there is {start:.2e} of the load's (tolerance "
                           f"{tolerance / max(scale, 1e-300):.2g}), {last:.2e} after {steps} "
                           f"Newton steps ({step.note if step else report.message})")
+    model.sync_displacement()                               # mixed: the displacement out of (u, p)
     if report.converged and report.newton_iterations:      # the tangent where Newton ended (a failed solve
         K.destroy()                                         # is rolled back to the target)
         K = assemble_tangent(model.compiled("jacobian"), model.bcs)
-    inertia = inertia_of(K)
+    inertia = inertia_of(K, pressure_dofs(model.unknown))
     K.destroy()
     return ForwardSolve("equilibrium", StaticResult(model, report), inertia, start,
                         tolerance / max(scale, 1e-300), set_by)
@@ -166,5 +169,6 @@ def solve_along_path(fscene: Scene, loaded: LoadedMesh, carved: dict | None = No
     """Load continuation from the rest shape (the scene's steps and cut-backs), as `fem-forms run` would."""
     static = solve_static(fscene, model=forward_model(fscene, loaded, carved))
     converged = static.report.converged
-    inertia = tangent_inertia(static.model.compiled("jacobian"), static.model.bcs) if converged else None
+    inertia = (tangent_inertia(static.model.compiled("jacobian"), static.model.bcs, pressure_dofs(static.model.unknown))
+               if converged else None)
     return ForwardSolve("path", static, inertia)

@@ -62,6 +62,18 @@ def _rules(s: InverseSpec, t: Table) -> None:
         raise InputError(f"{t.path}: give match_points or match_region, not both")
 
 
+def _check(scene) -> None:
+    """Rules across sections: the mixed u-p formulation with the direct method only, and not with a carving."""
+    if scene.discretization.formulation == "mixed":
+        if scene.inverse.method != "direct":
+            raise InputError(f"inverse.method = {scene.inverse.method!r}: the mixed formulation is designed by "
+                             "the direct method only (method = \"direct\", or formulation = \"displacement\")")
+        if scene.balance is not None:
+            raise InputError("balance: carving in an inverse scene is not implemented with formulation = "
+                             "\"mixed\"; use \"displacement\"")
+    check_carving(scene)
+
+
 ANALYSIS = Analysis(
     name="inverse",
     doc="the rest shape that deforms into the given shape under the loads, checked by a forward solve",
@@ -71,5 +83,6 @@ ANALYSIS = Analysis(
               INVERSE_BALANCE),          # [balance]: carve the interior too (designed on the target)
     outputs=("results.json", "rest_shape.msh", "rest_shape.stl", "fields.xdmf", "inverse.png",
              "void.stl (with [balance])"),
-    check=check_carving,
+    formulations=("displacement", "mixed"),
+    check=_check,
 )
