@@ -80,7 +80,8 @@ def page_text(name: str, checked: tuple[str, str, str] | None = None) -> str:
     shot = STORED / name / REPORT_SHOT
     if shot.is_file():
         lines += ["## Its report.html", "",
-                  "The run's page in the browser (`fem-forms view OUT`), as the demo left it:", "", f"```{{figure}} ../demos/{name}/{REPORT_SHOT}", ":alt: report.html", "```", ""]
+                  "The run's page in the browser (`fem-forms view OUT`), as the demo left it:", "",
+                  f"```{{figure}} ../demos/{name}/{REPORT_SHOT}", ":alt: report.html", "```", ""]
     pictures = [p for p in sorted((STORED / name).glob("*.png")) + sorted((STORED / name).glob("*.gif"))
                 if p.name != REPORT_SHOT]
     if pictures:
