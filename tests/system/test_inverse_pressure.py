@@ -149,3 +149,17 @@ def test_two_ranks_design_the_same_shell(shell, tmp_path):
     serial, two = wall_radii(out / "rest_shape.msh"), wall_radii(tmp_path / "two" / "rest_shape.msh")
     for wall in ("inner", "outer"):
         assert np.sort(two[wall]) == pytest.approx(np.sort(serial[wall]), rel=1e-8), wall
+
+
+def test_a_target_past_the_pressure_maximum_is_refused_in_one_line(shell, tmp_path, capsys):
+    """Twice the pressure (300 kPa): a rest shell exists (the ODE has its root, the design converges), but the
+    target is then on that shell's falling branch, beyond its pressure maximum: the forward check finds the
+    tangent there indefinite (measured 22 negative pivots; 2 at 250 kPa); exit 3 with one line naming the limit
+    point, no rest shape handed out as usable."""
+    d = scene(shell)
+    d["load"][0]["value"] = 2 * P
+    code, res, err, _ = run_scene(tmp_path, d, capsys)
+    assert code == 3 and "Traceback" not in err
+    line = err.strip().splitlines()[-1]
+    assert "past a limit point of the loads" in line and "a balloon beyond its pressure maximum" in line
+    assert res is not None and res["usable"] is False

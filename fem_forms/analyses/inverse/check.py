@@ -32,15 +32,19 @@ class ForwardCheck:
 
 
 def _stability_problems(solve: forward.ForwardSolve, predicted: str) -> list:
-    """An equilibrium whose tangent is not positive definite is unstable (a buckled branch): refused."""
+    """An equilibrium whose tangent is not positive definite is unstable: past a limit point of the loads (a
+    buckled branch, a balloon beyond its pressure maximum), where no load holds it: refused."""
     i = solve.inertia
     if i is None or i.stable:
         return []
     where = f"at {predicted}" if solve.kind == "equilibrium" else "at the forward solve's equilibrium"
     if i.error:
         return [f"the tangent {where} could not be checked for stability: {i.error}"]
-    return [f"the tangent {where} is not positive definite ({i.negative} negative, {i.null} null pivots of "
-            f"{i.dofs}): an unstable equilibrium (a buckled branch), the design is not usable"]
+    head = (f"has {i.negative} negative pivots where a stable state has {i.saddle} (its pressure dofs), {i.null} "
+            f"null, of {i.dofs}" if i.saddle else
+            f"is not positive definite ({i.negative} negative, {i.null} null pivots of {i.dofs})")
+    return [f"the tangent {where} {head}: an unstable equilibrium, past a limit point of the loads (a buckled "
+            "branch, a balloon beyond its pressure maximum) where no load holds it; the design is not usable"]
 
 
 def _matched_vertices(spec, pts_target: np.ndarray, size: float) -> np.ndarray | None:
