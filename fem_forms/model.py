@@ -2,7 +2,7 @@
 total potential energy, residual and tangent (UFL)."""
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable
 
 from dolfinx import fem, geometry
@@ -183,7 +183,14 @@ class Model:
         """The scalar unknowns the terms add to the Newton solve (a volume-controlled cavity's pressure), made
         once per model: their forms compile once."""
         if self._scalars is None:
-            self._scalars = [s for t in self.terms for s in t.global_scalars(self)]
+            scalars = [s for t in self.terms for s in t.global_scalars(self)]
+            w = self.context.extra.get("virtual_displacement")
+            if w is not None:                     # inverse elastostatics: its equations at w = 0 (inverse_forms)
+                zero = {w: ufl.as_vector([0.0] * len(w))}
+                scalars = [replace(s, equation=ufl.replace(s.equation, zero),
+                                   gradient=None if s.gradient is None else ufl.replace(s.gradient, zero))
+                           for s in scalars]
+            self._scalars = scalars
         return self._scalars
 
     def only_ufl_terms(self, analysis: str) -> None:
@@ -288,6 +295,7 @@ def build_model(scene: Scene, material=None, comm: MPI.Comm = MPI.COMM_WORLD,
     warnings += [w for t in terms for w in t.warnings()]
     if rest == "unknown":
         context.deformation = ufl.inv(rest_map) + ufl.grad(variation) * ufl.inv(rest_map)
+        context.extra["virtual_displacement"] = variation
         forms = inverse_forms(terms, context, unknown, variation)
     else:
         forms = equilibrium_forms(terms, context, unknown, v)

@@ -10,6 +10,7 @@ from fem_forms.design.parameters import InverseResult, cellwise_exact, one_point
 from fem_forms.meshes import LoadedMesh, load_mesh
 from fem_forms.model import Model, build_model
 from fem_forms.physics.admissibility import SmallestValue
+from fem_forms.physics.cavities import cavity_report
 from fem_forms.scene import Scene
 from fem_forms.solvers import continuation, snes
 from fem_forms.solvers.linear import rigid_body_modes
@@ -45,19 +46,21 @@ def solve_direct(scene: Scene, material=None, loaded: LoadedMesh | None = None, 
         return rest_volume.positive_or("inverted rest-shape elements (min det = {value:.3g})")
 
     problem = snes.NonlinearProblem(v, residual, jacobian, bcs, energy=None, set_load=load.set,
-                                    inadmissible=inadmissible)
+                                    inadmissible=inadmissible, scalars=model.global_scalars())
     options = {"snes_linesearch_type": "basic", **scene.solver.petsc}
     mixed = scene.discretization.formulation == "mixed"       # (v, p): a saddle point, LU as in statics
     report = continuation.solve(problem, options, steps=scene.solver.steps,
                                 max_cutbacks=scene.solver.max_cutbacks,
                                 linear_kind="direct" if mixed else scene.solver.linear,
                                 near_nullspace=None if mixed else lambda: rigid_body_modes(V),
-                                prefix="fem_forms_inverse_", reuse_factor="chord")
+                                prefix="fem_forms_inverse_",
+                                reuse_factor=False if problem.scalars else "chord")   # bordered: fresh factors
     model.sync_displacement()                                  # mixed: the rest offset out of (v, p)
     res = InverseResult("direct", model.u, loaded, report.converged, report.newton_iterations, report.message,
                         history=[{"load": s.load, "iterations": s.iterations, "accepted": s.accepted,
                                   "reason": s.reason, "note": s.note} for s in report.steps],
                         physics=[t.name for t in terms], residual_scale=report.load_scale)
+    res.cavities = cavity_report(terms)           # the pressure and the rest volume the design found
     res.solve_time = time.perf_counter() - t0
     return res
 

@@ -30,6 +30,7 @@ class InverseResult:
     # stopped at snes_rtol of it, which is what the forward check's equilibrium test holds it to
     residual_scale: float = 0.0
     carving: object = None          # [balance] in an inverse scene: the carving designed on the target
+    cavities: dict = field(default_factory=dict)   # direct method: each inflated cavity's designed numbers
 
 
 def target_scene(scene: Scene) -> MeshSpec:

@@ -41,7 +41,7 @@ class Inflation(LoadTerm):
         self.wall_area = fem.Constant(mesh, PETSc.ScalarType(1.0))        # mesh area of the walls
         self.where = spec.where
         self._ctx: Context | None = None
-        self._volume_form = None
+        self._volume_form = self._rest_volume_form = None
 
     def set_spec(self, spec: Load) -> None:
         if (spec.volume is not None) != self.volume_control:
@@ -64,6 +64,13 @@ class Inflation(LoadTerm):
         """-1/3 x . J F^-T N (per mesh facet area): its integral over the walls is the cavity volume."""
         area_vector = ufl.det(ctx.F) * ufl.inv(ctx.F).T * ctx.rest_area_vector()
         return -ufl.dot(ctx.position, area_vector) / 3.0
+
+    def rest_volume_integrand(self, ctx: Context):
+        """-1/3 X . N dA (per mesh facet area): its integral over the walls is the cavity's rest volume, which
+        an inverse design's unknown rest shape moves (a constant, V0 / the walls' area, where the mesh is it)."""
+        if ctx.rest_offset is None:
+            return self.rest_volume / self.wall_area
+        return -ufl.dot(ctx.rest_position, ctx.rest_area_vector()) / 3.0
 
     def prepare(self, ctx: Context) -> None:
         """Refuse walls that enclose no volume; the rest volume V0 and the walls' area as Constants."""
@@ -102,9 +109,9 @@ class Inflation(LoadTerm):
         return self.applied_pressure(ctx) * ufl.dot(v, area_vector) * self._walls(ctx)
 
     # -- volume control ----------------------------------------------------------------------------
-    def target_volume(self, ctx: Context):
-        """V0 + lambda f dV: the prescribed volume, ramped by the load factor and history (UFL scalar)."""
-        return self.rest_volume + ctx.load.constant * self.factor * self.added_volume
+    def added(self, ctx: Context):
+        """lambda f dV: the prescribed added volume, ramped by the load factor and history (UFL scalar)."""
+        return ctx.load.constant * self.factor * self.added_volume
 
     def global_scalars(self, model) -> list:
         """Under volume control, the cavity pressure with its equation s (V(u) - V0 - lambda dV) = 0, scaled by
@@ -118,7 +125,8 @@ class Inflation(LoadTerm):
             modulus = 1.0
         scale = modulus / float(self.rest_volume.value) ** (1.0 / 3.0)
         walls = self._walls(ctx)
-        equation = scale * (self.volume_integrand(ctx) - self.target_volume(ctx) / self.wall_area) * walls
+        equation = scale * (self.volume_integrand(ctx) - self.rest_volume_integrand(ctx)
+                            - self.added(ctx) / self.wall_area) * walls
         v = model.residual.arguments()[0]
         return [GlobalScalar(f"{self.cavity} pressure", self.pressure, equation,
                              coupling=derivative_wrt_constant(model.residual, self.pressure),
@@ -143,10 +151,19 @@ class Inflation(LoadTerm):
         return {"cavities": {self.cavity: self.numbers()}}
 
     def numbers(self) -> dict:
-        """Pressure, volume and volume_change at the current state."""
-        volume = self.volume()
-        return {"pressure": self.pressure_now(), "volume": volume,
-                "volume_change": volume - float(self.rest_volume.value)}
+        """Pressure, volume and volume_change at the current state (from the rest volume, which an inverse
+        design's rest shape sets: then also `rest_volume`)."""
+        volume, rest = self.volume(), self.rest_volume_now()
+        designed = {} if self._ctx.rest_offset is None else {"rest_volume": rest}
+        return {"pressure": self.pressure_now(), "volume": volume, "volume_change": volume - rest, **designed}
+
+    def rest_volume_now(self) -> float:
+        """The cavity's rest volume (m^3, every rank): V0, or where the rest shape is designed, at its design."""
+        if self._ctx.rest_offset is None:
+            return float(self.rest_volume.value)
+        if self._rest_volume_form is None:
+            self._rest_volume_form = fem.form(self.rest_volume_integrand(self._ctx) * self._walls(self._ctx))
+        return self._ctx.mesh.comm.allreduce(fem.assemble_scalar(self._rest_volume_form), op=MPI.SUM)
 
     def record(self) -> dict:
         r = self.numbers()

@@ -53,7 +53,8 @@ def run(scene: Scene, out: Path, echo: bool = False) -> dict:
                "method": res.method,
                "iterations": res.iterations, "converged": res.converged, "design_time_s": res.solve_time,
                "forward_solves": res.forward_solves,
-               "physics": res.physics, "history": res.history}
+               "physics": res.physics, "history": res.history,
+               **({"cavities": res.cavities} if res.cavities else {})}
     problems = [] if res.converged else [f"the {res.method} method did not reach a rest shape: {res.message}"]
     check = None
     if res.converged:
