@@ -14,7 +14,7 @@ from fem_forms.materials import Material
 from fem_forms.meshes import LoadedMesh, load_mesh
 from fem_forms.output.probes import ProbeSet
 from fem_forms.physics.admissibility import SmallestValue
-from fem_forms.physics.assemble import equilibrium_forms, inverse_forms, scene_physics
+from fem_forms.physics.assemble import at_no_variation, equilibrium_forms, inverse_forms, scene_physics
 from fem_forms.physics.parameters import Parameters
 from fem_forms.physics.supports import LoadFactor
 from fem_forms.physics.term_list import TermList
@@ -185,10 +185,10 @@ class Model:
         if self._scalars is None:
             scalars = [s for t in self.terms for s in t.global_scalars(self)]
             w = self.context.extra.get("virtual_displacement")
-            if w is not None:                     # inverse elastostatics: its equations at w = 0 (inverse_forms)
-                zero = {w: ufl.as_vector([0.0] * len(w))}
-                scalars = [replace(s, equation=ufl.replace(s.equation, zero),
-                                   gradient=None if s.gradient is None else ufl.replace(s.gradient, zero))
+            if w is not None:                     # inverse elastostatics: its equations at w = 0 (inverse_forms);
+                # its tangent is not an energy's: p is no Lagrange multiplier of the constraint there
+                scalars = [replace(s, equation=at_no_variation(s.equation, w), multiplier=None,
+                                   gradient=None if s.gradient is None else at_no_variation(s.gradient, w))
                            for s in scalars]
             self._scalars = scalars
         return self._scalars

@@ -22,6 +22,9 @@ class ForwardOnRest:
         if not model.conservative:
             raise InputError(f"inverse.method = {scene.inverse.method!r}: follower pressure is supported "
                              "by the direct method only")
+        if model.global_scalars():                # the scene refuses it; a script's call would leave p at 0
+            raise InputError(f"inverse.method = {scene.inverse.method!r}: volume control is designed by the "
+                             "direct method only")
         self.scene, self.loaded, self.V, self.mesh = scene, loaded, model.V, loaded.mesh
         self.d, self.u = model.rest_offset, model.u
         self.load, self.bcs, self.dx = model.load, model.bcs, model.dx

@@ -196,5 +196,10 @@ def inverse_forms(terms: list[Term], ctx: Context, unknown: fem.Function,
         energy = sum(e for e in (t.energy(ctx) for t in terms) if e is not None)
         q = ufl.split(test)[1]
         work = work + ufl.derivative(energy, unknown, ufl.as_vector([0.0] * len(variation) + [q]))
-    residual = ufl.replace(work, {variation: ufl.as_vector([0.0] * len(variation))})
+    residual = at_no_variation(work, variation)
     return EquilibriumForms(None, residual, ufl.derivative(residual, unknown, trial), False)
+
+
+def at_no_variation(form, variation: fem.Function):
+    """`form` with the inverse problem's placeholder virtual displacement w set to 0 (inverse_forms: u = -v)."""
+    return ufl.replace(form, {variation: ufl.as_vector([0.0] * len(variation))})

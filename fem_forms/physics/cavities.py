@@ -65,12 +65,17 @@ class Inflation(LoadTerm):
         area_vector = ufl.det(ctx.F) * ufl.inv(ctx.F).T * ctx.rest_area_vector()
         return -ufl.dot(ctx.position, area_vector) / 3.0
 
+    @staticmethod
+    def rest_shape_integrand(ctx: Context):
+        """-1/3 X . N dA (per mesh facet area): its integral over the walls is the cavity's rest volume."""
+        return -ufl.dot(ctx.rest_position, ctx.rest_area_vector()) / 3.0
+
     def rest_volume_integrand(self, ctx: Context):
-        """-1/3 X . N dA (per mesh facet area): its integral over the walls is the cavity's rest volume, which
-        an inverse design's unknown rest shape moves (a constant, V0 / the walls' area, where the mesh is it)."""
+        """The rest volume's integrand in the volume-control equation: the rest shape's, which an inverse design's
+        unknown rest shape moves; V0 / the walls' area (the same integral) where the mesh is the rest shape."""
         if ctx.rest_offset is None:
             return self.rest_volume / self.wall_area
-        return -ufl.dot(ctx.rest_position, ctx.rest_area_vector()) / 3.0
+        return self.rest_shape_integrand(ctx)
 
     def prepare(self, ctx: Context) -> None:
         """Refuse walls that enclose no volume; the rest volume V0 and the walls' area as Constants."""
@@ -82,7 +87,7 @@ class Inflation(LoadTerm):
                              "type = \"pressure\" for a pressure on an open surface")
         walls = self._walls(ctx)
         comm = ctx.mesh.comm
-        rest = -ufl.dot(ctx.rest_position, ctx.rest_area_vector()) / 3.0 * walls
+        rest = self.rest_shape_integrand(ctx) * walls
         v0 = comm.allreduce(fem.assemble_scalar(fem.form(rest)), op=MPI.SUM)
         if not v0 > 0:
             raise InputError(f"{label}: the walls enclose a volume of {v0:.4g} m^3 on the solid's outer side: a "
@@ -99,8 +104,8 @@ class Inflation(LoadTerm):
 
     def energy(self, ctx: Context) -> ufl.Form:
         """-p (V(u) - V0) = p/3 int (x . J F^-T N - X . N) dA."""
-        rest = -ufl.dot(ctx.rest_position, ctx.rest_area_vector()) / 3.0
-        return -self.applied_pressure(ctx) * (self.volume_integrand(ctx) - rest) * self._walls(ctx)
+        return -self.applied_pressure(ctx) * (self.volume_integrand(ctx) - self.rest_shape_integrand(ctx)) \
+            * self._walls(ctx)
 
     def first_variation(self, ctx: Context, v) -> ufl.Form:
         """-p dV[v] = p int v . J F^-T N dA: the follower pressure's virtual work (exact for a closed surface,
@@ -114,8 +119,9 @@ class Inflation(LoadTerm):
         return ctx.load.constant * self.factor * self.added_volume
 
     def global_scalars(self, model) -> list:
-        """Under volume control, the cavity pressure with its equation s (V(u) - V0 - lambda dV) = 0, scaled by
-        s = E / V0^(1/3) so that it reads as a force beside the field residual."""
+        """Under volume control, the cavity pressure with its equation s (V(u) - V_rest - lambda dV) = 0 (V_rest: V0,
+        or the designed rest shape's cavity), scaled by s = E / V0^(1/3) so that it reads as a force beside the
+        field residual."""
         if not self.volume_control:
             return []
         ctx = model.context
@@ -171,5 +177,6 @@ class Inflation(LoadTerm):
 
 
 def cavity_report(terms) -> dict:
-    """results.json `cavities`: {name: {pressure, volume, volume_change}} of every inflated cavity."""
+    """results.json `cavities`: {name: {pressure, volume, volume_change}} of every inflated cavity (and its
+    `rest_volume` where the rest shape is designed)."""
     return {t.cavity: t.numbers() for t in terms if isinstance(t, Inflation)}

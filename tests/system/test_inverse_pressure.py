@@ -57,17 +57,19 @@ def rest_radii() -> tuple[float, float]:
     return A, _shoot(A)[0]
 
 
-def incompressible_rest_radii(nu: float) -> tuple[float, float]:
-    """(A, B) of Ogden's closed form (incompressible neo-Hookean, mu of E and nu)."""
-    mu = E / (2 * (1 + nu))
-
+def ogden_pressure(A: float, nu: float) -> float:
+    """Ogden's closed form (incompressible neo-Hookean, mu of E and nu): the pressure that inflates the rest shell
+    of inner radius A (outer B, B^3 = b^3 - a^3 + A^3) into a, b."""
     def f(s):
         return 2 / s + 1 / (2 * s**4)
+    B = (B_T**3 - A_T**3 + A**3) ** (1 / 3)
+    return E / (2 * (1 + nu)) * (f(B_T / B) - f(A_T / A))
 
-    def outer(A):
-        return (B_T**3 - A_T**3 + A**3) ** (1 / 3)
-    A = brentq(lambda A: f(B_T / outer(A)) - f(A_T / A) - P / mu, 0.5 * A_T, 0.9999 * A_T, xtol=1e-15)
-    return A, outer(A)
+
+def incompressible_rest_radii(nu: float) -> tuple[float, float]:
+    """(A, B) of Ogden's closed form for the pressure P."""
+    A = brentq(lambda A: ogden_pressure(A, nu) - P, 0.5 * A_T, 0.9999 * A_T, xtol=1e-15)
+    return A, (B_T**3 - A_T**3 + A**3) ** (1 / 3)
 
 
 def ode_pressure(A: float) -> float:
@@ -147,7 +149,6 @@ def test_the_rest_shell_a_volume_inflates_into_the_target(shell, tmp_path):
     assert res["converged"] and res["usable"] and res["target_mismatch_max"] < 5e-3 * A_T
     cavity = res["cavities"]["inside"]
     assert cavity["volume_change"] == pytest.approx(DV, rel=1e-9)
-    assert cavity["rest_volume"] == pytest.approx(cavity["volume"] - DV, rel=1e-9)
     A = (A_T**3 - 6 * DV / math.pi) ** (1 / 3)
     assert wall_radii(out / "rest_shape.msh")["inner"].mean() == pytest.approx(A, rel=1e-2)
     assert cavity["pressure"] == pytest.approx(ode_pressure(A), rel=4e-2)
@@ -171,11 +172,18 @@ def test_what_is_refused_where_it_is_not_designed(shell, tmp_path, capsys, metho
 
 @pytest.mark.mpi
 def test_two_ranks_design_the_same_shell(shell, tmp_path):
-    """The mixed design under volume control (its pressure dofs counted over the ranks, the state's parts split on
-    each, the cavity's pressure a scalar unknown of all ranks) on 2 ranks: the serial walls to 1e-8 and the same
-    pressure. The displacement formulation's inverse on 2 ranks: tests/system/test_inverse.py."""
+    """The mixed design under volume control (nu = 0.499), against Ogden's incompressible closed form for the rest
+    shell the volume gives (A^3 = a^3 - 6 dV / pi): its cavity exactly dV smaller, its pressure within 3 % (measured
+    +2.3 %: the faceted cavity, as in the displacement formulation's test, and nu 0.499, not 0.5). On 2 ranks (its pressure dofs counted
+    over the ranks, the state's parts split on each, the cavity's pressure a scalar unknown of all ranks): the
+    serial walls to 1e-8 and the same pressure. The displacement formulation's inverse on 2 ranks:
+    tests/system/test_inverse.py."""
     code, one, err, out = run_scene(tmp_path, scene(shell, "mixed", 0.499, volume=DV))
     assert code == 0, err
+    cavity = one["cavities"]["inside"]
+    assert cavity["volume_change"] == pytest.approx(DV, rel=1e-9)
+    rest_inner = (A_T**3 - 6 * DV / math.pi) ** (1 / 3)
+    assert cavity["pressure"] == pytest.approx(ogden_pressure(rest_inner, 0.499), rel=3e-2)
     p = mpirun(["-m", "fem_forms", "run", str(tmp_path / "scene.toml"), "--out", str(tmp_path / "two"), "-q"])
     assert p.returncode == 0, p.stderr[-2000:]
     import json
@@ -196,5 +204,5 @@ def test_a_target_past_the_pressure_maximum_is_refused_in_one_line(shell, tmp_pa
     code, res, err, _ = run_scene(tmp_path, d, capsys)
     assert code == 3 and "Traceback" not in err
     line = err.strip().splitlines()[-1]
-    assert "past a limit point of the loads" in line and "a balloon beyond its pressure maximum" in line
+    assert "past a limit point of the loads: a balloon beyond its pressure maximum" in line
     assert res is not None and res["usable"] is False

@@ -32,8 +32,8 @@ class ForwardCheck:
 
 
 def _stability_problems(solve: forward.ForwardSolve, predicted: str) -> list:
-    """An equilibrium whose tangent is not positive definite is unstable: past a limit point of the loads (a
-    buckled branch, a balloon beyond its pressure maximum), where no load holds it: refused."""
+    """An equilibrium whose tangent is not positive definite is unstable (a buckled branch past a bifurcation, a
+    balloon beyond its pressure maximum): the loads do not keep the part there; refused."""
     i = solve.inertia
     if i is None or i.stable:
         return []
@@ -43,8 +43,9 @@ def _stability_problems(solve: forward.ForwardSolve, predicted: str) -> list:
     head = (f"has {i.negative} negative pivots where a stable state has {i.saddle} (its pressure dofs), {i.null} "
             f"null, of {i.dofs}" if i.saddle else
             f"is not positive definite ({i.negative} negative, {i.null} null pivots of {i.dofs})")
-    return [f"the tangent {where} {head}: an unstable equilibrium, past a limit point of the loads (a buckled "
-            "branch, a balloon beyond its pressure maximum) where no load holds it; the design is not usable"]
+    return [f"the tangent {where} {head}: an unstable equilibrium (a buckled branch past a bifurcation, or past a "
+            "limit point of the loads: a balloon beyond its pressure maximum), the loads do not keep the part "
+            "there; the design is not usable"]
 
 
 def _matched_vertices(spec, pts_target: np.ndarray, size: float) -> np.ndarray | None:

@@ -80,7 +80,9 @@ def forward_scene(scene: Scene, rest_mesh: Path, dofs: int, carved: bool = False
     if fscene.several_materials:                # each material's cells, carried over as a volume group
         for m in fscene.materials:
             m.where = Selector("group", group=m.name, key=f"{m.key}.where")
-    if fscene.solver.linear == "auto" and carved:
+    if fscene.discretization.formulation == "mixed":     # a saddle point: LU, as the static analysis's
+        fscene.solver.linear = "direct"
+    elif fscene.solver.linear == "auto" and carved:
         fscene.solver.linear = "direct"
     elif fscene.solver.linear == "auto" and dofs >= CHECK_ITERATIVE_ABOVE_DOFS:
         fscene.solver.linear = "iterative-then-direct"
@@ -129,7 +131,7 @@ def solve_at_target(fscene: Scene, loaded: LoadedMesh, pts_rest: np.ndarray, pts
     # no decrease and wastes a step (measured on the soft beam: 2 steps with it, 1 without)
     options = {"snes_linesearch_type": "basic", **fscene.solver.petsc, "snes_max_it": steps}
     driver = snes.SNESDriver(problem, options, fscene.solver.linear, "fem_forms_check_",
-                             near_nullspace=lambda: rigid_body_modes(model.V))
+                             near_nullspace=None if model.unknown is not model.u else lambda: rigid_body_modes(model.V))
     K = assemble_tangent(model.compiled("jacobian"), model.bcs)      # at the target
     try:
         scale = driver.load_scale()              # the residual at the rest shape (u = 0) under full load
@@ -141,7 +143,7 @@ def solve_at_target(fscene: Scene, loaded: LoadedMesh, pts_rest: np.ndarray, pts
         # the 1e-6 of the load a load step's acceptance allows
         rtol = driver.options["snes_rtol"]
         bounds = {"rest shape": rtol * scale, "design": rtol * design_scale,
-                  "round-off": min(snes.roundoff_floor(K.norm(PETSc.NormType.INFINITY), model.unknown.vector),
+                  "round-off": min(snes.roundoff_floor(K.norm(PETSc.NormType.INFINITY), model.u.vector),
                                    acceptance.ACCEPTED * scale)}
         driver.user_options.setdefault("snes_atol", max(bounds.values()))
         tolerance = float(driver.user_options["snes_atol"])
