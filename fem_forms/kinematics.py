@@ -125,11 +125,22 @@ def principal_values(A, floor: float = FLOOR) -> tuple:
     a tangent at an isotropic A is good to about eps/floor (FLOOR: 1e-4, the modes of an Ogden solid at rest
     4e-5 off); the second and third moments of the eigenvalues (6 p^2 = |D|^2 + 6 floor^2, 6 p^3 r = 3 det D)
     keep their derivatives exact whatever the floor, so a floor of 1e-6 of the values costs nothing."""
-    I = ufl.Identity(3)
+    return principal_values_of(*deviator_moments(A), floor=floor)
+
+
+def deviator_moments(A) -> tuple:
+    """(tr A / 3, |D|^2, det D) of A and its deviator D = A - tr A / 3 I: all the closed form reads of A. Each
+    is computed from A itself (|D|^2 from I1 and I2 would lose |D|^2 to cancellation near isotropy)."""
     q = ufl.tr(A) / 3
-    D = A - q * I
-    p = ufl.sqrt(ufl.inner(D, D) / 6 + floor ** 2)
-    r = ufl.max_value(ufl.min_value(ufl.det(D / p) / 2, 1 - EDGE), -1 + EDGE)
+    D = A - q * ufl.Identity(3)
+    return q, ufl.inner(D, D), ufl.det(D)
+
+
+def principal_values_of(q, dd, det_d, floor: float = FLOOR) -> tuple:
+    """The eigenvalues (largest, middle, smallest) from the moments of deviator_moments: three scalars, so a
+    material can take its stress by the chain rule through them (the Ogden model)."""
+    p = ufl.sqrt(dd / 6 + floor ** 2)
+    r = ufl.max_value(ufl.min_value(det_d / (2 * p ** 3), 1 - EDGE), -1 + EDGE)
     phi = ufl.acos(r) / 3
     largest = q + 2 * p * ufl.cos(phi)
     smallest = q + 2 * p * ufl.cos(phi + 2 * math.pi / 3)

@@ -212,8 +212,9 @@ def test_an_obstacle_file_over_the_cap_is_refused(tmp_path):
 
 
 def test_a_shared_folders_petscrc_and_modules_are_not_read(tmp_path, sandbox, monkeypatch):
-    """PETSc reads .petscrc from the current folder when it starts, Python imports modules from it: a folder
-    shared with a scene could hold either. A run (a process of its own) and a study's runs read neither."""
+    """PETSc reads .petscrc from the current folder when it starts, Python imports modules from it, dolfinx and
+    FFCx their JIT settings (a form cache elsewhere, compiler flags): a folder shared with a scene could hold any.
+    A run (a process of its own) and a study's runs read none of them."""
     import subprocess
     import sys
     from fem_forms.study import study
@@ -223,6 +224,8 @@ def test_a_shared_folders_petscrc_and_modules_are_not_read(tmp_path, sandbox, mo
     (tmp_path / "petscrc").write_text(f"-options_file {sandbox}/other\n")
     (tmp_path / "json.py").write_text(f"open({str(sandbox / 'json_imported.txt')!r}, 'w').write('x')\n"
                                       "raise SystemExit(7)\n")
+    (tmp_path / "dolfinx_jit_parameters.json").write_text(json.dumps({"cache_dir": str(sandbox / "forms")}))
+    (tmp_path / "ffcx_parameters.json").write_text(json.dumps({"scalar_type": "float"}))
     before = _listing(sandbox)
     script = Path(sys.executable).parent / "fem-forms"          # the command users run (its folder on sys.path)
     p = subprocess.run([str(script), "run", "scene.toml", "-q"], capture_output=True, text=True)
