@@ -20,7 +20,8 @@ class Key:
     (a list of vectors), axes (distinct names from x, y, z -> indices), file (a path that must
     exist), table (a sub-table of `keys`, read into the same spec), map (name -> `item`), options
     (PETSc option -> scalar), selector (a boundary selector read by `parse`; `choices` limits its kinds),
-    selection (distinct names from `choices`; true means the default list, false none), tables (an array
+    selection (distinct names from `choices`; true means the default list, false none), names (distinct names
+    of things the scene declares, `length` of them), tables (an array
     of sub-tables of `keys`, each read into a dict),
     either (one of the alternatives in `keys`, told apart by shape: a list or a table).
     `note` replaces the generic range message; `attr` names the spec attribute when it differs.

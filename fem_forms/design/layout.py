@@ -1,14 +1,15 @@
 """Two-material layout design (SIMP): where to put the stiffer material so that the loaded part reaches targets.
 
 A density rho_e in [0, 1] per cell chooses between two materials: psi = (1 - w) psi_soft + w psi_stiff with
-w = rho_f^p (Bendsoe 1989's penalisation, p = 3 by default: intermediate densities cost stiffness, so the optimum
-is nearly black and white) of the filtered density rho_f = M rho, M_ij = H_ij v_j / sum_k H_ik v_k, H_ij =
-max(0, r - |c_i - c_j|) between cell centres c and with cell volumes v (the density filter of Bruns & Tortorelli
-2001: a smallest feature of about r, no checkerboards). The objective is the probes' mismatch J = 1/2 sum_p
-|x_p + u(x_p) - t_p|^2 / L^2 (L the part's size); its gradient takes one adjoint solve K^T lambda = dJ/du at the
-equilibrium and dJ/dw = -d/dw [R(u, w) . lambda], chained through the SIMP law and the filter's transpose.
+w = rho_bar^p (Bendsoe 1989's penalisation, p = 3 by default: intermediate densities cost stiffness for their
+volume) of the filtered density rho_f = M rho, M_ij = H_ij v_j / sum_k H_ik v_k, H_ij = max(0, r - |c_i - c_j|)
+between cell centres c and with cell volumes v (the density filter of Bruns & Tortorelli 2001: a smallest feature
+of about r, no checkerboards), projected to rho_bar by a smoothed Heaviside (sharper stage by stage). The mismatch
+is J = 1/2 sum_p |x_p + u(x_p) - t_p|^2 / L^2 (L the part's size); its gradient takes one adjoint solve
+K^T lambda = dJ/du at the equilibrium and dJ/dw = -d/dw [R(u, w) . lambda], chained through the SIMP law, the
+projection and the filter's transpose (and the density, where the two materials' differ and gravity acts).
 
-The design vector is global (every rank holds all cells, in the DG0 index map's global order): the filter and the
+The design vector is global (every rank holds all cells, in an order of their own by centre): the filter and the
 optimizer see the same numbers on every rank count."""
 from __future__ import annotations
 
@@ -121,41 +122,77 @@ class TargetPoints:
                 out.array[3 * k:3 * k + 3] += miss[i]
 
 
-class LayoutGradient:
-    """J(rho) and dJ/drho for one model whose material is a LayoutMaterial: `solve(model)` runs its equilibrium."""
+@dataclass
+class PlacedDensity:
+    """The density field the layout sets where gravity acts: rho_body + rho_bar (rho_placed - rho_body)."""
+    field: fem.Function
+    body: float
+    placed: float
 
-    def __init__(self, model, weight: fem.Function, cells: CellVector, targets: TargetPoints,
-                 radius: float, penalty: float, solve):
+
+class LayoutGradient:
+    """J(rho) and dJ/drho for one model whose material is a LayoutMaterial: `solve(model)` runs its equilibrium.
+    `domain` (a boolean per cell, design order): where the placed material may go (elsewhere w = 0)."""
+
+    def __init__(self, model, weight: fem.Function, cells: CellVector, targets: TargetPoints, radius: float,
+                 penalty: float, solve, domain: np.ndarray | None = None, density: PlacedDensity | None = None):
         self.model, self.weight, self.cells, self.targets = model, weight, cells, targets
-        self.penalty, self.solve = penalty, solve
+        self.penalty, self.solve, self.density = penalty, solve, density
+        self.domain = np.ones(cells.size) if domain is None else np.asarray(domain, dtype=float)
+        self.beta = 0.0                                   # the projection's sharpness (the optimizer raises it)
+        self.radius = radius
         self.filter = density_filter(cells.centres, cells.volumes, radius)
-        lam = self.adjoint = fem.Function(model.V, name="adjoint")
-        test = ufl.TestFunction(model.V)
         if model.unknown is not model.u:
             raise SolveError("layout design: the displacement formulation only (no mixed u-p yet)")
-        work = ufl.replace(model.residual, {test: lam})
-        self.dwork_dw = fem.form(ufl.derivative(work, weight, ufl.TestFunction(weight.function_space)))
+        lam = self.adjoint = fem.Function(model.V, name="adjoint")
+        work = ufl.replace(model.residual, {ufl.TestFunction(model.V): lam})
+        q = ufl.TestFunction(weight.function_space)
+        self.dwork_dw = fem.form(ufl.derivative(work, weight, q))
+        self.dwork_dm = None
+        if density is not None and density.placed != density.body:
+            dm = ufl.algorithms.expand_derivatives(ufl.derivative(work, density.field, q))
+            self.dwork_dm = None if dm.empty() else fem.form(dm)
         self.K = fpetsc.create_matrix(model.compiled("jacobian"))
         self.ksp = make_ksp(None, "lu", "fem_forms_layout_", comm=model.mesh.comm)
         self.evaluations = 0
 
-    def weights(self, rho: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(rho_f, w = rho_f^p)."""
-        rho_f = self.filter @ rho
-        return rho_f, rho_f ** self.penalty
+    def projected(self, rho_f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(rho_bar, d rho_bar / d rho_f): the filtered density projected by a smoothed Heaviside of sharpness
+        beta at 1/2 (Wang, Lazarov & Sigmund 2011; beta 0 leaves it as it is), 0 outside the domain."""
+        b = self.beta
+        if b == 0:
+            return rho_f * self.domain, self.domain.copy()
+        t, den = np.tanh(b * (rho_f - 0.5)), 2 * np.tanh(b * 0.5)
+        return (np.tanh(b * 0.5) + t) / den * self.domain, b * (1 - t ** 2) / den * self.domain
+
+    def layout(self, rho: np.ndarray) -> np.ndarray:
+        """rho_bar: how much of each cell is the placed material."""
+        return self.projected(self.filter @ rho)[0]
+
+    def fraction(self, rho: np.ndarray) -> tuple[float, np.ndarray]:
+        """The placed fraction of the domain's volume, sum v rho_bar / V_domain, and its gradient."""
+        rho_bar, slope = self.projected(self.filter @ rho)
+        v = self.cells.volumes * self.domain / float(self.cells.volumes @ self.domain)
+        return float(v @ rho_bar), self.filter.T @ (v * slope)
+
+    def set_layout(self, rho_bar: np.ndarray) -> None:
+        """The model's weight (rho_bar^p) and density fields for a layout."""
+        self.cells.fill(self.weight, rho_bar ** self.penalty)
+        if self.density is not None:
+            d = self.density
+            self.cells.fill(d.field, d.body + rho_bar * (d.placed - d.body))
 
     def value(self, rho: np.ndarray) -> float:
         """J at rho (the equilibrium solved from the last state)."""
-        _, w = self.weights(rho)
-        self.cells.fill(self.weight, w)
+        self.set_layout(self.layout(rho))
         report = self.solve(self.model)
         self.evaluations += 1
         if not report.converged:
             raise SolveError(f"layout design: no equilibrium for this layout ({report.message})")
         return self.targets.mismatch(self.model.u)
 
-    def gradient(self, rho: np.ndarray) -> np.ndarray:
-        """dJ/drho at the state `value(rho)` left: one adjoint solve."""
+    def _adjoint(self) -> None:
+        """K^T lambda = dJ/du at the current equilibrium (lambda = 0 on supported dofs)."""
         model = self.model
         self.K.zeroEntries()
         fpetsc.assemble_matrix(self.K, model.compiled("jacobian"), bcs=model.bcs)
@@ -168,15 +205,22 @@ class LayoutGradient:
         self.ksp.solveTranspose(rhs, lam)
         if self.ksp.getConvergedReason() < 0:
             raise SolveError(f"layout design: the adjoint solve failed ({self.ksp.getConvergedReason()})")
-        n = len(lam.array)
-        self.adjoint.x.array[:n] = lam.array
+        self.adjoint.x.array[:len(lam.array)] = lam.array
         self.adjoint.x.scatter_forward()
-        dw = fpetsc.assemble_vector(self.dwork_dw)
-        dw.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        dJ_dw = -self.cells.gather(dw.array[:self.cells.n_owned])
-        rho_f, _ = self.weights(rho)
-        dJ_drho_f = dJ_dw * self.penalty * rho_f ** (self.penalty - 1)
-        return self.filter.T @ dJ_drho_f
+
+    def _cellwise(self, form: fem.Form) -> np.ndarray:
+        """-d/d(field) of R . lambda per cell (design order)."""
+        vec = fpetsc.assemble_vector(form)
+        return -self.cells.gather(vec.array[:self.cells.n_owned])
+
+    def gradient(self, rho: np.ndarray) -> np.ndarray:
+        """dJ/drho at the state `value(rho)` left: one adjoint solve."""
+        self._adjoint()
+        rho_bar, slope = self.projected(self.filter @ rho)
+        dJ = self._cellwise(self.dwork_dw) * self.penalty * rho_bar ** (self.penalty - 1)
+        if self.dwork_dm is not None:
+            dJ = dJ + self._cellwise(self.dwork_dm) * (self.density.placed - self.density.body)
+        return self.filter.T @ (dJ * slope)
 
 
 def part_length(model) -> float:
@@ -187,3 +231,60 @@ def part_length(model) -> float:
     hi = np.max(comm.allgather(x.max(axis=0) if len(x) else np.full(3, -np.inf)), axis=0)
     return float(np.linalg.norm(hi - lo)) or mesh_size(model.mesh)
 
+
+
+BOUND_PENALTY = 1e3     # f's penalty on a placed fraction over its bound (squared excess)
+
+
+@dataclass
+class LayoutResult:
+    """The optimised layout: densities (raw and filtered, in the design's cell order), J per iteration."""
+    rho: np.ndarray
+    rho_f: np.ndarray
+    history: list
+    objective: float
+    stiff_fraction: float
+    iterations: int
+    converged: bool
+
+
+def optimize_layout(gradient: LayoutGradient, max_fraction: float, iterations: int = 100, reach: float = 1e-4,
+                    on_iteration=None) -> LayoutResult:
+    """Of the layouts that bring the targets within about `reach` (m, root mean square distance), the one with the
+    least placed material: scipy's L-BFGS-B on f = J / J_reach + fraction + BOUND_PENALTY max(0, fraction -
+    max_fraction)^2 over 0 <= rho <= 1 (J_reach = n reach^2 / (2 L^2): the mismatch counts once the targets are
+    farther than `reach`, the material always), in stages of sharper projection (beta 1, 2, 4, 8, 16), each from
+    the last one's layout. Less material is the tie-breaker among the many layouts that reach a few targets; with
+    SIMP and the projection that layout is black and white (an intermediate density pays volume for little
+    stiffness)."""
+    from scipy.optimize import minimize
+    cells = gradient.cells
+    allowed = len(gradient.targets.points) * reach ** 2 / (2 * gradient.targets.length ** 2)
+    rho = np.full(cells.size, max_fraction)
+    history, converged, count = [], False, 0
+
+    def f(x):
+        nonlocal count
+        x = cells.comm.bcast(np.asarray(x, dtype=float))
+        J = gradient.value(x)
+        fraction, d_fraction = gradient.fraction(x)
+        over = max(fraction - max_fraction, 0.0)
+        history.append(J)
+        if on_iteration is not None:
+            on_iteration(count, J, fraction)
+        count += 1
+        value = J / allowed + fraction + BOUND_PENALTY * over ** 2
+        return value, gradient.gradient(x) / allowed + (1 + 2 * BOUND_PENALTY * over) * d_fraction
+
+    stages = [1.0, 2.0, 4.0, 8.0, 16.0]
+    for i, beta in enumerate(stages):
+        gradient.beta = beta
+        budget = (iterations - count) // (len(stages) - i)
+        if budget < 1:
+            break
+        out = minimize(f, rho, jac=True, method="L-BFGS-B", bounds=[(0.0, 1.0)] * cells.size,
+                       options={"maxfun": budget, "maxiter": budget})
+        rho = cells.comm.bcast(np.clip(out.x, 0.0, 1.0))
+        converged = bool(out.success) and i == len(stages) - 1
+    J = gradient.value(rho)
+    return LayoutResult(rho, gradient.layout(rho), history, J, gradient.fraction(rho)[0], count, converged)

@@ -14,6 +14,7 @@ from fem_forms.materials.hyperelastic import SMALL_STRAIN_MODELS
 from fem_forms.scene import registry
 from fem_forms.scene.analyses.balance import BalanceSpec
 from fem_forms.scene.analyses.contact_section import ContactSpec
+from fem_forms.scene.analyses.design import DesignSpec
 from fem_forms.scene.analyses.fracture_section import FractureSpec, fracture_scene_rules
 from fem_forms.scene.analyses.dynamic import DampingSpec, DynamicSpec
 from fem_forms.scene.analyses.impact_section import ImpactSoundSpec
@@ -21,7 +22,7 @@ from fem_forms.scene.analyses.inverse import InverseSpec
 from fem_forms.scene.analyses.modal import ModalSpec, SoundSpec
 from fem_forms.scene.analyses.thermal_section import ThermalSpec
 from fem_forms.scene.cavities import cavity_rules
-from fem_forms.scene.materials import MaterialSpec, kinematics_rules, viscoelastic_rules
+from fem_forms.scene.materials import MaterialSpec, kinematics_rules, open_ended_rule, viscoelastic_rules
 from fem_forms.scene.files import parse_assignment, read_toml, set_key
 from fem_forms.scene.limits import LIMITS, NO_LIMITS, Limits, check_scene
 from fem_forms.scene.reader import AXES, Key, Section, Table, Variants, check_number, check_vector
@@ -56,6 +57,7 @@ class Scene:
     dynamic: DynamicSpec = field(default_factory=DynamicSpec)
     damping: DampingSpec = field(default_factory=DampingSpec)
     thermal: ThermalSpec | None = None     # None: no temperature field
+    design: DesignSpec | None = None       # [design] of analysis = "design"
     contact: ContactSpec | None = None     # None: no contact
     fracture: FractureSpec | None = None   # None: no damage field
     source: Path | None = None
@@ -139,6 +141,7 @@ def _parse_scene(data: dict, base_dir: Path, source: Path | None, limits: Limits
             m.strength_tensile is not None or m.strength_yield is not None for m in sc.materials):
         raise InputError("output.fields: 'utilization' needs a [material.strength] (stress over strength)")
     viscoelastic_rules(sc)                             # after the analysis's own sections: it reads [dynamic]
+    open_ended_rule(sc)                                # after [design]: the material it places needs no `where`
     kinematics_rules(sc)
     fracture_scene_rules(sc)
     if analysis.check is not None:

@@ -35,6 +35,7 @@ def kind_text(k: Key) -> str:
         "table": "table", "tables": "array of tables", "map": "table of name = value",
         "options": "table of PETSc options (name = value)", "selector": "a table saying where, one of the shapes below",
         "selection": "true (the default list), false (none) or a list of names", "either": "one of the forms below",
+        "names": "a list of names",
     }[k.kind]
 
 

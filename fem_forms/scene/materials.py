@@ -268,12 +268,19 @@ def viscoelastic_rules(scene) -> None:
 
 
 def _materials_rules(materials: list[MaterialSpec]) -> None:
-    """Across the materials: distinct names, at most one without `where` (it takes the rest)."""
+    """Across the materials: distinct names."""
     names = [m.name for m in materials]
     for i, m in enumerate(materials):
         if m.name in names[:i]:
             raise InputError(f"{m.key}.name = {m.name!r}: another material has this name")
-    open_ended = [m for m in materials if m.where is None]
+
+
+def open_ended_rule(scene) -> None:
+    """At most one material without `where` (it takes the rest), the material a design places aside (its
+    `where`, if any, is where it may go)."""
+    materials = scene.materials
+    placed = scene.design.materials[1] if scene.analysis == "design" and scene.design is not None else None
+    open_ended = [m for m in materials if m.where is None and m.name != placed]
     if len(materials) > 1 and len(open_ended) > 1:
         raise InputError(f"{open_ended[1].key}.where: missing (only one material may leave out `where`: "
                          f"it takes every cell no other material claims; {open_ended[0].key} already does)")

@@ -234,6 +234,14 @@ def read_value(k: Key, v: Any, key: str, base_dir: Path) -> Any:
         return out
     if k.kind == "selection":
         return read_selection(k, v, key)
+    if k.kind == "names":
+        if not isinstance(v, list) or (k.length is not None and len(v) != k.length):
+            raise InputError(f"{key} = {brief(v)}: must be a list of {k.length or 'some'} names")
+        for i, x in enumerate(v):
+            check_name(x, f"{key}[{i}]")
+        if len(set(v)) != len(v):
+            raise InputError(f"{key}: names must not repeat")
+        return list(v)
     if k.kind == "either":
         same = [a for a in k.keys if _shape(v) == _shape_of_kind(a.kind)]
         # among single values, the alternative of the value's own type first ("all" or 1)
@@ -263,7 +271,7 @@ def _scalar_type(v: Any) -> str | None:
 
 
 def _shape_of_kind(kind: str) -> str:
-    return ("table" if kind == "table" else "list" if kind in ("vector", "points", "tables", "axes", "selection")
+    return ("table" if kind == "table" else "list" if kind in ("vector", "points", "tables", "axes", "selection", "names")
             else "value")
 
 

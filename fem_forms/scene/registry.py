@@ -7,12 +7,12 @@ sections is read into scene.<section name> (declare a Scene field there for the 
 from __future__ import annotations
 
 from fem_forms.errors import InputError
-from fem_forms.scene.analyses import Analysis, balance, dynamic, inverse, modal, static, thermal
+from fem_forms.scene.analyses import Analysis, balance, design, dynamic, inverse, modal, static, thermal
 from fem_forms.scene.reader import Key, Section
 
 ANALYSES: dict[str, Analysis] = {a.name: a for a in (static.ANALYSIS, modal.ANALYSIS, inverse.ANALYSIS,
                                                      balance.ANALYSIS, dynamic.ANALYSIS,
-                                                     thermal.ANALYSIS)}
+                                                     thermal.ANALYSIS, design.ANALYSIS)}
 
 ANALYSIS_KEY = Key("analysis", "string", "what to compute: " + "; ".join(
     f"{a.name}: {a.doc}" for a in ANALYSES.values()), default="static", choices=tuple(ANALYSES))

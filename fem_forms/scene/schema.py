@@ -73,6 +73,10 @@ def key_schema(k: Key) -> dict:
     elif k.kind == "selection":
         s = {"anyOf": [{"type": "boolean"},
                        {"type": "array", "items": {"enum": list(k.choices)}, "uniqueItems": True}]}
+    elif k.kind == "names":
+        s = {"type": "array", "items": {"type": "string"}, "uniqueItems": True}
+        if k.length is not None:
+            s["minItems"] = s["maxItems"] = k.length
     elif k.kind == "either":
         s = {"oneOf": [key_schema(a) for a in k.keys]}
     else:

@@ -10,13 +10,18 @@ from fem_forms.scene.reader import Key
 BASE = {"mesh": {"cells": [4, 1, 1]}, "material": {"E": 1e6, "nu": 0.3, "rho": 1000.0}}
 # tables an analysis cannot run without, and keys a table needs beyond its required ones (cross-key rules)
 HEATED_END = {"boundary": [{"where": {"axis": "x", "at": 0.0}, "temperature": 1.0}]}
-NEEDS = {"thermal": {"thermal": {"conductivity": 1.0, "specific_heat": 1.0, **HEATED_END}}}
-COMPLETE = {"thermal": {**HEATED_END, "conductivity": 1.0, "specific_heat": 1.0}, "contact": {"self": True}}
+TWO = {"material": [{"name": "soft", "E": 1e6, "nu": 0.3, "rho": 1000.0},
+                    {"name": "stiff", "E": 1e7, "nu": 0.3, "rho": 1000.0}], "output": {"probes": {"tip": [1.0, 0.05, 0.05]}}}
+DESIGNED = {"materials": ["soft", "stiff"], "target": [{"probe": "tip", "position": [1.0, 0.05, 0.0]}]}
+NEEDS = {"thermal": {"thermal": {"conductivity": 1.0, "specific_heat": 1.0, **HEATED_END}},
+         "design": {**TWO, "design": DESIGNED}}
+COMPLETE = {"thermal": {**HEATED_END, "conductivity": 1.0, "specific_heat": 1.0}, "contact": {"self": True},
+            "design": DESIGNED}
 # tables of other sections a section needs in one analysis (balance reads [contact] with elastic = true only)
 ALONG = {("balance", "contact"): {"balance": {"elastic": True}},
          ("dynamic", "sound"): {"contact": {"obstacle": [{"name": "a", "shape": "plane", "point": [0.0, 0.0, -1.0],
                                                           "normal": [0.0, 0.0, 1.0]}]}}}   # [sound.impact] names it
-REQUIRED = {"vector": [0.0, 0.0, 1.0], "number": 1.0, "integer": 1, "string": "a"}
+REQUIRED = {"vector": [0.0, 0.0, 1.0], "number": 1.0, "integer": 1, "string": "a", "names": ["a", "b"], "tables": []}
 
 
 def required_only(keys) -> dict:

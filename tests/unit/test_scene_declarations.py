@@ -52,6 +52,10 @@ def sample(k: Key, tmp: Path):
         return str(tmp / "any.msh")
     if k.kind == "string":
         return (k.choices or ("a",))[0]
+    if k.kind == "names":
+        return [f"n{i}" for i in range(k.length or 1)]
+    if k.kind == "tables":
+        return [{s.name: sample(s, tmp) for s in k.keys if s.required}]
     return {"number": 1.0, "integer": 1, "boolean": True, "vector": [1.0] * (k.length or 3)}[k.kind]
 
 

@@ -185,11 +185,13 @@ def load_span(model: Model) -> float:
 
 
 def solve_static(scene: Scene, material=None, model: Model | None = None,
-                 on_step: Callable[[float], None] | None = None) -> StaticResult:
+                 on_step: Callable[[float], None] | None = None, answers: bool = True) -> StaticResult:
     """Solve the scene's equilibrium. `material` may be a Material or a user's psi(F) function.
     `on_step(lam)` is called after each accepted load step (the state committed): the static analysis
     writes its load path there. Raises InputError for bad input; a failed solve is returned with
-    report.converged False: at a limit point with the answer numbers of the last accepted state, else none."""
+    report.converged False: at a limit point with the answer numbers of the last accepted state, else none.
+    `answers=False` leaves the answer numbers (stresses, reactions, probes) out: a design loop needs the state
+    only (half of a small model's solve)."""
     t0 = time.perf_counter()
     histories, sweeps = [], None
     model = model or build_model(scene, material)
@@ -237,7 +239,9 @@ def solve_static(scene: Scene, material=None, model: Model | None = None,
     if not report.converged and (why := model.solid.near_limit(model.context, report.message)):
         report.message = f"{report.message}; {why}"
     result = StaticResult(model, report, histories=histories, sweeps=sweeps)
-    if report.converged:
+    if not answers:
+        pass
+    elif report.converged:
         post_process(result)
     elif limit_point(result):     # the loads back at the last accepted factor (the state was rolled back there)
         set_load(report.load_reached)

@@ -1,0 +1,130 @@
+"""analysis = "design": where to put the second material (the stiff one) so that the loaded part's probes reach
+their targets. The layout is optimised as densities (fem_forms/design/layout.py: SIMP, filter, projection, adjoint
+gradient, L-BFGS-B), then cast black and white (a cell is the placed material where its density is 1/2 or more) and
+solved once more as cast: the positions results.json reports are the cast layout's, the files are what to make."""
+from __future__ import annotations
+
+from pathlib import Path
+import sys
+import time
+
+from dolfinx import fem, io
+from mpi4py import MPI
+import numpy as np
+
+from fem_forms.analyses.static.solve import solve_static
+from fem_forms.design.layout import (CellVector, LayoutGradient, LayoutMaterial, PlacedDensity, TargetPoints,
+                                     optimize_layout, part_length)
+from fem_forms.errors import SolveError
+from fem_forms.materials.constants import bind_constants
+from fem_forms.meshes import load_mesh
+from fem_forms.model import build_model
+from fem_forms.output import fields, results
+from fem_forms.output.layout_files import write_layout_files
+from fem_forms.output.probes import write_table
+from fem_forms.output.summary import header
+from fem_forms.scene import Scene
+
+CAST_AT = 0.5           # a cell is cast in the placed material where its density is at least this
+
+
+def _domain(model, cells: CellVector, placed_index: int) -> np.ndarray:
+    """Where the placed material may go (design order): its `where`'s cells, else every cell."""
+    spec = model.scene.materials[placed_index]
+    if spec.where is None:
+        return np.ones(cells.size, dtype=bool)
+    regions = model.context.materials
+    return cells.gather(regions.index[:cells.n_owned] == placed_index) > 0.5
+
+
+def build_design(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> LayoutGradient:
+    """The model of the scene with its two materials mixed per cell, and the design's gradient on it."""
+    d = scene.design
+    names = [m.name for m in scene.materials]
+    body, placed = (scene.materials[names.index(n)] for n in d.materials)
+    loaded = load_mesh(scene.mesh, comm, degree=scene.discretization.degree)
+    weight = fem.Function(fem.FunctionSpace(loaded.mesh, ("DG", 0)), name="placed_weight")
+    mix = LayoutMaterial(bind_constants(body.material, loaded.mesh), bind_constants(placed.material, loaded.mesh),
+                         weight)
+    model = build_model(scene, mix, comm=comm, loaded=loaded)
+    cells = CellVector(weight.function_space)
+    probes = scene.output.probes
+    points = np.array([probes[t["probe"]] for t in d.target], dtype=float)
+    targets = TargetPoints(model.V, points, np.array([t["position"] for t in d.target], dtype=float),
+                           part_length(model))
+    radius = d.filter_radius or 2.0 * float(np.mean(cells.volumes)) ** (1.0 / 3.0)
+    return LayoutGradient(model, weight, cells, targets, radius, d.penalty,
+                          solve=lambda m: solve_static(scene, model=m, answers=False).report,
+                          domain=_domain(model, cells, names.index(d.materials[1])),
+                          density=PlacedDensity(model.parameters.density, body.rho, placed.rho))
+
+
+def run(scene: Scene, out, echo: bool = False) -> dict:
+    """Optimise, cast, solve the cast layout, write the files, then results.json last."""
+    t0 = time.perf_counter()
+    out = Path(out)
+    comm = MPI.COMM_WORLD
+    d = scene.design
+    if comm.rank == 0:
+        out.mkdir(parents=True, exist_ok=True)
+    comm.barrier()
+    design = build_design(scene, comm)
+    history = []
+
+    def said(k, J, fraction):
+        history.append([k, J, fraction, design.beta])
+        if echo and comm.rank == 0:
+            print(f"  design iteration {k}: mismatch J = {J:.4e}, placed fraction {fraction:.3f}, "
+                  f"projection beta {design.beta:g}", file=sys.stderr, flush=True)
+
+    result = optimize_layout(design, d.stiff_fraction, d.iterations, d.reach, on_iteration=said)
+    cast = result.rho_f >= CAST_AT
+    design.set_layout(cast.astype(float))
+    report = design.solve(design.model)
+    if not report.converged:
+        raise SolveError(f"design: the cast layout has no equilibrium under the loads ({report.message})")
+    reached = design.targets.positions(design.model.u)
+    cells, volumes = design.cells, design.cells.volumes
+    files = write_layout_files(out, design.model.mesh, cells.order, cast, tuple(d.materials))
+    write_table(out / "design_history.csv", ["iteration", "mismatch", "placed_fraction", "beta"], history, comm)
+    _write_fields(out / "layout.xdmf", design, result.rho_f)
+    files.update({"history": "design_history.csv", "fields": "layout.xdmf"})
+    domain_volume = float(volumes @ design.domain)
+    summary = {**header("design", scene, comm, design.model.dofs, time.perf_counter() - t0),
+               "converged": bool(result.converged),
+               "design": {
+                   "materials": {"body": d.materials[0], "placed": d.materials[1]},
+                   "iterations": result.iterations, "optimizer_converged": bool(result.converged),
+                   "mismatch_start": result.history[0] if result.history else None,
+                   "mismatch_optimized": result.objective,
+                   "mismatch_cast": design.targets.mismatch(design.model.u),
+                   "placed_fraction_bound": d.stiff_fraction,
+                   "placed_fraction_optimized": result.stiff_fraction,
+                   "placed_fraction_cast": float(volumes @ cast) / domain_volume,
+                   "placed_volume_m3": float(volumes @ cast), "domain_volume_m3": domain_volume,
+                   "gray_fraction": float(np.mean((result.rho_f > 0.1) & (result.rho_f < 0.9))),
+                   "filter_radius_m": float(design.radius), "penalty": d.penalty,
+                   "targets": {t["probe"]: {"target": t["position"], "reached": reached[i].tolist(),
+                                            "distance_m": float(np.linalg.norm(reached[i] - t["position"]))}
+                               for i, t in enumerate(d.target)},
+                   "evaluations": design.evaluations},
+               "files": files}
+    results.write_json_atomic(out / "results.json", summary, comm)
+    if echo and comm.rank == 0:
+        print(f"{scene.title}: {result.iterations} design iterations, {d.materials[1]} in "
+              f"{summary['design']['placed_fraction_cast']:.1%} of its domain, {summary['wall_time_s']:.1f} s -> {out}")
+        for name, t in summary["design"]["targets"].items():
+            print(f"  {name}: reached {np.round(t['reached'], 6).tolist()} m, {t['distance_m'] * 1e3:.3g} mm from "
+                  f"the target")
+    return summary
+
+
+def _write_fields(path: Path, design: LayoutGradient, rho_bar: np.ndarray) -> None:
+    """layout.xdmf: the optimised densities (placed fraction per cell) and the cast layout's displacement."""
+    model = design.model
+    density = fem.Function(design.weight.function_space, name="placed_density")
+    design.cells.fill(density, rho_bar)
+    with io.XDMFFile(model.mesh.comm, str(path), "w") as xdmf:
+        xdmf.write_mesh(model.mesh)
+        xdmf.write_function(density)
+        xdmf.write_function(fields.p1_interpolant(model.u, "displacement"))

@@ -1,0 +1,82 @@
+"""The layout design analysis: its [design] section (the two materials, the stiff volume's bound, the filter, the
+targets). Declared once here; the reader, the JSON Schema and the runner all read these."""
+from __future__ import annotations
+
+from fem_forms.errors import InputError
+from fem_forms.keys import spec_class
+from fem_forms.scene.analyses import Analysis
+from fem_forms.scene.reader import Key, Section, Table
+
+TARGET_KEYS = (
+    Key("probe", "string", "name of an [output.probes] point", required=True),
+    Key("position", "vector", "where that point should be in the loaded part", unit="m", required=True, length=3),
+)
+DESIGN_KEYS = (
+    Key("materials", "names", "the two [[material]] names: the body's (everywhere the design puts nothing else) "
+        "and the one the design places (its `where`, if any, is where it may go)", required=True, length=2),
+    Key("stiff_fraction", "number", "the placed material fills at most this fraction of the volume it may take",
+        default=0.3, exclusive_minimum=0, maximum=1),
+    Key("filter_radius", "number", "the layout's smallest feature (the density filter's radius)", unit="m",
+        exclusive_minimum=0, default_note="2 x the cells' mean size"),
+    Key("penalty", "number", "SIMP exponent p: a cell of density rho has the energy (1 - rho^p) psi_body + "
+        "rho^p psi_placed", default=3.0, minimum=1, maximum=6),
+    Key("iterations", "integer", "layouts the optimizer may try (each one equilibrium and one adjoint solve)",
+        default=100, minimum=1),
+    Key("reach", "number", "how near the targets the layout must bring its probes (root mean square distance): "
+        "the design is the least placed material that does", unit="m", default=1e-4, exclusive_minimum=0),
+    Key("target", "tables", "[[design.target]]: a probe and where it should be in the loaded part", required=True,
+        keys=TARGET_KEYS),
+)
+
+DesignSpec = spec_class("DesignSpec", "[design]: which material goes where so that probes reach their targets.",
+                        DESIGN_KEYS, __name__)
+
+
+def _rules(s, t: Table) -> None:
+    if not s.target:
+        raise InputError(f"{t.key('target')}: give at least one [[design.target]] (a probe and its position)")
+
+
+def _check(scene) -> None:
+    """The design's materials, targets and physics against the rest of the scene."""
+    d = scene.design
+    if d is None:
+        raise InputError("design: missing (required table for analysis = 'design')")
+    names = [m.name for m in scene.materials]
+    for i, name in enumerate(d.materials):
+        if name not in names:
+            raise InputError(f"design.materials[{i}] = {name!r}: no [[material]] has this name (the scene's: "
+                             f"{', '.join(map(repr, names))})")
+    if len(scene.materials) != 2:
+        raise InputError(f"material: a design scene has exactly the two materials design.materials names "
+                         f"(this one has {len(scene.materials)})")
+    body = next(m for m in scene.materials if m.name == d.materials[0])
+    if body.where is not None:
+        raise InputError(f"{body.key}.where: the body's material takes every cell the design leaves (no `where`)")
+    for m in scene.materials:
+        if m.plasticity_model is not None or m.prony is not None:
+            raise InputError(f"{m.key}: plasticity and viscoelasticity are not implemented in a design")
+        if m.fiber_direction is not None or m.fiber_field is not None:
+            raise InputError(f"{m.key}.fibers: fibres are not implemented in a design")
+    probes = scene.output.probes
+    for i, target in enumerate(d.target):
+        if target["probe"] not in probes:
+            raise InputError(f"design.target[{i}].probe = {target['probe']!r}: no such point in [output.probes] "
+                             f"(it has: {', '.join(map(repr, probes)) or 'none'})")
+    if scene.thermal is not None:
+        raise InputError("thermal: not implemented in a design")
+    if scene.solver.control == "arc-length":
+        raise InputError("solver.control = 'arc-length': a design solves each layout under load control")
+
+
+ANALYSIS = Analysis(
+    name="design",
+    doc="where to put a stiffer second material so that the loaded part's probes reach their targets (SIMP, "
+        "adjoint gradients, L-BFGS-B)",
+    runner="fem_forms.analyses.design:run",
+    sections=(Section("design", "which material goes where so that probes reach their targets", DesignSpec,
+                      keys=DESIGN_KEYS, rules=_rules, absent=lambda: None),),
+    outputs=("results.json", "layout.xdmf", "layout.msh", "placed.stl", "body.stl", "design_history.csv",
+             "layout.png"),
+    check=_check,
+)
