@@ -85,8 +85,10 @@ class TargetPoints:
     """Probes snapped to their nearest displacement node (on the lowest rank owning one as near), and their
     target positions: the mismatch, and its derivative with respect to the owned displacement dofs."""
 
-    def __init__(self, V: fem.FunctionSpace, points: np.ndarray, targets: np.ndarray, length: float):
+    def __init__(self, V: fem.FunctionSpace, points: np.ndarray, targets: np.ndarray, length: float,
+                 counted: np.ndarray | None = None):
         self.points, self.targets, self.length = np.atleast_2d(points), np.atleast_2d(targets), length
+        self.counted = np.ones_like(self.points) if counted is None else np.asarray(counted, dtype=float)
         comm = V.mesh.comm
         self.n = V.dofmap.index_map.size_local
         X = V.tabulate_dof_coordinates()[:self.n]
@@ -110,13 +112,17 @@ class TargetPoints:
                 local[i] = u.x.array[3 * k:3 * k + 3]
         return self.at + self.comm.allreduce(local, op=MPI.SUM)
 
+    def misses(self, u: fem.Function) -> np.ndarray:
+        """Position minus target of every probe, 0 in the coordinates that do not count."""
+        return (self.positions(u) - self.targets) * self.counted
+
     def mismatch(self, u: fem.Function) -> float:
-        return 0.5 * float(np.sum((self.positions(u) - self.targets) ** 2)) / self.length ** 2
+        return 0.5 * float(np.sum(self.misses(u) ** 2)) / self.length ** 2
 
     def gradient(self, u: fem.Function, out: PETSc.Vec) -> None:
         """dJ/du into `out` (owned entries)."""
         out.set(0.0)
-        miss = (self.positions(u) - self.targets) / self.length ** 2
+        miss = self.misses(u) / self.length ** 2
         for i, k in enumerate(self.node):
             if k >= 0:
                 out.array[3 * k:3 * k + 3] += miss[i]
@@ -259,7 +265,7 @@ def optimize_layout(gradient: LayoutGradient, max_fraction: float, iterations: i
     stiffness)."""
     from scipy.optimize import minimize
     cells = gradient.cells
-    allowed = len(gradient.targets.points) * reach ** 2 / (2 * gradient.targets.length ** 2)
+    allowed = gradient.targets.counted.sum() / 3 * reach ** 2 / (2 * gradient.targets.length ** 2)
     rho = np.full(cells.size, max_fraction)
     history, converged, count = [], False, 0
 

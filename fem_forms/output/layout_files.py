@@ -104,6 +104,7 @@ def _picture(path: Path, points: np.ndarray, surfaces: dict, names) -> None:
         ax.set_xlim(lo[0], hi[0]), ax.set_ylim(lo[1], hi[1]), ax.set_zlim(lo[2], hi[2])
         ax.set_box_aspect(np.maximum(hi - lo, 1e-3 * np.max(hi - lo)))
         ax.view_init(elev, azim)
+        ax.locator_params(nbins=3)
         ax.set_xlabel("x (m)"), ax.set_ylabel("y (m)"), ax.set_zlabel("z (m)")
     fig.suptitle(f"{names[1]} (orange) placed in {names[0]} (grey)")
     fig.tight_layout()

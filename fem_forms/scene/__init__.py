@@ -141,11 +141,11 @@ def _parse_scene(data: dict, base_dir: Path, source: Path | None, limits: Limits
             m.strength_tensile is not None or m.strength_yield is not None for m in sc.materials):
         raise InputError("output.fields: 'utilization' needs a [material.strength] (stress over strength)")
     viscoelastic_rules(sc)                             # after the analysis's own sections: it reads [dynamic]
-    open_ended_rule(sc)                                # after [design]: the material it places needs no `where`
     kinematics_rules(sc)
     fracture_scene_rules(sc)
     if analysis.check is not None:
         analysis.check(sc)
+    open_ended_rule(sc)                                # after [design]'s check: the material it places needs no `where`
     t.done()
     check_scene(sc, limits)
     return sc

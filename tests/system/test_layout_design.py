@@ -129,3 +129,34 @@ def test_design_scene_casts_a_layout_that_a_plain_static_run_confirms(tmp_path):
             assert np.allclose(reached, d["targets"][n]["reached"], atol=1e-9)
         for f in ("placed.stl", "body.stl", "layout.png", "design_history.csv", "layout.xdmf"):
             assert (out / f).stat().st_size > 0
+
+
+def test_a_design_scene_that_cannot_work_is_refused_in_one_line():
+    import pytest
+    from fem_forms.errors import InputError
+    from fem_forms.scene import Scene
+    d = _beam(analysis="design", design={"materials": ["soft", "stiff"], "target": [
+        {"probe": "top", "position": [0.1, 0.01, 0.0]}]})
+    cases = [({"design": dict(d["design"], materials=["soft", "hard"])}, r"^design.materials\[1\] = 'hard': no "),
+             ({"design": dict(d["design"], target=[{"probe": "tip", "position": [0.0, 0.0, 0.0]}])},
+              r"^design.target\[0\].probe = 'tip': no such point"),
+             ({"design": dict(d["design"], target=[])}, r"^design.target: give at least one"),
+             ({"material": [SOFT, STIFF, dict(STIFF, name="third", where={"box": [[0, 0, 0], [0.01, 0.02, 0.02]]})]},
+              r"^material: a design scene has exactly the two materials"),
+             ({"material": [dict(SOFT, where={"box": [[0, 0, 0], [0.05, 0.02, 0.02]]}), STIFF]},
+              r"^material\[0\].where: the body's material takes every cell"),
+             ({"solver": {"control": "arc-length"}}, r"^solver.control = 'arc-length': for analysis = 'static' only"),
+             ({"design": dict(d["design"], stiff_fraction=0.0)}, r"^design.stiff_fraction = 0.0"),
+             ({"design": dict(d["design"], materials=["soft", "soft"])}, r"^design.materials: names must not repeat"),
+             ({"load": [{"type": "inflation", "where": {"group": "cavity"}, "volume": 1e-6}]},
+              r"^load\[0\].volume: volume control is for analysis = 'static' or 'inverse'")]
+    for change, message in cases:
+        with pytest.raises(InputError, match=message):
+            Scene.from_dict(dict(d, **change))
+    Scene.from_dict(d)                                   # the scene itself is fine
+
+
+def test_the_manuals_example_scene_reads():
+    from fem_forms.scene import Scene
+    scene = Scene.from_file(Path(__file__).resolve().parents[2] / "docs" / "examples" / "stiff_spine.toml")
+    assert scene.analysis == "design" and scene.design.target[0]["axes"] == [2]

@@ -50,8 +50,9 @@ def build_design(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> LayoutGradien
     cells = CellVector(weight.function_space)
     probes = scene.output.probes
     points = np.array([probes[t["probe"]] for t in d.target], dtype=float)
+    counted = np.array([[float(i in t["axes"]) for i in range(3)] for t in d.target])
     targets = TargetPoints(model.V, points, np.array([t["position"] for t in d.target], dtype=float),
-                           part_length(model))
+                           part_length(model), counted)
     radius = d.filter_radius or 2.0 * float(np.mean(cells.volumes)) ** (1.0 / 3.0)
     return LayoutGradient(model, weight, cells, targets, radius, d.penalty,
                           solve=lambda m: solve_static(scene, model=m, answers=False).report,
@@ -84,6 +85,7 @@ def run(scene: Scene, out, echo: bool = False) -> dict:
     if not report.converged:
         raise SolveError(f"design: the cast layout has no equilibrium under the loads ({report.message})")
     reached = design.targets.positions(design.model.u)
+    misses = design.targets.misses(design.model.u)          # in the counted coordinates
     cells, volumes = design.cells, design.cells.volumes
     files = write_layout_files(out, design.model.mesh, cells.order, cast, tuple(d.materials))
     write_table(out / "design_history.csv", ["iteration", "mismatch", "placed_fraction", "beta"], history, comm)
@@ -104,8 +106,9 @@ def run(scene: Scene, out, echo: bool = False) -> dict:
                    "placed_volume_m3": float(volumes @ cast), "domain_volume_m3": domain_volume,
                    "gray_fraction": float(np.mean((result.rho_f > 0.1) & (result.rho_f < 0.9))),
                    "filter_radius_m": float(design.radius), "penalty": d.penalty,
-                   "targets": {t["probe"]: {"target": t["position"], "reached": reached[i].tolist(),
-                                            "distance_m": float(np.linalg.norm(reached[i] - t["position"]))}
+                   "targets": {t["probe"]: {"target": t["position"], "axes": ["xyz"[a] for a in t["axes"]],
+                                            "reached": reached[i].tolist(),
+                                            "distance_m": float(np.linalg.norm(misses[i]))}
                                for i, t in enumerate(d.target)},
                    "evaluations": design.evaluations},
                "files": files}

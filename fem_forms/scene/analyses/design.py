@@ -10,6 +10,8 @@ from fem_forms.scene.reader import Key, Section, Table
 TARGET_KEYS = (
     Key("probe", "string", "name of an [output.probes] point", required=True),
     Key("position", "vector", "where that point should be in the loaded part", unit="m", required=True, length=3),
+    Key("axes", "axes", "the position's coordinates that count (the others are free: a tip's height, say)",
+        default=["x", "y", "z"]),
 )
 DESIGN_KEYS = (
     Key("materials", "names", "the two [[material]] names: the body's (everywhere the design puts nothing else) "
@@ -65,8 +67,6 @@ def _check(scene) -> None:
                              f"(it has: {', '.join(map(repr, probes)) or 'none'})")
     if scene.thermal is not None:
         raise InputError("thermal: not implemented in a design")
-    if scene.solver.control == "arc-length":
-        raise InputError("solver.control = 'arc-length': a design solves each layout under load control")
 
 
 ANALYSIS = Analysis(
