@@ -4,6 +4,7 @@ gradient, L-BFGS-B), then cast black and white (a cell is the placed material wh
 solved once more as cast: the positions results.json reports are the cast layout's, the files are what to make."""
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 import sys
 import time
@@ -12,6 +13,7 @@ from dolfinx import fem, io
 from mpi4py import MPI
 import numpy as np
 
+from fem_forms import progress
 from fem_forms.analyses.static.solve import solve_static
 from fem_forms.design.layout import (CellVector, LayoutGradient, LayoutMaterial, PlacedDensity, TargetPoints,
                                      optimize_layout, part_length)
@@ -37,6 +39,24 @@ def _domain(model, cells: CellVector, placed_index: int) -> np.ndarray:
     return cells.gather(regions.index[:cells.n_owned] == placed_index) > 0.5
 
 
+def warm_solver(scene: Scene):
+    """The design's equilibrium solve: the first layout along the scene's load steps, each next one from the last
+    layout's equilibrium in one step to full load (a nearby layout's state is a good start), along the load
+    steps again from rest where that fails."""
+    warm = dataclasses.replace(scene, solver=dataclasses.replace(scene.solver, steps=1))
+    started = []
+
+    def solve(model):
+        if started:
+            report = solve_static(warm, model=model, answers=False).report
+            if report.converged:
+                return report
+            model.unknown.x.array[:] = 0.0
+        started.append(True)
+        return solve_static(scene, model=model, answers=False).report
+    return solve
+
+
 def build_design(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> LayoutGradient:
     """The model of the scene with its two materials mixed per cell, and the design's gradient on it."""
     d = scene.design
@@ -54,8 +74,7 @@ def build_design(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> LayoutGradien
     targets = TargetPoints(model.V, points, np.array([t["position"] for t in d.target], dtype=float),
                            part_length(model), counted)
     radius = d.filter_radius or 2.0 * float(np.mean(cells.volumes)) ** (1.0 / 3.0)
-    return LayoutGradient(model, weight, cells, targets, radius, d.penalty,
-                          solve=lambda m: solve_static(scene, model=m, answers=False).report,
+    return LayoutGradient(model, weight, cells, targets, radius, d.penalty, solve=warm_solver(scene),
                           domain=_domain(model, cells, names.index(d.materials[1])),
                           density=PlacedDensity(model.parameters.density, body.rho, placed.rho))
 
@@ -74,7 +93,7 @@ def run(scene: Scene, out, echo: bool = False) -> dict:
 
     def said(k, J, fraction):
         history.append([k, J, fraction, design.beta])
-        if echo and comm.rank == 0:
+        if echo and comm.rank == 0 and progress.reporter() is not None:       # shown as progress (not with -q)
             print(f"  design iteration {k}: mismatch J = {J:.4e}, placed fraction {fraction:.3f}, "
                   f"projection beta {design.beta:g}", file=sys.stderr, flush=True)
 
@@ -114,7 +133,7 @@ def run(scene: Scene, out, echo: bool = False) -> dict:
                "files": files}
     results.write_json_atomic(out / "results.json", summary, comm)
     if echo and comm.rank == 0:
-        print(f"{scene.title}: {result.iterations} design iterations, {d.materials[1]} in "
+        print(f"{scene.title}: {result.iterations} layouts tried, {d.materials[1]} in "
               f"{summary['design']['placed_fraction_cast']:.1%} of its domain, {summary['wall_time_s']:.1f} s -> {out}")
         for name, t in summary["design"]["targets"].items():
             print(f"  {name}: reached {np.round(t['reached'], 6).tolist()} m, {t['distance_m'] * 1e3:.3g} mm from "
