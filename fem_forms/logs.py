@@ -81,6 +81,8 @@ def ignore_folder_jit_files() -> None:
     with tempfile.TemporaryDirectory() as empty:
         os.chdir(empty)
         try:
+            dolfinx.jit._load_parameters.cache_clear()          # read before fem_forms was imported: read again
+            ffcx.parameters._load_parameters.cache_clear()
             dolfinx.jit._load_parameters()
             ffcx.parameters._load_parameters()
         finally:

@@ -49,6 +49,8 @@ class CellVector:
         self.space = space
         comm = self.comm = space.mesh.comm
         self.n_owned = space.dofmap.index_map.size_local
+        if not np.array_equal(space.dofmap.list.array[:self.n_owned], np.arange(self.n_owned)):
+            raise RuntimeError("CellVector: the DG0 dofs are not numbered as the cells (dolfinx 0.5.2 does)")
         counts = comm.allgather(self.n_owned)
         self.start = int(sum(counts[:comm.rank]))
         self.size = int(sum(counts))
@@ -76,7 +78,7 @@ def density_filter(centres: np.ndarray, volumes: np.ndarray, radius: float) -> s
     tree = cKDTree(centres)
     dist = tree.sparse_distance_matrix(tree, radius, output_type="coo_matrix")
     H = sparse.coo_matrix((radius - dist.data, (dist.row, dist.col)), shape=dist.shape).tocsr()
-    H = H + sparse.identity(len(centres), format="csr") * radius          # the cell itself (distance 0)
+    H.setdiag(radius)                        # each cell's own weight r, whether or not scipy kept distance 0
     H = H @ sparse.diags(volumes)
     return sparse.diags(1.0 / np.asarray(H.sum(axis=1)).ravel()) @ H
 
@@ -239,14 +241,13 @@ def part_length(model) -> float:
 
 
 
-BOUND_PENALTY = 1e3     # f's penalty on a placed fraction over its bound (squared excess)
 
 
 @dataclass
 class LayoutResult:
-    """The optimised layout: densities (raw and filtered, in the design's cell order), J per iteration."""
+    """The optimised layout: densities (raw and projected, in the design's cell order), J per layout tried."""
     rho: np.ndarray
-    rho_f: np.ndarray
+    rho_bar: np.ndarray
     history: list
     objective: float
     stiff_fraction: float
@@ -254,24 +255,35 @@ class LayoutResult:
     converged: bool
 
 
+class _Spent(Exception):
+    """The optimizer asked for more layouts than it may try."""
+
+
+STAGES = (1.0, 2.0, 4.0, 8.0, 16.0)     # the projection's sharpness beta, stage by stage
+BOUND_TOLERANCE = 1e-3                  # a placed fraction this far over its bound counts as over
+
+
 def optimize_layout(gradient: LayoutGradient, max_fraction: float, iterations: int = 100, reach: float = 1e-4,
                     on_iteration=None) -> LayoutResult:
-    """Of the layouts that bring the targets within about `reach` (m, root mean square distance), the one with the
-    least placed material: scipy's L-BFGS-B on f = J / J_reach + fraction + BOUND_PENALTY max(0, fraction -
-    max_fraction)^2 over 0 <= rho <= 1 (J_reach = n reach^2 / (2 L^2): the mismatch counts once the targets are
-    farther than `reach`, the material always), in stages of sharper projection (beta 1, 2, 4, 8, 16), each from
-    the last one's layout. Less material is the tie-breaker among the many layouts that reach a few targets; with
+    """Of the layouts within the placed fraction's bound that bring every target within about `reach` (m, in its
+    counted coordinates), the one with the least placed material: scipy's L-BFGS-B on f = J / J_reach + fraction +
+    kappa max(0, fraction - max_fraction)^2 over 0 <= rho <= 1 (J_reach = n_targets reach^2 / (2 L^2): the mismatch
+    counts once the targets are farther than `reach`, the material always), in stages of sharper projection
+    (STAGES), each from the last one's layout, kappa x100 after a stage that ended over the bound. At most
+    `iterations` layouts. Less material is the tie-breaker among the many layouts that reach a few targets; with
     SIMP and the projection that layout is black and white (an intermediate density pays volume for little
-    stiffness)."""
+    stiffness). Every rank takes rank 0's value and gradient: the same steps everywhere."""
     from scipy.optimize import minimize
-    cells = gradient.cells
-    allowed = gradient.targets.counted.sum() / 3 * reach ** 2 / (2 * gradient.targets.length ** 2)
+    cells, comm = gradient.cells, gradient.cells.comm
+    allowed = len(gradient.targets.points) * reach ** 2 / (2 * gradient.targets.length ** 2)
     rho = np.full(cells.size, max_fraction)
-    history, converged, count = [], False, 0
+    history, converged, count, kappa, last = [], False, 0, 1e3, {}
 
     def f(x):
         nonlocal count
-        x = cells.comm.bcast(np.asarray(x, dtype=float))
+        if count >= iterations:
+            raise _Spent
+        x = comm.bcast(np.asarray(x, dtype=float))
         J = gradient.value(x)
         fraction, d_fraction = gradient.fraction(x)
         over = max(fraction - max_fraction, 0.0)
@@ -279,18 +291,24 @@ def optimize_layout(gradient: LayoutGradient, max_fraction: float, iterations: i
         if on_iteration is not None:
             on_iteration(count, J, fraction)
         count += 1
-        value = J / allowed + fraction + BOUND_PENALTY * over ** 2
-        return value, gradient.gradient(x) / allowed + (1 + 2 * BOUND_PENALTY * over) * d_fraction
+        last["x"] = x
+        value = J / allowed + fraction + kappa * over ** 2
+        grad = gradient.gradient(x) / allowed + (1 + 2 * kappa * over) * d_fraction
+        return comm.bcast((value, grad))
 
-    stages = [1.0, 2.0, 4.0, 8.0, 16.0]
+    stages = STAGES[-min(len(STAGES), iterations):]
     for i, beta in enumerate(stages):
         gradient.beta = beta
-        budget = (iterations - count) // (len(stages) - i)
-        if budget < 1:
-            break
-        out = minimize(f, rho, jac=True, method="L-BFGS-B", bounds=[(0.0, 1.0)] * cells.size,
-                       options={"maxfun": budget, "maxiter": budget})
-        rho = cells.comm.bcast(np.clip(out.x, 0.0, 1.0))
-        converged = bool(out.success) and i == len(stages) - 1
+        budget = max(1, (iterations - count) // (len(stages) - i))
+        try:
+            out = minimize(f, rho, jac=True, method="L-BFGS-B", bounds=[(0.0, 1.0)] * cells.size,
+                           options={"maxfun": budget, "maxiter": budget})
+            rho, done = comm.bcast(np.clip(out.x, 0.0, 1.0)), bool(out.success)
+        except _Spent:
+            rho, done = last.get("x", rho), False
+        over = gradient.fraction(rho)[0] - max_fraction > BOUND_TOLERANCE
+        converged = done and i == len(stages) - 1 and not over
+        if over:
+            kappa = min(100 * kappa, 1e12)
     J = gradient.value(rho)
     return LayoutResult(rho, gradient.layout(rho), history, J, gradient.fraction(rho)[0], count, converged)

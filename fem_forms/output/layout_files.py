@@ -57,12 +57,14 @@ def boundary_triangles(points: np.ndarray, ids: np.ndarray, member: np.ndarray, 
     return tris
 
 
-def write_layout_files(out: Path, mesh, order: np.ndarray, placed: np.ndarray, names: tuple[str, str]) -> dict:
-    """placed.stl, body.stl, layout.msh and layout.png for the cells `placed` (design order) of the placed
-    material names[1] in the body names[0]; {what: file name}."""
+def write_layout_files(out: Path, mesh, order: np.ndarray, placed: np.ndarray, names: tuple[str, str],
+                       picture: bool = True) -> dict:
+    """placed.stl, body.stl, layout.msh and (with `picture`) layout.png for the cells `placed` (design order) of
+    the placed material names[1] in the body names[0]; {what: file name}."""
     cells = gathered_cells(mesh, order)
-    files = {"placed_stl": "placed.stl", "body_stl": "body.stl", "layout_mesh": "layout.msh",
-             "layout_picture": "layout.png"}
+    files = {"placed_stl": "placed.stl", "body_stl": "body.stl", "layout_mesh": "layout.msh"}
+    if picture:
+        files["layout_picture"] = "layout.png"
     if mesh.comm.rank == 0:
         cell_name = mesh.topology.cell_name()
         points, ids = _numbered(cells)
@@ -73,7 +75,8 @@ def write_layout_files(out: Path, mesh, order: np.ndarray, placed: np.ndarray, n
             write_stl(out / files[key], points, tris, name)
             surfaces[name] = tris
         _write_msh(out / files["layout_mesh"], points, ids, placed, names, cell_name)
-        _picture(out / files["layout_picture"], points, surfaces, names)
+        if picture:
+            _picture(out / files["layout_picture"], points, surfaces, names)
     mesh.comm.barrier()
     return files
 

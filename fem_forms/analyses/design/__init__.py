@@ -17,17 +17,18 @@ from fem_forms import progress
 from fem_forms.analyses.static.solve import solve_static
 from fem_forms.design.layout import (CellVector, LayoutGradient, LayoutMaterial, PlacedDensity, TargetPoints,
                                      optimize_layout, part_length)
-from fem_forms.errors import SolveError
+from fem_forms.errors import InputError, SolveError
 from fem_forms.materials.constants import bind_constants
 from fem_forms.meshes import load_mesh
 from fem_forms.model import build_model
 from fem_forms.output import fields, results
-from fem_forms.output.layout_files import write_layout_files
+from fem_forms.output.layout_files import VERTICES, write_layout_files
 from fem_forms.output.probes import write_table
 from fem_forms.output.summary import header
 from fem_forms.scene import Scene
 
 CAST_AT = 0.5           # a cell is cast in the placed material where its density is at least this
+BOUND_SLACK = 0.02      # a cast layout this far over its fraction's bound (cells rounded up) is still within it
 
 
 def _domain(model, cells: CellVector, placed_index: int) -> np.ndarray:
@@ -63,6 +64,9 @@ def build_design(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> LayoutGradien
     names = [m.name for m in scene.materials]
     body, placed = (scene.materials[names.index(n)] for n in d.materials)
     loaded = load_mesh(scene.mesh, comm, degree=scene.discretization.degree)
+    if loaded.mesh.topology.cell_name() not in VERTICES:
+        raise InputError(f"mesh: {loaded.mesh.topology.cell_name()} cells; a design writes its layout for "
+                         "tetrahedra and hexahedra only")
     weight = fem.Function(fem.FunctionSpace(loaded.mesh, ("DG", 0)), name="placed_weight")
     mix = LayoutMaterial(bind_constants(body.material, loaded.mesh), bind_constants(placed.material, loaded.mesh),
                          weight)
@@ -94,51 +98,63 @@ def run(scene: Scene, out, echo: bool = False) -> dict:
     def said(k, J, fraction):
         history.append([k, J, fraction, design.beta])
         if echo and comm.rank == 0 and progress.reporter() is not None:       # shown as progress (not with -q)
-            print(f"  design iteration {k}: mismatch J = {J:.4e}, placed fraction {fraction:.3f}, "
-                  f"projection beta {design.beta:g}", file=sys.stderr, flush=True)
+            print(f"  layout {k}: mismatch J = {J:.4e}, placed fraction {fraction:.3f}, projection beta "
+                  f"{design.beta:g}", file=sys.stderr, flush=True)
 
     result = optimize_layout(design, d.stiff_fraction, d.iterations, d.reach, on_iteration=said)
-    cast = result.rho_f >= CAST_AT
+    cast = result.rho_bar >= CAST_AT
     design.set_layout(cast.astype(float))
     report = design.solve(design.model)
     if not report.converged:
         raise SolveError(f"design: the cast layout has no equilibrium under the loads ({report.message})")
-    reached = design.targets.positions(design.model.u)
-    misses = design.targets.misses(design.model.u)          # in the counted coordinates
-    cells, volumes = design.cells, design.cells.volumes
-    files = write_layout_files(out, design.model.mesh, cells.order, cast, tuple(d.materials))
-    write_table(out / "design_history.csv", ["iteration", "mismatch", "placed_fraction", "beta"], history, comm)
-    _write_fields(out / "layout.xdmf", design, result.rho_f)
-    files.update({"history": "design_history.csv", "fields": "layout.xdmf"})
-    domain_volume = float(volumes @ design.domain)
+    files = write_layout_files(out, design.model.mesh, design.cells.order, cast, tuple(d.materials),
+                               picture=scene.output.picture)
+    write_table(out / "design_history.csv", ["layout", "mismatch", "placed_fraction", "beta"], history, comm)
+    files["history"] = "design_history.csv"
+    if scene.output.fields:
+        _write_fields(out / "layout.xdmf", design, result.rho_bar)
+        files["fields"] = "layout.xdmf"
     summary = {**header("design", scene, comm, design.model.dofs, time.perf_counter() - t0),
-               "converged": bool(result.converged),
-               "design": {
-                   "materials": {"body": d.materials[0], "placed": d.materials[1]},
-                   "iterations": result.iterations, "optimizer_converged": bool(result.converged),
-                   "mismatch_start": result.history[0] if result.history else None,
-                   "mismatch_optimized": result.objective,
-                   "mismatch_cast": design.targets.mismatch(design.model.u),
-                   "placed_fraction_bound": d.stiff_fraction,
-                   "placed_fraction_optimized": result.stiff_fraction,
-                   "placed_fraction_cast": float(volumes @ cast) / domain_volume,
-                   "placed_volume_m3": float(volumes @ cast), "domain_volume_m3": domain_volume,
-                   "gray_fraction": float(np.mean((result.rho_f > 0.1) & (result.rho_f < 0.9))),
-                   "filter_radius_m": float(design.radius), "penalty": d.penalty,
-                   "targets": {t["probe"]: {"target": t["position"], "axes": ["xyz"[a] for a in t["axes"]],
-                                            "reached": reached[i].tolist(),
-                                            "distance_m": float(np.linalg.norm(misses[i]))}
-                               for i, t in enumerate(d.target)},
-                   "evaluations": design.evaluations},
-               "files": files}
+               "converged": True, "design": _design_summary(design, result, cast, d), "files": files}
     results.write_json_atomic(out / "results.json", summary, comm)
     if echo and comm.rank == 0:
+        s = summary["design"]
         print(f"{scene.title}: {result.iterations} layouts tried, {d.materials[1]} in "
-              f"{summary['design']['placed_fraction_cast']:.1%} of its domain, {summary['wall_time_s']:.1f} s -> {out}")
-        for name, t in summary["design"]["targets"].items():
+              f"{s['placed_fraction_cast']:.1%} of its domain (bound {d.stiff_fraction:.0%}), "
+              f"{summary['wall_time_s']:.1f} s -> {out}")
+        for name, t in s["targets"].items():
             print(f"  {name}: reached {np.round(t['reached'], 6).tolist()} m, {t['distance_m'] * 1e3:.3g} mm from "
                   f"the target")
+        if not s["within_bound"]:
+            print(f"fem-forms: warning: the targets need more {d.materials[1]} than design.stiff_fraction = "
+                  f"{d.stiff_fraction} allows: the layout at the bound misses them by the distances above",
+                  file=sys.stderr)
     return summary
+
+
+def _design_summary(design: LayoutGradient, result, cast: np.ndarray, d) -> dict:
+    """results.json `design`: the optimum's and the cast layout's numbers, where the targets' probes landed."""
+    volumes, domain = design.cells.volumes, design.domain > 0
+    reached = design.targets.positions(design.model.u)
+    misses = design.targets.misses(design.model.u)          # in the counted coordinates
+    domain_volume = float(volumes @ domain)
+    fraction_cast = float(volumes @ cast) / domain_volume
+    gray = (result.rho_bar > 0.1) & (result.rho_bar < 0.9) & domain
+    return {"materials": {"body": d.materials[0], "placed": d.materials[1]},
+            "layouts_tried": result.iterations, "optimizer_converged": bool(result.converged),
+            "mismatch_start": result.history[0] if result.history else None,
+            "mismatch_optimized": result.objective, "mismatch_cast": design.targets.mismatch(design.model.u),
+            "placed_fraction_bound": d.stiff_fraction, "placed_fraction_optimized": result.stiff_fraction,
+            "placed_fraction_cast": fraction_cast,
+            "within_bound": bool(fraction_cast <= d.stiff_fraction + BOUND_SLACK),
+            "placed_volume_m3": float(volumes @ cast), "domain_volume_m3": domain_volume,
+            "gray_fraction": float(volumes @ gray) / domain_volume,
+            "filter_radius_m": float(design.radius), "penalty": d.penalty,
+            "targets": {t["probe"]: {"target": t["position"], "axes": ["xyz"[a] for a in t["axes"]],
+                                     "node": design.targets.at[i].tolist(), "reached": reached[i].tolist(),
+                                     "distance_m": float(np.linalg.norm(misses[i]))}
+                        for i, t in enumerate(d.target)},
+            "evaluations": design.evaluations}
 
 
 def _write_fields(path: Path, design: LayoutGradient, rho_bar: np.ndarray) -> None:

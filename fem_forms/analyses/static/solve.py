@@ -239,11 +239,9 @@ def solve_static(scene: Scene, material=None, model: Model | None = None,
     if not report.converged and (why := model.solid.near_limit(model.context, report.message)):
         report.message = f"{report.message}; {why}"
     result = StaticResult(model, report, histories=histories, sweeps=sweeps)
-    if not answers:
-        pass
-    elif report.converged:
+    if answers and report.converged:
         post_process(result)
-    elif limit_point(result):     # the loads back at the last accepted factor (the state was rolled back there)
+    elif answers and limit_point(result):     # the loads back at the last accepted factor (the state was rolled back there)
         set_load(report.load_reached)
         post_process(result)
     result.wall_time_s = time.perf_counter() - t0

@@ -22,10 +22,12 @@ DESIGN_KEYS = (
         exclusive_minimum=0, default_note="2 x the cells' mean size"),
     Key("penalty", "number", "SIMP exponent p: a cell of density rho has the energy (1 - rho^p) psi_body + "
         "rho^p psi_placed", default=3.0, minimum=1, maximum=6),
-    Key("iterations", "integer", "layouts the optimizer may try (each one equilibrium and one adjoint solve)",
+    Key("iterations", "integer", "layouts the optimizer may try (each one equilibrium and one adjoint solve; the "
+        "cast layout is solved once more)",
         default=100, minimum=1),
-    Key("reach", "number", "how near the targets the layout must bring its probes (root mean square distance): "
-        "the design is the least placed material that does", unit="m", default=1e-4, exclusive_minimum=0),
+    Key("reach", "number", "how near its target the layout must bring each probe (in the target's counted "
+        "coordinates, root mean square over the targets): the design is the least placed material that does",
+        unit="m", default=1e-4, exclusive_minimum=0),
     Key("target", "tables", "[[design.target]]: a probe and where it should be in the loaded part", required=True,
         keys=TARGET_KEYS),
 )
@@ -60,6 +62,8 @@ def _check(scene) -> None:
             raise InputError(f"{m.key}: plasticity and viscoelasticity are not implemented in a design")
         if m.fiber_direction is not None or m.fiber_field is not None:
             raise InputError(f"{m.key}.fibers: fibres are not implemented in a design")
+    if scene.mesh.cell == "prism":
+        raise InputError("mesh.cell = 'prism': a design writes its layout for tetrahedra and hexahedra only")
     probes = scene.output.probes
     for i, target in enumerate(d.target):
         if target["probe"] not in probes:
