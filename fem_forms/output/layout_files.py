@@ -1,93 +1,59 @@
 """A two-material layout as files to make it from: the placed material's volume and the body's as STL surfaces
 (ready for a mould or a slicer), the mesh with both as named volume groups (layout.msh: a plain static scene reads
-it with [[material]] where = { group = NAME }) and a picture. Rank 0 writes from the gathered cells."""
+it with [[material]] where = { group = NAME }) and a picture. Rank 0 writes from the gathered mesh, with the
+surface and .msh writers the inverse design's rest shape uses."""
 from __future__ import annotations
 
 from pathlib import Path
 
 import numpy as np
 
+from fem_forms.design.rest_shape import boundary_faces, triangles, write_volume_mesh
+from fem_forms.output.fields import gather_mesh
 from fem_forms.output.stl import write_stl
 
-# each cell's faces as vertex positions in DOLFINx's reference ordering (hexahedra: tensor-product order)
-FACES = {"tetrahedron": [(1, 2, 3), (0, 2, 3), (0, 1, 3), (0, 1, 2)],
-         "hexahedron": [(0, 1, 3, 2), (0, 1, 5, 4), (0, 2, 6, 4), (1, 3, 7, 5), (2, 3, 7, 6), (4, 5, 7, 6)]}
 VERTICES = {"tetrahedron": 4, "hexahedron": 8}
-GMSH_TYPE = {"tetrahedron": "tetra", "hexahedron": "hexahedron"}
-TO_GMSH = {"tetrahedron": [0, 1, 2, 3], "hexahedron": [0, 1, 3, 2, 4, 5, 7, 6]}     # DOLFINx -> gmsh/VTK order
 
 
-def gathered_cells(mesh, order: np.ndarray) -> np.ndarray | None:
-    """Every cell's vertex positions (cells x vertices x 3) in the design's cell order, on rank 0 (None elsewhere)."""
-    tdim = mesh.topology.dim
-    nown = mesh.topology.index_map(tdim).size_local
-    nv = VERTICES[mesh.topology.cell_name()]
-    nodes = mesh.geometry.dofmap.array.reshape(-1, mesh.geometry.dofmap.links(0).size)[:nown, :nv]
-    mine = mesh.geometry.x[nodes]
-    every = mesh.comm.gather(mine, root=0)
-    return None if mesh.comm.rank else np.concatenate(every)[order]
-
-
-def _numbered(cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(distinct points, cells as point indices): vertices shared by cells merged by position."""
-    flat = cells.reshape(-1, 3)
-    scale = max(float(np.ptp(flat)), 1e-300)
-    _, first, index = np.unique(np.round(flat / (1e-9 * scale)), axis=0, return_index=True, return_inverse=True)
-    return flat[first], index.reshape(cells.shape[:2])
-
-
-def boundary_triangles(points: np.ndarray, ids: np.ndarray, member: np.ndarray, cell_name: str) -> np.ndarray:
-    """The triangles bounding the member cells (faces only one member cell has), oriented outward."""
-    faces, owner = [], []
-    for f in FACES[cell_name]:
-        faces.append(ids[:, f])
-        owner.append(np.arange(len(ids)))
-    faces, owner = np.concatenate(faces), np.concatenate(owner)
-    keep = member[owner]
-    faces, owner = faces[keep], owner[keep]
-    _, inverse, counts = np.unique(np.sort(faces, axis=1), axis=0, return_inverse=True, return_counts=True)
-    single = counts[inverse] == 1
-    faces, owner = faces[single], owner[single]
-    tris = faces[:, :3] if faces.shape[1] == 3 else np.concatenate([faces[:, [0, 1, 2]], faces[:, [0, 2, 3]]])
-    cell = owner if faces.shape[1] == 3 else np.concatenate([owner, owner])
-    p = points[tris]
-    normal = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
-    outward = np.einsum("ij,ij->i", normal, p.mean(axis=1) - points[ids[cell]].mean(axis=1)) > 0
-    tris[~outward] = tris[~outward][:, ::-1]
-    return tris
+def positively_oriented(points: np.ndarray, cells: np.ndarray) -> np.ndarray:
+    """The cells (VTK/gmsh vertex order) reordered where their volume is negative, so that rest_shape's
+    boundary_faces come out outward (a box mesh's tetrahedra have either orientation)."""
+    p = points[cells]
+    if cells.shape[1] == 4:
+        volume = np.einsum("ij,ij->i", np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), p[:, 3] - p[:, 0])
+        swap = [0, 2, 1, 3]
+    else:
+        volume = np.einsum("ij,ij->i", np.cross(p[:, 1] - p[:, 0], p[:, 3] - p[:, 0]), p[:, 4] - p[:, 0])
+        swap = [4, 5, 6, 7, 0, 1, 2, 3]
+    out = cells.copy()
+    out[volume < 0] = cells[volume < 0][:, swap]
+    return out
 
 
 def write_layout_files(out: Path, mesh, order: np.ndarray, placed: np.ndarray, names: tuple[str, str],
                        picture: bool = True) -> dict:
     """placed.stl, body.stl, layout.msh and (with `picture`) layout.png for the cells `placed` (design order) of
     the placed material names[1] in the body names[0]; {what: file name}."""
-    cells = gathered_cells(mesh, order)
+    gathered = gather_mesh(mesh)
     files = {"placed_stl": "placed.stl", "body_stl": "body.stl", "layout_mesh": "layout.msh"}
     if picture:
         files["layout_picture"] = "layout.png"
     if mesh.comm.rank == 0:
-        cell_name = mesh.topology.cell_name()
-        points, ids = _numbered(cells)
-        placed = np.asarray(placed, dtype=bool)
+        points, cells, cell_name = gathered
+        cells = positively_oriented(points, cells[:, :VERTICES[cell_name]])
+        member = np.empty(len(cells), dtype=bool)
+        member[order] = np.asarray(placed, dtype=bool)        # the design's order -> gather_mesh's (rank order)
         surfaces = {}
-        for key, member, name in (("placed_stl", placed, names[1]), ("body_stl", ~placed, names[0])):
-            tris = boundary_triangles(points, ids, member, cell_name)
+        for key, chosen, name in (("placed_stl", member, names[1]), ("body_stl", ~member, names[0])):
+            tris = triangles(boundary_faces(cells[chosen], cell_name)) if chosen.any() else np.empty((0, 3), int)
             write_stl(out / files[key], points, tris, name)
             surfaces[name] = tris
-        _write_msh(out / files["layout_mesh"], points, ids, placed, names, cell_name)
+        write_volume_mesh(out / files["layout_mesh"], points, cells, cell_name,
+                          cell_groups={names[0]: ~member, names[1]: member})
         if picture:
             _picture(out / files["layout_picture"], points, surfaces, names)
     mesh.comm.barrier()
     return files
-
-
-def _write_msh(path: Path, points: np.ndarray, ids: np.ndarray, placed: np.ndarray, names, cell_name: str) -> None:
-    import meshio
-    tags = np.where(placed, 2, 1).astype(int)
-    m = meshio.Mesh(points, [(GMSH_TYPE[cell_name], ids[:, TO_GMSH[cell_name]])],
-                    cell_data={"gmsh:physical": [tags], "gmsh:geometrical": [tags]},
-                    field_data={names[0]: np.array([1, 3]), names[1]: np.array([2, 3])})
-    meshio.write(path, m, file_format="gmsh22", binary=False)
 
 
 def _picture(path: Path, points: np.ndarray, surfaces: dict, names) -> None:

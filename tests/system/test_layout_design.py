@@ -112,6 +112,13 @@ def _beam(**over) -> dict:
     return d
 
 
+def _stl_volume(path) -> float:
+    """The volume a binary STL encloses, sum of det(p0, p1, p2) / 6 over its triangles (negative if inward)."""
+    raw = Path(path).read_bytes()
+    tri = np.frombuffer(raw[84:], dtype=[("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")])["v"].astype(float)
+    return float(np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])).sum() / 6)
+
+
 def _end_angle(results: dict) -> float:
     """The free end's rotation about y (degrees): the angle of its bottom-to-top edge against z."""
     p = {n: np.add(END[n], results["probes"][n]["displacement"]) for n in END}
@@ -151,6 +158,11 @@ def test_design_scene_casts_a_layout_that_a_plain_static_run_confirms(tmp_path):
             assert np.allclose(reached, d["targets"][n]["reached"], atol=1e-9)
         for f in ("placed.stl", "body.stl", "layout.png", "design_history.csv", "layout.xdmf"):
             assert (out / f).stat().st_size > 0
+        # the STL surfaces closed and outward: the volume they enclose (divergence theorem) is the cells' (to the
+        # file's single precision)
+        body = d["domain_volume_m3"] - d["placed_volume_m3"]
+        assert abs(_stl_volume(out / "placed.stl") - d["placed_volume_m3"]) < 1e-6 * d["placed_volume_m3"]
+        assert abs(_stl_volume(out / "body.stl") - body) < 1e-6 * body
 
 
 def test_a_design_scene_that_cannot_work_is_refused_in_one_line():
