@@ -11,6 +11,7 @@ import ufl
 from fem_forms.design.forward_on_rest import ForwardOnRest
 from fem_forms.errors import InputError, SolveError
 from fem_forms.meshes import mesh_size
+from fem_forms.output.probes import nearest_nodes
 from fem_forms.solvers.linear import make_ksp
 
 
@@ -210,16 +211,6 @@ class AdjointDesign:
 def _snap_points(V: fem.FunctionSpace, points: list):
     """Dofs of the mesh vertices nearest each point: (all local dof indices, owned only)."""
     bs = V.dofmap.index_map_bs
-    nown = V.dofmap.index_map.size_local
-    X = V.tabulate_dof_coordinates()[:nown]
-    comm = V.mesh.comm
-    own = []
-    for p in points:
-        dist = np.linalg.norm(X - np.asarray(p), axis=1) if len(X) else np.array([np.inf])
-        k = int(np.argmin(dist))
-        best = comm.allreduce(float(dist[k]), op=MPI.MIN)
-        rank = comm.allreduce(comm.rank if dist[k] <= best else comm.size, op=MPI.MIN)
-        if comm.rank == rank:
-            own += [k * bs + c for c in range(bs)]
-    own = np.array(own, dtype=np.int32)
+    node, _ = nearest_nodes(V, points)
+    own = np.array([k * bs + c for k in node if k >= 0 for c in range(bs)], dtype=np.int32)
     return own, own

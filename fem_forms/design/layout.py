@@ -26,6 +26,7 @@ import ufl
 
 from fem_forms.errors import SolveError
 from fem_forms.meshes import mesh_size
+from fem_forms.output.probes import nearest_nodes
 from fem_forms.solvers.linear import make_ksp
 
 
@@ -92,18 +93,7 @@ class TargetPoints:
         self.points, self.targets, self.length = np.atleast_2d(points), np.atleast_2d(targets), length
         self.counted = np.ones_like(self.points) if counted is None else np.asarray(counted, dtype=float)
         comm = V.mesh.comm
-        self.n = V.dofmap.index_map.size_local
-        X = V.tabulate_dof_coordinates()[:self.n]
-        self.node = np.full(len(self.points), -1)
-        self.at = np.zeros_like(self.points)                  # the snapped nodes' positions
-        for i, p in enumerate(self.points):
-            dist = np.linalg.norm(X - p, axis=1) if len(X) else np.array([np.inf])
-            k = int(np.argmin(dist))
-            best = comm.allreduce(float(dist[k]), op=MPI.MIN)
-            owner = comm.allreduce(comm.rank if dist[k] <= best else comm.size, op=MPI.MIN)
-            if comm.rank == owner:
-                self.node[i] = k
-            self.at[i] = comm.allreduce(X[k] if comm.rank == owner else np.zeros(3), op=MPI.SUM)
+        self.node, self.at = nearest_nodes(V, self.points)      # the snapped nodes (local index on their owner)
         self.comm = comm
 
     def positions(self, u: fem.Function) -> np.ndarray:

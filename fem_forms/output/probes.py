@@ -53,6 +53,24 @@ class ProbeSet:
         return {n: total[i].tolist() for i, n in enumerate(self.names)}
 
 
+def nearest_nodes(V: fem.FunctionSpace, points) -> tuple[np.ndarray, np.ndarray]:
+    """Each point's nearest owned node of V (the lowest rank owning one as near takes it): (its local node index
+    on that rank, -1 elsewhere; its position, on every rank). The designs' targets sit on nodes this way."""
+    comm = V.mesh.comm
+    X = V.tabulate_dof_coordinates()[:V.dofmap.index_map.size_local]
+    points = np.atleast_2d(np.asarray(points, dtype=float))
+    node, at = np.full(len(points), -1), np.zeros((len(points), 3))
+    for i, p in enumerate(points):
+        dist = np.linalg.norm(X - p, axis=1) if len(X) else np.array([np.inf])
+        k = int(np.argmin(dist))
+        best = comm.allreduce(float(dist[k]), op=MPI.MIN)
+        owner = comm.allreduce(comm.rank if dist[k] <= best else comm.size, op=MPI.MIN)
+        if comm.rank == owner:
+            node[i] = k
+        at[i] = comm.allreduce(X[k] if comm.rank == owner else np.zeros(3), op=MPI.SUM)
+    return node, at
+
+
 def evaluate(f: fem.Function, points: dict[str, list]) -> dict[str, list]:
     """{name: value} of f at each named point (located afresh; keep a ProbeSet to evaluate often)."""
     return ProbeSet(f.function_space.mesh, points).evaluate(f)

@@ -22,7 +22,7 @@ from fem_forms.materials.constants import bind_constants
 from fem_forms.meshes import load_mesh
 from fem_forms.model import build_model
 from fem_forms.output import fields, results
-from fem_forms.output.layout_files import VERTICES, write_layout_files
+from fem_forms.design.layout_files import VERTICES, write_layout_files
 from fem_forms.output.probes import write_table
 from fem_forms.output.summary import header
 from fem_forms.scene import Scene
