@@ -4,13 +4,15 @@
   0.1 mm above a 20 degree slope (inside the default barrier distance), friction 0.2, dt 2 ms, 0.3 s: the slide's
   acceleration against g (sin - mu cos) (fitted on t > 0.05 s), steps, rejected steps, Newton iterations, wall time
   (median of 3 runs, one process each).
-- A solid rubber hemisphere (R 5 cm, dome down, E 1 MPa, nu 0.4, 1100 kg/m^3, gmsh h 1 cm: 7,692 dofs P1) placed on a
-  floor with friction 0.8 and set rocking at 1.6 rad/s about its contact point, dt 2 ms, 1.2 s = 600 steps: the
-  rocking period against rolling without slip, T = 2 pi sqrt(I_P / (m g d)), d = 3R/8 (0.591 s; amplitude 8.6 deg
-  adds about 0.1 %); one run each, stopped by SIGTERM after 2.4 LIMIT_S (6 minutes; backward Euler 10: the run
-  keeps its steps and says how far it got).
-- Where the hemisphere's time goes (backward Euler, 0.3 s, in this process under cProfile): tangent assembly, the
-  linear solves inside SNES, residuals, line-search energies, the contact term, the rest.
+- A solid rubber hemisphere (R 5 cm, dome down, E 1 MPa, nu 0.4, 1100 kg/m^3) placed on a floor with friction 0.8
+  and set rocking at 1.6 rad/s about its contact point, dt 2 ms, 1.2 s = 600 steps: the rocking period against
+  rolling without slip, T = 2 pi sqrt(I_P / (m g d)), d = 3R/8 (0.591 s; amplitude 8.6 deg adds about 0.1 %). The
+  issue's scene: P1 on a gmsh mesh graded from 2.5 mm within 12 mm of the lowest point to 1 cm (the contact point
+  rolls 7.5 mm each way), each scheme; and the default P2 on a uniform 1 cm mesh (its facets are 11 degrees wide,
+  more than the swing: P1 there rocks on facet edges, period -17 %), backward Euler. One run each, stopped by
+  SIGTERM after 2.4 LIMIT_S (6 minutes; backward Euler P2 10: the run keeps its steps and says how far it got).
+- Where the hemisphere's time goes (the issue's scene, backward Euler, 0.3 s, in this process under cProfile):
+  tangent assembly, the linear solves inside SNES, residuals, line-search energies, the contact term, the rest.
 
 Run: `.venv/bin/python benchmarks/contact_schemes.py` (about 25 minutes, alone on the machine). Writes
 benchmarks/contact_schemes.md.
@@ -70,8 +72,9 @@ def block(scheme: str) -> dict:
             "output": {"picture": False, "fields": False, "probes": {"c": [0.05, 0.05, 0.1]}}}
 
 
-def hemisphere(mesh: Path, scheme: str, initial: str = "rest", duration: float = 1.2) -> dict:
+def hemisphere(mesh: Path, scheme: str, initial: str = "rest", duration: float = 1.2, degree: int = 1) -> dict:
     return {"title": "rocking hemisphere", "analysis": "dynamic", "mesh": {"generator": "file", "file": str(mesh)},
+            "discretization": {"degree": degree},
             "material": {"model": "neo-hookean", "E": E, "nu": NU, "rho": RHO}, "load": [{"type": "gravity"}],
             "dynamic": {"duration": duration, "dt": 2e-3, "scheme": scheme, "initial": initial, "output_every": 50,
                         "initial_velocity": {"angular": [0.0, 1.6, 0.0], "about": [0.0, 0.0, -R]}},
@@ -81,11 +84,26 @@ def hemisphere(mesh: Path, scheme: str, initial: str = "rest", duration: float =
                        "probes": {"centre": [0.0, 0.0, 0.0], "low": [0.0, 0.0, -0.04]}}}
 
 
-def make_hemisphere(path: Path) -> Path:
+def make_hemisphere(path: Path, graded: bool = True) -> Path:
+    """The dome (flat face up at z = 0), tetrahedra of 1 cm; `graded`: 2.5 mm within 12 mm of the lowest point,
+    growing to 1 cm at 36 mm."""
     from fem_forms.meshes.occ_parts import write_part
 
     def dome(occ):
         d, _ = occ.cut([(3, occ.addSphere(0, 0, 0, R))], [(3, occ.addBox(-2 * R, -2 * R, 0, 4 * R, 4 * R, 2 * R))])
+        if graded:
+            import gmsh
+            occ.synchronize()
+            f = gmsh.model.mesh.field
+            low = f.add("Distance")
+            f.setNumbers(low, "PointsList", [occ.addPoint(0, 0, -R)])
+            size = f.add("Threshold")
+            f.setNumber(size, "InField", low)
+            for key, value in (("SizeMin", 2.5e-3), ("SizeMax", 0.01), ("DistMin", 0.012), ("DistMax", 0.036)):
+                f.setNumber(size, key, value)
+            f.setAsBackgroundMesh(size)
+            for key in ("Mesh.MeshSizeExtendFromBoundary", "Mesh.MeshSizeFromPoints", "Mesh.MeshSizeFromCurvature"):
+                gmsh.option.setNumber(key, 0)
         return d
     return write_part(path, dome, 0.01)
 
@@ -127,7 +145,7 @@ def breakdown(mesh: Path, work: Path) -> list[str]:
     import fem_forms as ff
     from fem_forms.analyses.dynamic.solve import solve_dynamic
     ff.quiet_jit()
-    scene = ff.Scene.from_dict(hemisphere(mesh, "backward-euler", duration=0.3))
+    scene = ff.Scene.from_dict(hemisphere(mesh, "backward-euler", duration=0.3))     # the issue's scene (P1)
     solve_dynamic(scene)                                   # compiles the forms
     prof = cProfile.Profile()
     t = time.perf_counter()
@@ -172,16 +190,21 @@ def main() -> None:
         r = dict(r, wall_time_s=wall)
         lines.append(row(scheme, r, wall, f"{100 * slide_error(out):+.2f} %"))
     mesh = make_hemisphere(work / "dome.msh")
+    uniform = make_hemisphere(work / "dome-uniform.msh", graded=False)
     T = rolling_period()
     lines += ["", f"| rocking hemisphere (600 steps) | steps | rejected | Newton iterations | wall | period against "
               f"rolling {T:.3f} s |", "|---|---|---|---|---|---|"]
-    for scheme, initial, limit in [("backward-euler", "rest", 4 * LIMIT_S),
-                                   ("generalized-alpha", "rest", 2.4 * LIMIT_S),
-                                   ("newmark", "rest", 2.4 * LIMIT_S), ("newmark", "static", 2.4 * LIMIT_S)]:
-        r, out, wall = run(hemisphere(mesh, scheme, initial), work / f"dome-{scheme}-{initial}", limit)
+    for scheme, initial, degree, limit in [("backward-euler", "rest", 1, 2.4 * LIMIT_S),
+                                           ("generalized-alpha", "rest", 1, 2.4 * LIMIT_S),
+                                           ("newmark", "rest", 1, 2.4 * LIMIT_S),
+                                           ("newmark", "static", 1, 2.4 * LIMIT_S),
+                                           ("backward-euler", "rest", 2, 4 * LIMIT_S)]:
+        scene = hemisphere(mesh if degree == 1 else uniform, scheme, initial, degree=degree)
+        r, out, wall = run(scene, work / f"dome-{scheme}-{initial}-{degree}", limit)
         period = rocking_period(out) if (out / "probes.csv").exists() else None
         measure = f"{period:.3f} s ({100 * (period / T - 1):+.1f} %)" if period else "no full swing"
-        lines.append(row(f"{scheme}, initial = {initial}", r, wall, measure))
+        where = "P1 graded" if degree == 1 else "P2 uniform 1 cm"
+        lines.append(row(f"{scheme}, initial = {initial}, {where}", r, wall, measure))
     lines += [""] + breakdown(mesh, work)
     (HERE / "contact_schemes.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
