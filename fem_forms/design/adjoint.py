@@ -84,8 +84,30 @@ class AdjointDesign:
         self.fixed = np.unique(np.concatenate(fixed)) if fixed else np.empty(0, dtype=np.int32)
         self.fixed = self.fixed[self.fixed < self.n]
         self.vec = lambda: self.W.createVecLeft()
+        self.pinned = np.empty(0, PETSc.IntType)     # global rows of C held (a part standing on a table)
+        self.free_direction = self._free = None
+        if fwd.standing is not None:
+            local, self.pinned = _pinned_dofs(fwd.standing)
+            self.free_direction = fwd.standing.normal
+            self.fixed = np.unique(np.concatenate([self.fixed, local])).astype(self.fixed.dtype)
+            e = self.vec()
+            e.array[:] = np.tile(self.free_direction, self.n // 3)
+            w = self.W * e
+            self._free = (w, e.dot(w))
         self.evaluations = 0
         self.last_failure = ""
+
+    def _add_contact(self, fwd: ForwardOnRest) -> None:
+        """The contact's Hessian (barrier and friction) at the last equilibrium into K, and the friction's into
+        C = K - B: its slips are measured from the rest shape, so they depend on u alone. B takes nothing: the barrier
+        depends on X + u, but its Hessian (a flat obstacle's: along the normal, at the sole) acts only on the sole's
+        normal dofs, which the design holds (_pinned_dofs)."""
+        x, standing = fwd.u.vector, fwd.standing
+        fwd.driver.arrays.add_hessian(x, self.K)
+        self.C.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
+        standing.add_friction_hessian(x, self.C, fwd.driver.arrays.constrained)
+        self.C.assemble()
+        self.C.zeroRowsColumns(self.pinned, 1.0)
 
     def _solve_K(self, rhs: PETSc.Vec) -> PETSc.Vec:
         """K x = rhs with homogeneous conditions on supported dofs (K was assembled with them)."""
@@ -113,8 +135,25 @@ class AdjointDesign:
         m, d = self.vec(), self.vec()
         d.array[:] = dvec
         m.array[:] = dvec + fwd.u.x.array[:self.n]
-        self._Wm = self.W * m
+        self._Wm = self.weigh(m)
         return 0.5 * m.dot(self._Wm) + 0.5 * d.dot(self.R * d)
+
+    def weigh(self, m: PETSc.Vec) -> PETSc.Vec:
+        """W m; for a part standing on a table, with the mismatch's mean along the table's normal taken out: how high
+        the part rests is the barrier's (within contact.distance), not the design's."""
+        Wm = self.W * m
+        if self._free is not None:
+            w, c = self._free
+            Wm.axpy(-w.dot(m) / c, w)
+        return Wm
+
+    def resting_offset(self, m: PETSc.Vec) -> float:
+        """The W-weighted mean of the mismatch m along the table's normal (m): how much higher than the target the
+        part rests (0 off a table)."""
+        if self._free is None:
+            return 0.0
+        w, c = self._free
+        return w.dot(m) / c
 
     def linearise(self) -> np.ndarray:
         """Gradient of J (owned dofs) at the last forward state; assembles and factorises K and B
@@ -130,6 +169,9 @@ class AdjointDesign:
         self.C.zeroEntries()
         fpetsc.assemble_matrix(self.C, self.C_form, bcs=fwd.bcs)
         self.C.assemble()
+        if fwd.standing is not None:
+            self._add_contact(fwd)
+            self.ksp.setOperators(self.K)
         self.ksp_C.setOperators(self.C)
         d = self.vec()
         d.array[:] = fwd.d.x.array[:self.n]
@@ -175,16 +217,20 @@ class AdjointDesign:
 
     def gauss_newton_product(self, p: PETSc.Vec, out: PETSc.Vec) -> None:
         """out = (A^T (W + damping D) A + R) p on free dofs, A = I - K^-1 B = K^-1 C, at the last
-        linearised state: the damping limits the predicted change of the deformed shape."""
+        linearised state: the damping limits the predicted change of the deformed shape. Standing on a table, the
+        damping also takes damping D p: where the sole slides at Coulomb's limit, moving its rest position along the
+        table changes nothing (A p = 0) and only this bounds the step."""
         q = p.copy()
         q.array[self.fixed] = 0.0
         Bq = self.vec()
         self.B.mult(q, Bq)
         a = q - self._solve_K(Bq)
-        b = self.W * a
+        b = self.weigh(a)
         if self.damping:
             b.axpy(self.damping, self.D * a)
         r = b - self._BT(self._solve_K(b.copy())) + self.R * q
+        if self.damping and self._free is not None:
+            r.axpy(self.damping, self.D * q)
         r.array[self.fixed] = 0.0
         r.copy(out)
 
@@ -214,3 +260,15 @@ def _snap_points(V: fem.FunctionSpace, points: list):
     node, _ = nearest_nodes(V, points)
     own = np.array([k * bs + c for k in node if k >= 0 for c in range(bs)], dtype=np.int32)
     return own, own
+
+
+def _pinned_dofs(standing) -> tuple[np.ndarray, np.ndarray]:
+    """The sole's dofs along the table's normal (StandingRest): the rest shape keeps the target's sole height, which
+    the table holds. (Free, they would leave the design three directions it cannot tell: a rest shape made higher,
+    lower or tilted about its sole lands the same once put down.) Returns (the local indices this rank owns, their
+    global rows)."""
+    surface = standing.term.surface
+    mine = np.isin(surface.owned, standing.sole)
+    local = (3 * surface.owned_local[mine] + standing.axis).astype(np.int32)
+    rows = (3 * surface.blocks[surface.owned[mine]] + standing.axis).astype(PETSc.IntType)
+    return local, rows

@@ -3,22 +3,26 @@ from __future__ import annotations
 
 import ufl
 
+
 from fem_forms.errors import InputError
 from fem_forms.meshes import LoadedMesh
 from fem_forms.physics.admissibility import SmallestValue
+from fem_forms.physics.contact.on_rest import StandingRest
 from fem_forms.model import build_model
 from fem_forms.scene import Scene
 from fem_forms.solvers import continuation, snes
+from fem_forms.solvers.reports import SolveReport
 
 
 class ForwardOnRest:
     """Forward equilibrium of the body whose rest shape is (target mesh + d), written on the fixed
     target mesh: X = x + d(x), G = dX/dx = I + grad d, F = I + grad u G^-1, dX = det G dx.
-    Provides the energy, its derivatives in u and in d (ufl.derivative), and warm-started solves."""
+    Provides the energy, its derivatives in u and in d (ufl.derivative), and warm-started solves. A part standing
+    on obstacles ([contact]) has the contact term beside the forms (physics/contact/on_rest.py)."""
 
     def __init__(self, scene: Scene, material, loaded: LoadedMesh):
         model = build_model(scene, material, loaded=loaded, rest="designed")
-        model.only_ufl_terms("inverse design")
+        model.terms.only_ufl("inverse design", but=("contact",))
         if not model.conservative:
             raise InputError(f"inverse.method = {scene.inverse.method!r}: follower pressure is supported "
                              "by the direct method only")
@@ -31,6 +35,9 @@ class ForwardOnRest:
         self.energy, self.residual, self.jacobian = model.energy, model.residual, model.jacobian
         self.dres_dd = ufl.derivative(self.residual, self.d, ufl.TrialFunction(self.V))
         self.physics = model.physics
+        self.arrays = model.terms.arrays
+        contact = next((t for t in self.arrays if t.role == "contact"), None)
+        self.standing = StandingRest.of(contact) if contact is not None else None
         G = model.context.rest_map
         self._volume_ratio = SmallestValue(ufl.det(model.context.F) * ufl.det(G), self.mesh,
                                            self.dx.metadata()["quadrature_degree"])
@@ -38,6 +45,7 @@ class ForwardOnRest:
         self._driver: snes.SNESDriver | None = None
         self._problem: snes.NonlinearProblem | None = None
         self._u_ok = self.u.x.array.copy()
+        self._d_ok = self.d.x.array.copy()
 
     def inadmissible(self):
         return self._volume_ratio.positive_or("inverted elements (min det = {value:.3g})")
@@ -49,21 +57,62 @@ class ForwardOnRest:
         if self._driver is None:          # forms compiled and matrix created once for all solves
             self._problem = snes.NonlinearProblem(self.u, self.residual, self.jacobian, self.bcs,
                                                     energy=self.energy, set_load=None,
-                                                    inadmissible=self.inadmissible)
+                                                    inadmissible=self.inadmissible, array_terms=self.arrays)
             self._driver = snes.SNESDriver(self._problem, dict(self.scene.solver.petsc),
                                              self.scene.solver.linear, "fem_forms_fwd_")
         problem = self._problem
         problem.set_load = None
         self.load.set(1.0)
+        if self.standing is not None:
+            return self._solve_standing(fallback)
         rep = continuation.solve(problem, driver=self._driver)
         if not rep.converged and fallback:
             self.u.x.array[:] = 0.0
             problem.set_load = self.load.set
             rep = continuation.solve(problem, steps=max(self.scene.solver.steps, 4),
                                max_cutbacks=self.scene.solver.max_cutbacks, driver=self._driver)
+        return self._keep(rep)
+
+    @property
+    def driver(self) -> snes.SNESDriver | None:
+        """The SNES driver of the forward solves (its array terms' Hessian: the adjoint's K), after the first."""
+        return self._driver
+
+    def _keep(self, rep: SolveReport) -> SolveReport:
+        """The state of a converged solve kept as the next one's fallback; a failed one's undone."""
         if rep.converged:
-            self._u_ok = self.u.x.array.copy()
+            self._u_ok, self._d_ok = self.u.x.array.copy(), self.d.x.array.copy()
         else:
             self.u.x.array[:] = self._u_ok
         return rep
 
+    def _solve_standing(self, fallback: bool) -> SolveReport:
+        """Equilibrium on the obstacles from the rest shape mesh + d, friction anchored there (the continuation
+        re-lags it at the equilibrium until its normal forces settle). A start that crosses an obstacle keeps the
+        last deformed shape instead (else, with `fallback`, starts from rest); a rest shape through an obstacle has
+        no equilibrium."""
+        problem, standing = self._problem, self.standing
+        if (gap := standing.follow_rest()) <= 0.0:
+            why = f"the rest shape crosses an obstacle (smallest distance {gap:.3g} m)"
+            return self._keep(SolveReport(False, 0.0, 0, float("nan"), message=why))
+        x = self.u.vector
+        if standing.term.inadmissible(x) is not None:       # the last deformed shape, kept
+            self.u.x.array[:] = self._u_ok - (self.d.x.array - self._d_ok)
+            self.u.x.scatter_forward()
+        if fallback and standing.term.inadmissible(x) is not None:
+            self.u.x.array[:] = 0.0
+            self.u.x.scatter_forward()
+        standing.lag()
+        rep = continuation.solve(problem, driver=self._driver)
+        if not rep.converged and fallback:
+            self.u.x.array[:] = 0.0
+            self.u.x.scatter_forward()
+
+            def set_load(lam: float) -> None:              # each load step anchored at rest
+                self.load.set(lam)
+                standing.lag()
+            problem.set_load = set_load
+            rep = continuation.solve(problem, steps=max(self.scene.solver.steps, 4),
+                                     max_cutbacks=self.scene.solver.max_cutbacks, driver=self._driver)
+            problem.set_load = None
+        return self._keep(rep)

@@ -174,7 +174,7 @@ def solve_adjoint(scene: Scene, material=None, loaded: LoadedMesh | None = None)
     v.x.array[:design.n] = d
     v.x.scatter_forward()
     res = InverseResult("adjoint", v, loaded, ok, its, msg, history=history, forward_solves=fwd.solves,
-                        physics=fwd.physics)
+                        physics=fwd.physics, free_direction=design.free_direction)
     if final is not None:
         res.deformed_offset = fem.Function(V, name="deformed_minus_target")
         res.deformed_offset.x.array[:] = v.x.array + fwd.u.x.array

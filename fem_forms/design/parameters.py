@@ -31,6 +31,8 @@ class InverseResult:
     residual_scale: float = 0.0
     carving: object = None          # [balance] in an inverse scene: the carving designed on the target
     cavities: dict = field(default_factory=dict)   # direct method: each inflated cavity's designed numbers
+    free_direction: object = None   # standing on obstacles: the table's normal, along which the part rests where
+                                    # the barrier holds it (the mismatch's mean along it is not the design's)
 
 
 def target_scene(scene: Scene) -> MeshSpec:

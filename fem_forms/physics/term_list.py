@@ -43,11 +43,11 @@ class TermList:
         """The terms whose energy is computed as arrays (ArrayTerm), for the solver's callbacks."""
         return [t for t in self.all if t.is_array]
 
-    def only_ufl(self, analysis: str) -> None:
-        """InputError naming the array terms (energies computed outside UFL) that `analysis` cannot take yet:
-        left out, their energy would silently be missing."""
-        if self.arrays:
-            raise InputError(f"{', '.join(t.name for t in self.arrays)}: not available in {analysis} yet (its "
+    def only_ufl(self, analysis: str, but: tuple = ()) -> None:
+        """InputError naming the array terms (energies computed outside UFL) that `analysis` cannot take yet,
+        those of the roles `but` aside: left out, their energy would silently be missing."""
+        if missing := [t for t in self.arrays if t.role not in but]:
+            raise InputError(f"{', '.join(t.name for t in missing)}: not available in {analysis} yet (its "
                              "energy is computed as arrays; static and implicit dynamic solves take it)")
 
     def _each(self, hook: str, *args) -> None:

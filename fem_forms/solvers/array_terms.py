@@ -93,6 +93,16 @@ class ArrayTerms:
         if self.terms:
             A.assemble()
 
+    @property
+    def relags(self) -> bool:
+        """Whether some term lags a friction a static step re-lags at its equilibrium (contact with obstacles)."""
+        return any(hasattr(t, "relag") for t in self.terms)
+
+    def relag(self, x: PETSc.Vec, tolerance: float) -> float:
+        """Each such term re-lagged at x where its normal forces changed by more than `tolerance`; the largest
+        relative change."""
+        return max((t.relag(x, tolerance) for t in self.terms if hasattr(t, "relag")), default=0.0)
+
     def energy(self, x: PETSc.Vec) -> float:
         """The terms' energy at x (each term's is the same on every rank), for the line-search objective."""
         return sum(t.energy_value(x) for t in self.terms)

@@ -46,6 +46,7 @@ class NonlinearProblem:
     array_terms: list = field(default_factory=list)   # physics.terms.ArrayTerm: energies as arrays (lumped mass)
     bounds: tuple | None = None        # (lower, upper): fem.Function (e.g. State.old["damage"]), float or None
     scalars: list = field(default_factory=list)   # physics.scalars.GlobalScalar: solved with u (bordered.py)
+    relag: bool = True                 # a static step re-lags lagged friction at its equilibrium (continuation.py)
 
 
 def as_compiled(form) -> fem.Form:

@@ -107,6 +107,11 @@ def initial_static(system: DynamicSystem) -> None:
     m = system.model
     m.terms.lag(0.0)                               # lagged terms at t = 0, lagged from the start state
     problem = m.problem(m.load.set, state=system.state)
+    # friction lagged once here, as the time steps that follow lag it (once a step, never re-lagged). Re-lagged at
+    # this equilibrium, the rocking toy demo rocked with a period of 0.744 s against 0.836 s lagged once (0.839 s for
+    # rolling without slip) and 28 % more Newton iterations: measured, the cause not yet understood (a friction
+    # prestress in the contact patch that the time steps' lag does not keep is one candidate)
+    problem.relag = False
     rep = continuation.solve(problem, system.scene.solver.petsc, steps=system.scene.solver.steps,
                              max_cutbacks=system.scene.solver.max_cutbacks, linear_kind="direct")
     if not rep.converged:

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+import sys
 import time
 
 from dolfinx import fem
@@ -9,6 +10,7 @@ import numpy as np
 
 from fem_forms.analyses.inverse.carving import balance_line, check_stance, design_carved
 from fem_forms.analyses.inverse.check import check_rest_shape, picture
+from fem_forms.analyses.inverse.standing import standing_report
 from fem_forms.design.direct import solve_direct
 from fem_forms.design.fixed_point import solve_fixed_point
 from fem_forms.design.optimizers import solve_adjoint
@@ -70,6 +72,10 @@ def run(scene: Scene, out: Path, echo: bool = False) -> dict:
         summary["design_gap_max"] = check.design_gap_max
         if check.solve is not None:
             summary["forward_check"] = check.solve.summary()
+        if getattr(scene, "contact", None) is not None:
+            standing, unusable = standing_report(scene, check)
+            summary.update(standing)
+            problems += unusable
             if has_strength(scene) and check.static.report.converged:    # the rest shape under its loads
                 summary["strength"] = Quantities(check.static.model).strength()
         if check.matched_mismatch_max is not None:
@@ -87,6 +93,9 @@ def run(scene: Scene, out: Path, echo: bool = False) -> dict:
     summary["problems"] = problems
     summary["wall_time_s"] = time.perf_counter() - t0
     results.write_json_atomic(out / "results.json", summary, comm)
+    if echo and comm.rank == 0:
+        for w in summary.get("warnings", []):
+            print(f"fem-forms: warning: {w}", file=sys.stderr)
     if echo and comm.rank == 0 and not problems:
         print(f"{scene.title}: rest shape by the {res.method} method in {res.iterations} iterations, "
               f"{res.solve_time:.2f} s; largest rest offset {summary['max_rest_offset']:.4g} m; forward check "
@@ -97,6 +106,12 @@ def run(scene: Scene, out: Path, echo: bool = False) -> dict:
             print(line + " (the rest shape under its loads)")
         if "balance" in summary:
             print(balance_line(summary["balance"]))
+        if "stance" in summary:
+            st = summary["stance"]
+            print(f"stands on its own: rests {1e3 * summary['resting_offset_m']:+.3g} mm from the target's height "
+                  f"(the barrier's gap), shape within {summary['shape_mismatch_max']:.3g} m; centre of mass "
+                  f"{1e3 * st['margin_m']:.3g} mm inside the contact patch (toppling angle "
+                  f"{st['toppling_angle_deg']:.3g} deg)")
     if problems:
         raise SolveError(f"{scene.title}: no usable rest shape: {'; '.join(problems)}")
     return summary

@@ -29,6 +29,8 @@ class ForwardCheck:
     solve: forward.ForwardSolve | None = None   # how the forward check solved, and its tangent's inertia
     # rank 0: (target points, rest points, boundary faces of both: the same cells) for the picture
     drawn: tuple | None = None
+    resting_offset: float = 0.0     # standing on obstacles: how much higher than the target the part rests, and
+    shape_mismatch_max: float | None = None     # ... the largest distance from the target raised by that much
 
 
 def _stability_problems(solve: forward.ForwardSolve, predicted: str) -> list:
@@ -143,7 +145,8 @@ def check_rest_shape(scene: Scene, res: InverseResult, out: Path, carving=None) 
         loaded = from_arrays(comm, written)
         carved = carving.on_mesh(loaded) if carving is not None else None
         solve = (forward.solve_at_target(fscene, loaded, pts_rest, pts_design, res.residual_scale, carved)
-                 if scene.inverse.check == "equilibrium" else forward.solve_along_path(fscene, loaded, carved))
+                 if scene.inverse.check == "equilibrium" and getattr(scene, "contact", None) is None
+                 else forward.solve_along_path(fscene, loaded, carved))     # friction depends on the path
     except InputError as e:
         return ForwardCheck(np.inf, None, problems + [f"the rest shape is not a valid mesh: {e}"], drawn=drawn)
     static = solve.static
@@ -164,6 +167,13 @@ def check_rest_shape(scene: Scene, res: InverseResult, out: Path, carving=None) 
 
     to_target = np.linalg.norm(deformed - pts_target[idx], axis=1)
     mismatch = largest(to_target)
+    offset, shape_max = 0.0, None
+    if res.free_direction is not None:          # standing on a table: how high it rests is the barrier's
+        n = res.free_direction
+        owned = np.arange(len(X)) < fmesh.geometry.index_map().size_local
+        rise = (deformed - pts_target[idx])[owned] @ n
+        offset = comm.allreduce(float(rise.sum()), op=MPI.SUM) / comm.allreduce(int(owned.sum()), op=MPI.SUM)
+        shape_max = largest(np.linalg.norm(deformed - pts_target[idx] - offset * n, axis=1))
     gap = largest(np.linalg.norm(deformed - pts_design[idx], axis=1))
     matched = _matched_vertices(scene.inverse, pts_target, size)
     matched_max = None if matched is None else largest(to_target, matched[idx])
@@ -171,7 +181,7 @@ def check_rest_shape(scene: Scene, res: InverseResult, out: Path, carving=None) 
     if gap > tol:
         problems.append(f"the forward solve on the rest shape lands {gap:.3g} m from {predicted} "
                         f"(tolerance {tol:.3g} m): another equilibrium, the design is not usable")
-    return ForwardCheck(mismatch, static, problems, gap, matched_max, solve, drawn)
+    return ForwardCheck(mismatch, static, problems, gap, matched_max, solve, drawn, offset, shape_max)
 
 
 def picture(path: Path, res: InverseResult, check: ForwardCheck, title: str, up=None) -> None:

@@ -171,6 +171,7 @@ def solve_along_path(fscene: Scene, loaded: LoadedMesh, carved: dict | None = No
     """Load continuation from the rest shape (the scene's steps and cut-backs), as `fem-forms run` would."""
     static = solve_static(fscene, model=forward_model(fscene, loaded, carved))
     converged = static.report.converged
-    inertia = (tangent_inertia(static.model.compiled("jacobian"), static.model.bcs, pressure_dofs(static.model.unknown))
+    m = static.model
+    inertia = (tangent_inertia(m.compiled("jacobian"), m.bcs, pressure_dofs(m.unknown), (m.terms.arrays, m.unknown))
                if converged else None)
     return ForwardSolve("path", static, inertia)

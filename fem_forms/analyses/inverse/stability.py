@@ -15,6 +15,7 @@ from dolfinx.fem import petsc as fpetsc
 from petsc4py import PETSc
 import ufl
 
+from fem_forms.solvers.array_terms import ArrayTerms
 from fem_forms.solvers.linear import make_ksp
 from fem_forms.solvers.snes import as_compiled
 
@@ -73,9 +74,13 @@ def inertia_of(A: PETSc.Mat, saddle: int = 0) -> Inertia:
         ksp.destroy()
 
 
-def tangent_inertia(jacobian: ufl.Form | fem.Form, bcs: list, saddle: int = 0) -> Inertia:
-    """The inertia of the tangent at the current state (`saddle`: as inertia_of's)."""
+def tangent_inertia(jacobian: ufl.Form | fem.Form, bcs: list, saddle: int = 0, arrays=None) -> Inertia:
+    """The inertia of the tangent at the current state (`saddle`: as inertia_of's); `arrays`: (the model's array
+    terms, the state) whose Hessians join the forms' (a contact's barrier and friction)."""
     A = assemble_tangent(jacobian, bcs)
+    if arrays is not None and arrays[0]:
+        terms, u = arrays
+        ArrayTerms(terms, u.function_space, bcs, as_compiled(jacobian)).add_hessian(u.vector, A)
     try:
         return inertia_of(A, saddle)
     finally:

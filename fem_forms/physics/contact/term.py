@@ -16,10 +16,11 @@ from fem_forms.errors import InputError
 from fem_forms.meshes.boundary_surface import BoundarySurface, boundary_surface
 from fem_forms.physics.contact.barrier import barrier, barrier_first, barrier_second, pressure_at_half, psd_blocks
 from fem_forms.physics.contact.events import StepEvents
-from fem_forms.physics.contact.friction import LaggedFriction, tangent_basis
+from fem_forms.physics.contact.lagging import Lag, lag_friction, relag
 from fem_forms.physics.contact.mesh_obstacle import FileObstacle
 from fem_forms.physics.contact.obstacles import make_obstacle
 from fem_forms.physics.contact.pressure import add_pressure_field
+from fem_forms.physics.contact.report import obstacle_reports
 from fem_forms.physics.array_term import ArrayTerm
 from fem_forms.physics.contact.holding import held_motion, surface_points
 from fem_forms.physics.contact.hessian_blocks import add_node_blocks, add_triangle_hessian
@@ -52,10 +53,12 @@ class ContactTerm(ArrayTerm):
         self.intersection_free = True
         self.blocked = False                       # an obstacle file moved onto the part at the step's time
         self.time = self.start_time = 0.0
-        self.friction: list[LaggedFriction] = []
+        self.friction: list = []                   # per obstacle: its LaggedFriction, or None
         self._lagged_at = None                     # the state the friction was lagged from
         self.events = StepEvents()                 # impacts and stick-slip transitions of each time step
         self.only = None                           # the surface points [contact] where leaves to the obstacles
+        self.rest_offset = None                    # a designed rest shape's d (on_rest.py), else None
+        self.lag: Lag | None = None                # what the friction's slips are measured from (lagging.py)
         self.set_spec(spec)
 
     def set_spec(self, spec) -> None:
@@ -79,9 +82,11 @@ class ContactTerm(ArrayTerm):
             self._scale()
 
     def prepare(self, ctx: Context) -> None:
-        if not isinstance(ctx.u, fem.Function) or ctx.rest_map is not None or ctx.deformation is not None:
-            raise InputError("contact: available with formulation = 'displacement' in forward analyses only")
+        if not isinstance(ctx.u, fem.Function) or ctx.deformation is not None:
+            raise InputError("contact: available with formulation = 'displacement' in forward analyses and the "
+                             "adjoint inverse design only")
         self.surface = boundary_surface(ctx.u.function_space)
+        self.rest_offset, self.mesh_rest = ctx.rest_offset, self.surface.rest.copy()   # on_rest.follow_rest
         if self.spec.where is not None:
             self.only = surface_points(self.surface, ctx.u.function_space, ctx.loaded, self.spec.where)
             for ob in self.obstacles:
@@ -151,15 +156,18 @@ class ContactTerm(ArrayTerm):
             ob.move_to(t)
         # an obstacle file moved onto the part at t: no step from here is safe (the step is cut back)
         self.blocked = self.filec is not None and self.filec.intersects(p)
-        self.friction = []
-        for ob in self.obstacles:
-            d, g = ob.derivatives(p, order=1)
-            act = np.flatnonzero((d < self.dhat) & (d > 0))
-            lam = -self.kappa * self.surface.area[act] * barrier_first(d[act], self.dhat)
-            start_offset = ob.offset.copy()
+        starts = [ob.offset.copy() for ob in self.obstacles]
+        self.lag = Lag(p, eps, [np.zeros(3)] * len(self.obstacles))
+        self.friction = lag_friction(self, p, self.lag)          # with the obstacles where the step starts
+        for ob, start, fr in zip(self.obstacles, starts, self.friction):
             ob.move_to(t)
-            self.friction.append(LaggedFriction(act, lam, tangent_basis(g[act]), p[act], ob.friction, eps,
-                                                ob.offset - start_offset) if ob.friction > 0 and len(act) else None)
+            if fr is not None:
+                fr.obstacle_move = ob.offset - start
+        self.lag.moves = [ob.offset - start for ob, start in zip(self.obstacles, starts)]
+
+    def relag(self, x: PETSc.Vec, tolerance: float) -> float:
+        """The obstacles' friction re-lagged at x if its normal forces changed by more than `tolerance` (lagging.py)."""
+        return relag(self, x, tolerance)
 
     def _contacts(self, p: np.ndarray) -> tuple[list, list]:
         """At positions p: per obstacle, the surface points' distances to it; per IPC surface, how many pairs."""
@@ -190,7 +198,7 @@ class ContactTerm(ArrayTerm):
     def resume(self, t: float) -> None:
         """Continue from a restored state at time t (a dynamic --restart): the next step starts there, with the
         barrier's stiffness the checkpoint restored and the friction from no force at the start."""
-        self.time, self._lagged_at, self.friction = t, None, []
+        self.time, self._lagged_at, self.friction, self.lag = t, None, [], None
         for ob in self.obstacles + self.files:
             ob.move_to(t)
 
@@ -347,19 +355,10 @@ class ContactTerm(ArrayTerm):
         return None
 
     def report(self, x: PETSc.Vec) -> dict:
-        """results.json: contact {NAME: force (by the obstacle on the part, N), area (m^2 of the rest surface's
-        triangles whose nodes are all within dhat), max_pressure (Pa), active_points (nodes within dhat)}, min_distance (m), intersection_free, barrier numbers."""
+        """results.json: contact {NAME: the obstacle's numbers (report.py), self, files}, min_distance (m),
+        intersection_free, barrier numbers."""
         p = self.surface.positions(x)
-        out = {}
-        forces = [f.sum(axis=0) for _, f in self.nodal_forces(x)]
-        for ob, (act, d, g, *_), force in zip(self.obstacles, self._gaps(p), forces):
-            pressure = -self.kappa * barrier_first(d, self.dhat)
-            touching = np.zeros(self.surface.size, bool)
-            touching[act] = True
-            out[ob.name] = {"force": force.tolist(),
-                            "area": float(self.surface.face_areas()[touching[self.surface.faces].all(axis=1)].sum()),
-                            "max_pressure": float(pressure.max(initial=0.0)),
-                            "active_points": int(len(act))}
+        out = obstacle_reports(self, x)
         if self.filec is not None:
             out.update(self.filec.obstacle_reports(p))
         if self.selfc is not None:

@@ -7,6 +7,7 @@ from pathlib import Path
 from fem_forms.errors import InputError
 from fem_forms.scene.analyses import Analysis
 from fem_forms.scene.analyses.balance import INVERSE_BALANCE, check_carving
+from fem_forms.scene.analyses.contact_section import CONTACT
 from fem_forms.scene.reader import Key, Section, Table, Variants
 from fem_forms.scene.selectors import Selector
 
@@ -77,6 +78,26 @@ def _check(scene) -> None:
             raise InputError("balance: carving in an inverse scene is not implemented with formulation = "
                              "\"mixed\"; use \"displacement\"")
     check_carving(scene)
+    _check_contact(scene)
+
+
+def _check_contact(scene) -> None:
+    """[contact] in an inverse scene: a part standing on a table. The adjoint method only (the direct method's
+    deformed positions are the target, fixed: the barrier would push with whatever force the target's gaps give;
+    carving, [balance], takes the direct method: refused by its own rule), analytic obstacles that hold still."""
+    contact = getattr(scene, "contact", None)
+    if contact is None:
+        return
+    if scene.inverse.method != "adjoint":
+        raise InputError(f"inverse.method = {scene.inverse.method!r}: a part standing on obstacles ([contact]) is "
+                         "designed by the adjoint method (method = \"adjoint\"): the direct method solves on the "
+                         "target, where the contact forces are not determined")
+    if contact.self or any(ob.shape == "file" for ob in contact.obstacle):
+        raise InputError("contact: an inverse design stands on plane, sphere, box or cylinder obstacles (self-contact "
+                         "and obstacle files are not designed for yet)")
+    moving = next((i for i, ob in enumerate(contact.obstacle) if ob.motion), None)
+    if moving is not None:
+        raise InputError(f"contact.obstacle[{moving}].motion: the obstacles hold still in an inverse design")
 
 
 ANALYSIS = Analysis(
@@ -85,7 +106,8 @@ ANALYSIS = Analysis(
     runner="fem_forms.analyses.inverse:run",
     sections=(Section("inverse", "how to find the rest shape that deforms into the target", InverseSpec,
                       keys=COMMON_KEYS, variants=VARIANTS, rules=_rules),
-              INVERSE_BALANCE),          # [balance]: carve the interior too (designed on the target)
+              INVERSE_BALANCE,           # [balance]: carve the interior too (designed on the target)
+              CONTACT),                  # [contact]: standing on a table (adjoint method)
     outputs=("results.json", "rest_shape.msh", "rest_shape.stl", "fields.xdmf", "inverse.png",
              "void.stl (with [balance])"),
     formulations=("displacement", "mixed"),
