@@ -98,15 +98,17 @@ class AdjointDesign:
         self.last_failure = ""
 
     def _add_contact(self, fwd: ForwardOnRest) -> None:
-        """The contact's Hessian (barrier and friction) at the last equilibrium into K, and the friction's into
-        C = K - B: its slips are measured from the rest shape, so they depend on u alone. B takes nothing: the barrier
-        depends on X + u, but its Hessian (a flat obstacle's: along the normal, at the sole) acts only on the sole's
-        normal dofs, which the design holds (_pinned_dofs)."""
+        """The contact's Hessian (barrier and friction) at the last equilibrium into K; the barrier's into B (it
+        depends on X + u: on the held sole dofs it changes nothing, elsewhere, where a point outside the target's
+        sole comes within dhat, it does); the friction's into C = K - B (its slips are measured from the rest shape:
+        on u alone). C's held rows are then the identity's."""
         x, standing = fwd.u.vector, fwd.standing
         fwd.driver.arrays.add_hessian(x, self.K)
-        self.C.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
-        standing.add_friction_hessian(x, self.C, fwd.driver.arrays.constrained)
-        self.C.assemble()
+        for A, add in ((self.B, lambda A: standing.add_barrier_hessian(x, A)),
+                       (self.C, lambda A: standing.add_friction_hessian(x, A, fwd.driver.arrays.constrained))):
+            A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
+            add(A)
+            A.assemble()
         self.C.zeroRowsColumns(self.pinned, 1.0)
 
     def _solve_K(self, rhs: PETSc.Vec) -> PETSc.Vec:
@@ -146,14 +148,6 @@ class AdjointDesign:
             w, c = self._free
             Wm.axpy(-w.dot(m) / c, w)
         return Wm
-
-    def resting_offset(self, m: PETSc.Vec) -> float:
-        """The W-weighted mean of the mismatch m along the table's normal (m): how much higher than the target the
-        part rests (0 off a table)."""
-        if self._free is None:
-            return 0.0
-        w, c = self._free
-        return w.dot(m) / c
 
     def linearise(self) -> np.ndarray:
         """Gradient of J (owned dofs) at the last forward state; assembles and factorises K and B

@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import ufl
 
-
 from fem_forms.errors import InputError
 from fem_forms.meshes import LoadedMesh
 from fem_forms.physics.admissibility import SmallestValue

@@ -100,7 +100,8 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
 
 
 # a static step's lagged friction is re-lagged at its equilibrium until its normal forces change by less than
-# this share of their sum, at most RELAGS times (then the step is kept as a plain lag would have it)
+# this share of their sum, at most RELAGS times (then the step keeps its last re-lag, unsettled: measured 3-6 re-lags
+# a step on the soft column and the standing designs)
 RELAG_TOLERANCE, RELAGS = 1e-4, 8
 
 
@@ -108,7 +109,8 @@ def _settle_friction(drv: SNESDriver, rec: StepRecord) -> StepRecord:
     """A converged step whose friction was lagged at the step's start, re-lagged at its equilibrium (normal forces
     and tangent planes; slips still from the start) and solved again from there until the normal forces settle
     (IPC's lagging iterations): a block put down on a table in one load step otherwise slides on the near-zero
-    normal forces of its start (measured: a soft column landed 3.7 mm off where 20 steps put it). One record."""
+    normal forces of its start (measured: a soft column landed 3.7 mm off where 20 steps put it). One record, its
+    iterations summed; a re-solve that fails fails the step (its state is the failed solve's: the step is cut)."""
     if not (drv.p.relag and drv.arrays.relags):
         return rec
     for _ in range(RELAGS):

@@ -150,6 +150,11 @@ REFUSED = [
     ("target off the table", {"contact": {"obstacle": [{"shape": "plane", "point": [0, 0, -0.01],
                                                           "normal": [0, 0, 1], "friction": MU}]}},
      "the target touches no obstacle"),
+    ("frictionless table", {"contact": table(friction=0.0)}, "give the table friction"),
+    ("between two plates", {"contact": {"obstacle": [table()["obstacle"][0],
+                                                      {"shape": "plane", "point": [0, 0, SIZE + GAP],
+                                                       "normal": [0, 0, -1], "friction": MU}]}},
+     "touches obstacles on opposite sides"),
     ("slope", {"contact": {"obstacle": [{"shape": "plane", "point": [0, 0, -GAP], "normal": [0.01, 0, 1],
                                          "friction": MU}]}}, "flat with a normal along x, y or z"),
 ]

@@ -72,12 +72,12 @@ def run(scene: Scene, out: Path, echo: bool = False) -> dict:
         summary["design_gap_max"] = check.design_gap_max
         if check.solve is not None:
             summary["forward_check"] = check.solve.summary()
-        if getattr(scene, "contact", None) is not None:
-            standing, unusable = standing_report(scene, check)
-            summary.update(standing)
-            problems += unusable
             if has_strength(scene) and check.static.report.converged:    # the rest shape under its loads
                 summary["strength"] = Quantities(check.static.model).strength()
+        if getattr(scene, "contact", None) is not None:
+            standing, unusable = standing_report(scene, check, res.free_direction)
+            summary.update(standing)
+            problems += unusable
         if check.matched_mismatch_max is not None:
             summary["matched_mismatch_max"] = check.matched_mismatch_max
         summary["rest_mesh"] = str((out / "rest_shape.msh"))

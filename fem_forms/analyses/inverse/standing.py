@@ -20,10 +20,11 @@ def centre_of_mass(model) -> np.ndarray:
                      for i in range(3)]) / mass
 
 
-def standing_report(scene, check) -> tuple[dict, list]:
+def standing_report(scene, check, up: np.ndarray) -> tuple[dict, list]:
     """results.json's numbers of a design standing on obstacles (resting_offset_m, shape_mismatch_max, contact,
     stance, and `warnings`: points sliding at Coulomb's limit, as a compressed block's sole edges do) and the problems
-    that make it unusable (toppling)."""
+    that make it unusable (toppling, touching nothing). `up`: the table's normal (gravity's direction when the scene
+    has no gravity load)."""
     static = check.static
     out = {"resting_offset_m": check.resting_offset, "shape_mismatch_max": check.shape_mismatch_max}
     if static is None or not static.report.converged:
@@ -42,8 +43,13 @@ def standing_report(scene, check) -> tuple[dict, list]:
     problems = []
     p = term.surface.positions(x)
     touching = p[np.any([ob.distance(p) < term.dhat for ob in term.obstacles], axis=0)]
+    if not len(touching):
+        return out, problems + ["the checked part touches no obstacle: nothing holds it"]
     com = centre_of_mass(model)
-    polygon = SupportPolygon.from_points(touching, _gravity(scene))
+    if not np.all(np.isfinite(com)):
+        return out, problems + ["the part has no mass (rho = 0): its stance is not defined"]
+    gravity = next((ld.g for ld in scene.load if ld.type == "gravity"), None)
+    polygon = SupportPolygon.from_points(touching, np.asarray(gravity, float) if gravity is not None else -up)
     margin = polygon.margin(com)
     out["stance"] = {"centre_of_mass": com.tolist(), "support_corners": len(polygon.vertices),
                      "margin_m": margin, "toppling_angle_deg": polygon.toppling_angle_deg(com), "stands": margin > 0}
@@ -51,7 +57,3 @@ def standing_report(scene, check) -> tuple[dict, list]:
         problems.append(f"it topples: its centre of mass lies {-margin:.3g} m outside the contact patch")
     return out, problems
 
-
-def _gravity(scene) -> np.ndarray:
-    """The scene's gravity load's g, else -z."""
-    return np.asarray(next((ld.g for ld in scene.load if ld.type == "gravity"), [0.0, 0.0, -9.81]), dtype=float)

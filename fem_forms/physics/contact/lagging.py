@@ -27,7 +27,7 @@ class Lag:
 def lag_friction(term, p: np.ndarray, lag: Lag) -> list:
     """Per obstacle (None where frictionless or untouched) the LaggedFriction of the nodes within dhat at positions p,
     with the obstacles where they are now: normal forces and tangent planes at p, slips from lag's anchors. Records
-    the nodes' normal forces in lag.forces."""
+    the nodes' normal forces against frictional obstacles in lag.forces."""
     surface = term.surface
     lag.forces = np.zeros(surface.size)
     out = []
@@ -35,7 +35,8 @@ def lag_friction(term, p: np.ndarray, lag: Lag) -> list:
         d, g = ob.derivatives(p, order=1)
         act = np.flatnonzero((d < term.dhat) & (d > 0))
         lam = -term.kappa * surface.area[act] * barrier_first(d[act], term.dhat)
-        lag.forces[act] += lam
+        if ob.friction > 0:                         # what friction grips with: the re-lag's measure
+            lag.forces[act] += lam
         out.append(LaggedFriction(act, lam, tangent_basis(g[act]), lag.anchors[act], ob.friction, lag.eps, move)
                    if ob.friction > 0 and len(act) else None)
     return out

@@ -42,6 +42,9 @@ class StandingRest:
                              "on it")
         normals = np.concatenate([ob.derivatives(rest[m], order=1)[1] for ob, m in zip(term.obstacles, near)])
         normal = normals.mean(axis=0)
+        if np.linalg.norm(normal) < 0.5:
+            raise InputError("contact: the target touches obstacles on opposite sides (held between them): a part "
+                             "standing on a table is designed with the table below it")
         normal /= np.linalg.norm(normal)
         axis = int(np.argmax(np.abs(normal)))
         if np.abs(normals[:, axis]).min() < 1.0 - 1e-9:
@@ -64,6 +67,16 @@ class StandingRest:
         t = self.term
         t.lag = Lag(t.surface.rest.copy(), SLIP_RATE * t.diagonal, [np.zeros(3)] * len(t.obstacles))
         t.friction = lag_friction(t, t.surface.positions(t.state), t.lag)
+
+    def add_barrier_hessian(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
+        """The obstacles' barrier Hessian alone into A (all rows): the barrier depends on X + u, so the rest shape
+        moves it as u does."""
+        t = self.term
+        friction, t.friction = t.friction, []
+        try:
+            t.add_hessian(x, A, np.empty(0, PETSc.IntType))
+        finally:
+            t.friction = friction
 
     def add_friction_hessian(self, x: PETSc.Vec, A: PETSc.Mat, constrained: np.ndarray) -> None:
         """The anchored friction's Hessian alone into A, constrained rows and columns left out."""

@@ -95,6 +95,9 @@ def _check_contact(scene) -> None:
     if contact.self or any(ob.shape == "file" for ob in contact.obstacle):
         raise InputError("contact: an inverse design stands on plane, sphere, box or cylinder obstacles (self-contact "
                          "and obstacle files are not designed for yet)")
+    if not scene.fix and not any(ob.friction > 0 for ob in contact.obstacle):
+        raise InputError("contact.obstacle: a part standing on frictionless obstacles with no [[fix]] slides and turns "
+                         "freely along them (no equilibrium to design for); give the table friction")
     moving = next((i for i, ob in enumerate(contact.obstacle) if ob.motion), None)
     if moving is not None:
         raise InputError(f"contact.obstacle[{moving}].motion: the obstacles hold still in an inverse design")
