@@ -6,6 +6,7 @@ import json
 import math
 import re
 
+import meshio
 import numpy as np
 import pytest
 
@@ -26,6 +27,31 @@ def test_figure_on_table_demo(demo):
     assert pressure > weight / 36e-4                    # the column's side of the sole carries more than the mean
     assert (out / "run" / "deformed.png").stat().st_size > 0 and (out / "run" / "deformed.stl").stat().st_size > 0
     assert "contact_pressure" in (out / "run" / "fields.xdmf").read_text()
+
+
+def test_standing_figure_demo(demo):
+    """The figure designed to stand on the table (no glue) lands on its shape: heights and widths within the default
+    tolerance (1e-3 of its size) once raised by how high it rests, which is below the barrier's distance (0.2 mm);
+    the table carries the weight of the rest shape written to cast, rho g V with V summed with numpy over the
+    tetrahedra of rest_shape.msh, within 1e-6 and nothing sideways; no contact point slides; the centre of mass lies
+    over the foot (0 < x < 9 cm) inside the contact patch, and the rest shape differs from the target (it sags)."""
+    text, out = demo("standing_figure")
+    its, solves, offset = grab(rf"rest shape in ({NUMBER}) Gauss-Newton iterations \(({NUMBER}) forward solves\), "
+                               rf"largest rest offset ({NUMBER}) mm, usable True", text)
+    rests, shape, gap = grab(rf"rests ({NUMBER}) mm from the target's height, shape within ({NUMBER}) m, the design's "
+                             rf"prediction within ({NUMBER}) m", text)
+    size = math.sqrt(0.09 ** 2 + 0.04 ** 2 + 0.17 ** 2)            # the bounding box's diagonal (m)
+    assert shape < 1e-3 * size and gap < 1e-3 * size and abs(rests) < 0.2 and offset > 1.0
+    mesh = meshio.read(out / "run" / "rest_shape.msh")
+    p = mesh.points[mesh.cells_dict["tetra"]]
+    volume = np.abs(np.einsum("ij,ij->i", p[:, 1] - p[:, 0], np.cross(p[:, 2] - p[:, 0], p[:, 3] - p[:, 0]))).sum() / 6
+    fx, fy, fz, area = grab(rf"table force \(({NUMBER}), ({NUMBER}), ({NUMBER})\) N over ({NUMBER}) cm\^2", text)
+    assert fz == pytest.approx(1100.0 * 9.81 * volume, rel=1e-6) and max(abs(fx), abs(fy)) < 1e-6 * fz
+    use, sliding = grab(rf"friction use ({NUMBER}), sliding points ({NUMBER})", text)
+    assert use < 1.0 and sliding == 0 and area > 30.0
+    x, y, z, margin = grab(rf"centre of mass \(({NUMBER}), ({NUMBER}), ({NUMBER})\) m, ({NUMBER}) mm inside", text)
+    assert 0.0 < x < 0.09 and margin > 0 and "stands True" in text
+    assert (out / "run" / "rest_shape.stl").stat().st_size > 0 and (out / "run" / "inverse.png").stat().st_size > 0
 
 
 def test_finger_on_ball_demo(demo):
