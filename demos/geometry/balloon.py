@@ -1,0 +1,66 @@
+"""A segment of a rubber balloon animal: a thick-walled capsule (a tube with hemispherical ends) around one closed
+cavity, one eighth of it (x, y, z >= 0: the segment's middle at the origin, its axis along x). Gmsh geometry and
+tetrahedral mesh (metres). Named surfaces: "inner" (the cavity's wall), "outer", "x0", "y0", "z0" (the symmetry
+planes, where rollers hold it and x . n = 0 closes the cavity).
+
+    python demos/geometry/balloon.py [--h 0.003] [--out balloon.msh]
+"""
+import argparse
+from pathlib import Path
+
+import gmsh
+
+# the inflated segment, the design's target (m): outer radius 15 mm, wall 3 mm, a straight part 60 mm long
+OUTER, WALL, STRAIGHT = 0.015, 0.003, 0.060
+
+
+def capsule(occ, radius: float, half: float) -> list:
+    """A tube of `radius` from x = -half to half with hemispherical ends: its dim-tags."""
+    tube = occ.addCylinder(-half, 0, 0, 2 * half, 0, 0, radius)
+    whole, _ = occ.fuse([(3, tube)], [(3, occ.addSphere(-half, 0, 0, radius)), (3, occ.addSphere(half, 0, 0, radius))])
+    return whole
+
+
+def build(out: Path, h: float = 0.003) -> Path:
+    """Write the eighth segment's mesh (cell size h down to h/2) to `out`."""
+    gmsh.initialize()
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add("balloon")
+        occ = gmsh.model.occ
+        half = STRAIGHT / 2
+        shell, _ = occ.cut(capsule(occ, OUTER, half), capsule(occ, OUTER - WALL, half))
+        size = half + OUTER
+        eighth, _ = occ.intersect(shell, [(3, occ.addBox(0, 0, 0, size, size, size))])
+        occ.synchronize()
+        volume = eighth[0][1]
+        gmsh.model.addPhysicalGroup(3, [volume], 1)
+        names = {}
+        for _, s in gmsh.model.getBoundary([(3, volume)], oriented=False):
+            box = gmsh.model.getBoundingBox(2, s)
+            if box[3] < 1e-6:
+                names[s] = "x0"
+            elif box[4] < 1e-6:
+                names[s] = "y0"
+            elif box[5] < 1e-6:
+                names[s] = "z0"
+            else:                    # how far from the axis the wall reaches: inner or outer
+                names[s] = "outer" if max(box[4], box[5]) > OUTER - WALL / 2 else "inner"
+        for i, name in enumerate(sorted(set(names.values()))):
+            tag = gmsh.model.addPhysicalGroup(2, [s for s, n in names.items() if n == name], 10 + i)
+            gmsh.model.setPhysicalName(2, tag, name)
+        gmsh.option.setNumber("Mesh.CharacteristicLengthMax", h)
+        gmsh.option.setNumber("Mesh.CharacteristicLengthMin", 0.5 * h)
+        gmsh.model.mesh.generate(3)
+        gmsh.write(str(out))
+    finally:
+        gmsh.finalize()
+    return out
+
+
+if __name__ == "__main__":
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--h", type=float, default=0.003)
+    ap.add_argument("--out", default="balloon.msh")
+    a = ap.parse_args()
+    print(build(Path(a.out), a.h))
