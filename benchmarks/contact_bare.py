@@ -77,63 +77,69 @@ def surface(mesh, Q):
     return nodes, lumped, float(edges.mean())
 
 
-def main(path: str, duration: float = 1.2) -> dict:
-    comm = MPI.COMM_SELF
-    gmsh.initialize()                                  # (0.5.2's gmshio.read_from_msh returns an undefined name)
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.merge(path)
-        mesh = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=3)[0]
-    finally:
-        gmsh.finalize()
-    V = fem.VectorFunctionSpace(mesh, ("Lagrange", 1))
-    Q = fem.FunctionSpace(mesh, ("Lagrange", 1))
-    nodes, area, h = surface(mesh, Q)
-    X = Q.tabulate_dof_coordinates()
-    zdofs = 3 * nodes + 2
-    diag = float(np.linalg.norm(X.max(axis=0) - X.min(axis=0)))
-    dhat = 1e-3 * diag
-    kappa = E / (h * (-barrier_1(np.array([dhat / 2]), dhat)[0] / dhat))
-    u, un, vn = fem.Function(V), fem.Function(V), fem.Function(V)
-    w = np.zeros_like(X)
-    w[:, 0], w[:, 2] = SPIN * (X[:, 2] + R), -SPIN * X[:, 0]     # omega = (0, SPIN, 0) about (0, 0, -R)
-    vn.x.array[:] = w.ravel()
-    mu_l, lam_l = E / (2 * (1 + NU)), E * NU / ((1 + NU) * (1 - 2 * NU))
-    F = ufl.Identity(3) + ufl.grad(u)
-    J = ufl.det(F)
-    psi = mu_l / 2 * (ufl.tr(F.T * F) - 3) - mu_l * ufl.ln(J) + lam_l / 2 * ufl.ln(J) ** 2
-    inertia = u - un - DT * vn
-    g = fem.Constant(mesh, PETSc.ScalarType((0.0, 0.0, -G)))
-    energy = (RHO / (2 * DT ** 2) * ufl.dot(inertia, inertia) + psi - RHO * ufl.dot(g, u)) * ufl.dx(
-        metadata={"quadrature_degree": 2})
-    residual = ufl.derivative(energy, u, ufl.TestFunction(V))
-    energy_f, residual_f = fem.form(energy), fem.form(residual)
-    jacobian_f = fem.form(ufl.derivative(residual, u, ufl.TrialFunction(V)))
-    A = fpetsc.create_matrix(jacobian_f)
-    A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
-    b = fpetsc.create_vector(residual_f)
-    ksp = PETSc.KSP().create(comm)
-    ksp.setType("preonly")
-    ksp.getPC().setType("lu")
-    ksp.getPC().setFactorSolverType("mumps")
-    weight = RHO * G * comm.allreduce(fem.assemble_scalar(fem.form(fem.Constant(mesh, 1.0) * ufl.dx)))
-    d0 = X[nodes, 2] - FLOOR
-    kappa *= weight / np.sum(kappa * area * -barrier_1(d0, dhat))    # the start's push carries the weight
-    eps = 1e-3 * diag * DT
+class Hemisphere:
+    """The scene on the mesh file `path`: forms, matrix, LU and the contact's arrays, as a bare script holds them."""
 
-    def contact(x, lag):
+    def __init__(self, path: str):
+        comm = MPI.COMM_SELF
+        gmsh.initialize()                              # (0.5.2's gmshio.read_from_msh returns an undefined name)
+        try:
+            gmsh.option.setNumber("General.Terminal", 0)
+            gmsh.merge(path)
+            self.mesh = mesh = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=3)[0]
+        finally:
+            gmsh.finalize()
+        V = fem.VectorFunctionSpace(mesh, ("Lagrange", 1))
+        self.nodes, self.area, h = surface(mesh, fem.FunctionSpace(mesh, ("Lagrange", 1)))
+        self.X = X = fem.FunctionSpace(mesh, ("Lagrange", 1)).tabulate_dof_coordinates()
+        self.rows = (3 * self.nodes[:, None] + np.arange(3)).astype(PETSc.IntType)
+        diag = float(np.linalg.norm(X.max(axis=0) - X.min(axis=0)))
+        self.dhat, self.eps = 1e-3 * diag, 1e-3 * diag * DT
+        self.u, self.un, self.vn = fem.Function(V), fem.Function(V), fem.Function(V)
+        w = np.zeros_like(X)
+        w[:, 0], w[:, 2] = SPIN * (X[:, 2] + R), -SPIN * X[:, 0]     # omega = (0, SPIN, 0) about (0, 0, -R)
+        self.vn.x.array[:] = w.ravel()
+        self._forms(V)
+        self.A = fpetsc.create_matrix(self.jacobian)
+        self.A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
+        self.b = fpetsc.create_vector(self.residual)
+        self.ksp = PETSc.KSP().create(comm)
+        self.ksp.setType("preonly")
+        self.ksp.getPC().setType("lu")
+        self.ksp.getPC().setFactorSolverType("mumps")
+        self.weight = RHO * G * fem.assemble_scalar(fem.form(fem.Constant(mesh, 1.0) * ufl.dx))
+        kappa = E / (h * (-barrier_1(np.array([self.dhat / 2]), self.dhat)[0] / self.dhat))
+        push = np.sum(kappa * self.area * -barrier_1(X[self.nodes, 2] - FLOOR, self.dhat))
+        self.kappa = kappa * self.weight / push                      # the start's push carries the weight
+
+    def _forms(self, V) -> None:
+        """The incremental potential's UFL part (inertia, neo-Hookean, gravity), its residual and Hessian."""
+        u, un, vn = self.u, self.un, self.vn
+        mu_l, lam_l = E / (2 * (1 + NU)), E * NU / ((1 + NU) * (1 - 2 * NU))
+        F = ufl.Identity(3) + ufl.grad(u)
+        J = ufl.det(F)
+        psi = mu_l / 2 * (ufl.tr(F.T * F) - 3) - mu_l * ufl.ln(J) + lam_l / 2 * ufl.ln(J) ** 2
+        inertia = u - un - DT * vn
+        g = fem.Constant(self.mesh, PETSc.ScalarType((0.0, 0.0, -G)))
+        energy = (RHO / (2 * DT ** 2) * ufl.dot(inertia, inertia) + psi - RHO * ufl.dot(g, u)) * ufl.dx(
+            metadata={"quadrature_degree": 2})
+        residual = ufl.derivative(energy, u, ufl.TestFunction(V))
+        self.energy, self.residual = fem.form(energy), fem.form(residual)
+        self.jacobian = fem.form(ufl.derivative(residual, u, ufl.TrialFunction(V)))
+
+    def contact(self, x, lag):
         """(energy, gradient (n, 3), Hessian blocks (n, 3, 3)) of the barrier and the lagged friction at x."""
         lam, start = lag
-        p = X[nodes] + x.reshape(-1, 3)[nodes]
+        p = self.X[self.nodes] + x.reshape(-1, 3)[self.nodes]
         d = p[:, 2] - FLOOR
         if d.min() <= 0:
             return math.inf, None, None
-        grad, hess = np.zeros((len(nodes), 3)), np.zeros((len(nodes), 3, 3))
-        grad[:, 2] = kappa * area * barrier_1(d, dhat)
-        hess[:, 2, 2] = kappa * area * barrier_2(d, dhat)
+        ka, dhat, eps = self.kappa * self.area, self.dhat, self.eps
+        grad, hess = np.zeros((len(d), 3)), np.zeros((len(d), 3, 3))
+        grad[:, 2], hess[:, 2, 2] = ka * barrier_1(d, dhat), ka * barrier_2(d, dhat)
         s = p[:, :2] - start[:, :2]
         y = np.linalg.norm(s, axis=1)
-        e = kappa * np.sum(area * barrier(d, dhat)) + FRICTION * np.sum(lam * f0(y, eps))
+        e = np.sum(ka * barrier(d, dhat)) + FRICTION * np.sum(lam * f0(y, eps))
         a = np.where(y < eps, 2 / eps - y / eps ** 2, 1 / np.maximum(y, eps))
         bb = np.where(y < eps, 2 / eps - 2 * y / eps ** 2, 0.0)
         grad[:, :2] += (FRICTION * lam * a)[:, None] * s
@@ -144,66 +150,73 @@ def main(path: str, duration: float = 1.2) -> dict:
         hess[:, :2, :2] += (FRICTION * lam)[:, None, None] * inner
         return e, grad, hess
 
-    def total(x_arr, lag):
-        u.x.array[:] = x_arr
-        e_c = contact(x_arr, lag)[0]
-        return fem.assemble_scalar(energy_f) + e_c
+    def total(self, x, lag) -> float:
+        self.u.x.array[:] = x
+        return fem.assemble_scalar(self.energy) + self.contact(x, lag)[0]
 
-    rows = (3 * nodes[:, None] + np.arange(3)).astype(PETSc.IntType)
-    probes_cells = geometry.compute_colliding_cells(
+    def newton_direction(self, x, lag) -> tuple[float, np.ndarray | None]:
+        """(the residual's norm at x, the Newton direction), the residual left in self.b."""
+        self.u.x.array[:] = x
+        _, g_c, h_c = self.contact(x, lag)
+        with self.b.localForm() as loc:
+            loc.set(0.0)
+        fpetsc.assemble_vector(self.b, self.residual)
+        self.b.array[self.rows.ravel()] += g_c.ravel()
+        norm = self.b.norm()
+        self.A.zeroEntries()
+        fpetsc.assemble_matrix(self.A, self.jacobian)
+        self.A.assemble()
+        self.A.setValuesRCV(self.rows, self.rows, h_c.reshape(-1, 9), addv=PETSc.InsertMode.ADD_VALUES)
+        self.A.assemble()
+        self.ksp.setOperators(self.A)
+        dx = self.b.duplicate()
+        self.ksp.solve(self.b, dx)
+        return norm, -dx.array
+
+    def step(self, step: int) -> int:
+        """One backward-Euler step (friction lagged at its start); its Newton iterations."""
+        x_old = self.u.x.array.copy()
+        p_old = self.X[self.nodes] + x_old.reshape(-1, 3)[self.nodes]
+        lag = (self.kappa * self.area * -barrier_1(p_old[:, 2] - FLOOR, self.dhat), p_old)
+        self.un.x.array[:] = x_old
+        x = x_old + DT * self.vn.x.array                    # the constant-velocity guess, if it is admissible
+        if self.contact(x, lag)[0] == math.inf:
+            x = x_old.copy()
+        r0, zdofs = None, 3 * self.nodes + 2
+        for it in range(50):
+            norm, direction = self.newton_direction(x, lag)
+            r0 = norm if r0 is None else r0
+            if norm <= max(1e-9 * r0, 1e-10 * self.weight):
+                break
+            dz, d = direction[zdofs], self.X[self.nodes, 2] + x[zdofs] - FLOOR
+            falling = dz < 0
+            full = alpha = min(1.0, 0.9 * float(np.min(d[falling] / -dz[falling]))) if falling.any() else 1.0
+            e0, slope = self.total(x, lag), float(self.b.array @ direction)
+            while alpha > 1e-3 * full and self.total(x + alpha * direction, lag) > e0 + 1e-4 * alpha * slope:
+                alpha *= 0.5
+            if alpha <= 1e-3 * full:                       # the energy's round-off cannot judge the step: take it
+                alpha = full
+            x = x + alpha * direction
+            if DEBUG:
+                print(step, it, f"{norm:.3e}", alpha, file=sys.stderr)
+        self.u.x.array[:] = x
+        self.vn.x.array[:] = (x - x_old) / DT
+        return it
+
+
+def main(path: str, duration: float = 1.2) -> dict:
+    """The march; its steps, Newton iterations, wall time (the march alone) and the probes at every step."""
+    scene = Hemisphere(path)
+    mesh = scene.mesh
+    found = geometry.compute_colliding_cells(
         mesh, geometry.compute_collisions(geometry.BoundingBoxTree(mesh, 3), PROBES), PROBES)
-    cells = [probes_cells.links(i)[0] for i in range(len(PROBES))]
+    cells = np.array([found.links(i)[0] for i in range(len(PROBES))], dtype=np.int32)
     history, newton, t0 = [], 0, time.perf_counter()
     steps = int(round(duration / DT))
     for step in range(steps):
-        x_old = u.x.array.copy()
-        p_old = X[nodes] + x_old.reshape(-1, 3)[nodes]
-        lam = kappa * area * -barrier_1(p_old[:, 2] - FLOOR, dhat)
-        lag = (lam, p_old)
-        un.x.array[:] = x_old
-        x = x_old + DT * vn.x.array                               # the constant-velocity guess, if it is admissible
-        if contact(x, lag)[0] == math.inf:
-            x = x_old.copy()
-        r0 = None
-        for it in range(50):
-            u.x.array[:] = x
-            e_c, g_c, h_c = contact(x, lag)
-            with b.localForm() as loc:
-                loc.set(0.0)
-            fpetsc.assemble_vector(b, residual_f)
-            b.array[rows.ravel()] += g_c.ravel()
-            norm = b.norm()
-            r0 = norm if r0 is None else r0
-            if norm <= max(1e-9 * r0, 1e-10 * weight):
-                break
-            A.zeroEntries()
-            fpetsc.assemble_matrix(A, jacobian_f)
-            A.assemble()
-            A.setValuesRCV(rows, rows, h_c.reshape(-1, 9), addv=PETSc.InsertMode.ADD_VALUES)
-            A.assemble()
-            ksp.setOperators(A)
-            dx = b.duplicate()
-            ksp.solve(b, dx)
-            step_dir = -dx.array
-            dz = step_dir[zdofs]
-            d = X[nodes, 2] + x[zdofs] - FLOOR
-            falling = dz < 0
-            alpha = min(1.0, 0.9 * float(np.min(d[falling] / -dz[falling]))) if falling.any() else 1.0
-            full = alpha
-            e0, slope = total(x, lag), float(b.array @ step_dir)
-            while alpha > 1e-3 * full and total(x + alpha * step_dir, lag) > e0 + 1e-4 * alpha * slope:
-                alpha *= 0.5
-            if alpha <= 1e-3 * full:                      # the energy's round-off cannot judge the step: take it
-                alpha = full
-            x = x + alpha * step_dir
-            newton += 1
-            if DEBUG:
-                print(step, it, f"{norm:.3e}", alpha, file=sys.stderr)
-        u.x.array[:] = x
-        vn.x.array[:] = (x - x_old) / DT
-        history.append([(step + 1) * DT] + u.eval(PROBES, np.array(cells, dtype=np.int32)).ravel().tolist())
-    wall = time.perf_counter() - t0
-    return {"steps": steps, "newton_iterations": newton, "wall_time_s": wall, "history": history}
+        newton += scene.step(step)
+        history.append([(step + 1) * DT] + scene.u.eval(PROBES, cells).ravel().tolist())
+    return {"steps": steps, "newton_iterations": newton, "wall_time_s": time.perf_counter() - t0, "history": history}
 
 
 def compare() -> None:
