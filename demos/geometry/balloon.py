@@ -10,6 +10,8 @@ from pathlib import Path
 
 import gmsh
 
+from fem_forms.meshes.occ_parts import name_boundary, symmetry_plane
+
 # the inflated segment, the design's target (m): outer radius 15 mm, wall 3 mm, a straight part 60 mm long
 OUTER, WALL, STRAIGHT = 0.015, 0.003, 0.060
 
@@ -35,20 +37,8 @@ def build(out: Path, h: float = 0.003) -> Path:
         occ.synchronize()
         volume = eighth[0][1]
         gmsh.model.addPhysicalGroup(3, [volume], 1)
-        names = {}
-        for _, s in gmsh.model.getBoundary([(3, volume)], oriented=False):
-            box = gmsh.model.getBoundingBox(2, s)
-            if box[3] < 1e-6:
-                names[s] = "x0"
-            elif box[4] < 1e-6:
-                names[s] = "y0"
-            elif box[5] < 1e-6:
-                names[s] = "z0"
-            else:                    # how far from the axis the wall reaches: inner or outer
-                names[s] = "outer" if max(box[4], box[5]) > OUTER - WALL / 2 else "inner"
-        for i, name in enumerate(sorted(set(names.values()))):
-            tag = gmsh.model.addPhysicalGroup(2, [s for s, n in names.items() if n == name], 10 + i)
-            gmsh.model.setPhysicalName(2, tag, name)
+        name_boundary(gmsh, [volume], lambda box: symmetry_plane(box) or         # else how far from the axis
+                      ("outer" if max(box[4], box[5]) > OUTER - WALL / 2 else "inner"))   # the wall reaches
         gmsh.option.setNumber("Mesh.CharacteristicLengthMax", h)
         gmsh.option.setNumber("Mesh.CharacteristicLengthMin", 0.5 * h)
         gmsh.model.mesh.generate(3)

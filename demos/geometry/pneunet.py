@@ -18,6 +18,8 @@ from pathlib import Path
 
 import gmsh
 
+from fem_forms.meshes.occ_parts import name_boundary
+
 # body (m): 100 x 20 x 15 mm
 L, W, H = 0.100, 0.020, 0.015
 # chambers: 6 of 10 mm along x, 4 mm walls between them, 3 mm side and 2.5 mm top walls, a 6 mm base layer
@@ -80,18 +82,13 @@ def build(out: Path, h: float = 0.003, layer: float = 0.0, **walls: float) -> Pa
         for k, (name, tags) in enumerate((("body", upper), ("layer", lower))):
             if tags:
                 gmsh.model.setPhysicalName(3, gmsh.model.addPhysicalGroup(3, tags, 1 + k), name)
-        names = {}
-        for _, s in gmsh.model.getBoundary(body, oriented=False):      # of the union: no interface
-            x0, y0, z0, x1, y1, z1 = gmsh.model.getBoundingBox(2, s)
+        def name_of(box):
+            x0, y0, z0, x1, y1, z1 = box
             if x1 < eps:
-                names[s] = "clamp"
-            elif x0 > L - eps or y1 < eps or y0 > W - eps or z1 < eps or z0 > H - eps:
-                names[s] = "outer"
-            else:
-                names[s] = "cavity"
-        for i, name in enumerate(("cavity", "clamp", "outer")):
-            tag = gmsh.model.addPhysicalGroup(2, [s for s, n in names.items() if n == name], 10 + i)
-            gmsh.model.setPhysicalName(2, tag, name)
+                return "clamp"
+            outside = x0 > L - eps or y1 < eps or y0 > W - eps or z1 < eps or z0 > H - eps
+            return "outer" if outside else "cavity"
+        name_boundary(gmsh, [t for _, t in body], name_of)                # of the union: no interface
         gmsh.option.setNumber("Mesh.CharacteristicLengthMax", h)
         gmsh.option.setNumber("Mesh.CharacteristicLengthMin", 0.3 * h)
         gmsh.model.mesh.generate(3)

@@ -45,3 +45,19 @@ def fine_in_box(gmsh, bounds: dict, h_in: float, h_out: float) -> None:
     field.setAsBackgroundMesh(box)
     gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
     gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
+
+
+def symmetry_plane(box: tuple, tol: float = 1e-6) -> str | None:
+    """'x0', 'y0' or 'z0' for a surface whose gmsh bounding box (x0, y0, z0, x1, y1, z1) lies in that coordinate
+    plane (within tol: OpenCASCADE pads its boxes), else None."""
+    return next((name for name, top in zip(("x0", "y0", "z0"), box[3:]) if top < tol), None)
+
+
+def name_boundary(gmsh, volumes: list, name_of: Callable) -> None:
+    """Physical surface groups of the volumes' boundary, each surface named by name_of(its bounding box), numbered
+    from 10 in the names' sorted order."""
+    names = {s: name_of(gmsh.model.getBoundingBox(2, s))
+             for _, s in gmsh.model.getBoundary([(3, v) for v in volumes], oriented=False)}
+    for i, name in enumerate(sorted(set(names.values()))):
+        tag = gmsh.model.addPhysicalGroup(2, [s for s, n in names.items() if n == name], 10 + i)
+        gmsh.model.setPhysicalName(2, tag, name)

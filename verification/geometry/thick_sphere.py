@@ -15,6 +15,8 @@ import gmsh
 import meshio
 import numpy as np
 
+from fem_forms.meshes.occ_parts import name_boundary, symmetry_plane
+
 
 def build(out: Path, a: float = 1.0, b: float = 2.0, h: float = 0.25, pair: bool = False) -> Path:
     """Write the eighth shell's tetrahedral mesh (cell size h) to `out` (with `pair`, build_pair's)."""
@@ -30,20 +32,8 @@ def build(out: Path, a: float = 1.0, b: float = 2.0, h: float = 0.25, pair: bool
         occ.synchronize()
         volume = eighth[0][1]
         gmsh.model.addPhysicalGroup(3, [volume], 1)
-        names = {}
-        for _, s in gmsh.model.getBoundary([(3, volume)], oriented=False):
-            box = gmsh.model.getBoundingBox(2, s)
-            if box[3] < 1e-6:
-                names[s] = "x0"
-            elif box[4] < 1e-6:
-                names[s] = "y0"
-            elif box[5] < 1e-6:
-                names[s] = "z0"
-            else:
-                names[s] = "outer" if max(box[3:]) > 0.5 * (a + b) else "inner"
-        for i, name in enumerate(sorted(set(names.values()))):
-            tag = gmsh.model.addPhysicalGroup(2, [s for s, n in names.items() if n == name], 10 + i)
-            gmsh.model.setPhysicalName(2, tag, name)
+        name_boundary(gmsh, [volume], lambda box: symmetry_plane(box) or
+                      ("outer" if max(box[3:]) > 0.5 * (a + b) else "inner"))
         gmsh.option.setNumber("Mesh.CharacteristicLengthMax", h)
         gmsh.option.setNumber("Mesh.CharacteristicLengthMin", 0.5 * h)
         gmsh.model.mesh.generate(3)
