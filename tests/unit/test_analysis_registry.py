@@ -24,7 +24,7 @@ ALONG = {("balance", "contact"): {"balance": {"elastic": True}},
                                                           "normal": [0.0, 0.0, 1.0]}]}}}   # [sound.impact] names it
 # a section's table in one analysis where COMPLETE's is refused there (an inverse design stands on obstacles, not on
 # itself)
-IN_ANALYSIS = {("inverse", "contact"): {"self": False, "obstacle": [{"shape": "plane", "point": [0.0, 0.0, -1.0],
+IN_ANALYSIS = {("inverse", "contact"): {"self": False, "obstacle": [{"shape": "plane", "point": [0.0, 0.0, -1.0], "friction": 0.5,
                                                                       "normal": [0.0, 0.0, 1.0]}]}}
 REQUIRED = {"vector": [0.0, 0.0, 1.0], "number": 1.0, "integer": 1, "string": "a", "names": ["a", "b"], "tables": []}
 
