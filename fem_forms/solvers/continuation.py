@@ -100,8 +100,8 @@ def solve(problem: NonlinearProblem, options: dict | None = None, steps: int = 1
 
 
 # a static step's lagged friction is re-lagged at its equilibrium until its normal forces change by less than
-# this share of their sum, at most RELAGS times (then the step keeps its last re-lag, unsettled: measured 3-6 re-lags
-# a step on the soft column and the standing designs)
+# this share of their sum, at most RELAGS times (then the step keeps its last re-lag, unsettled, and the run says so:
+# measured 3-6 re-lags a step on the soft column and the standing designs)
 RELAG_TOLERANCE, RELAGS = 1e-4, 8
 
 
@@ -122,6 +122,8 @@ def _settle_friction(drv: SNESDriver, rec: StepRecord) -> StepRecord:
         more.krylov_iterations += rec.krylov_iterations
         more.preconditioner_builds += rec.preconditioner_builds
         rec = more
+    else:
+        rec.unsettled = rec.accepted          # kept, and said (results.json friction_unsettled, a warning)
     return rec
 
 

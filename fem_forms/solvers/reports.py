@@ -23,6 +23,7 @@ class StepRecord:
     krylov_iterations: int = 0
     preconditioner_builds: int = 0   # multigrid hierarchies built (kept across Newton steps when cheaper)
     checked_residual: float = math.nan   # the residual norm acceptance.why_rejected tested
+    unsettled: bool = False   # its lagged friction's normal forces still moved after the last re-lag (continuation)
 
 
 @dataclass
@@ -58,6 +59,11 @@ class SolveReport:
         self.newton_iterations += rec.iterations
         progress.report("step_accepted" if rec.accepted else "step_rejected", load=rec.load,
                         iterations=rec.iterations, why=why or "")
+
+    @property
+    def friction_unsettled(self) -> list:
+        """The load factors of accepted steps whose friction's normal forces had not settled after the last re-lag."""
+        return [s.load for s in self.steps if s.accepted and s.unsettled]
 
     @property
     def unstable_rejected(self) -> list:

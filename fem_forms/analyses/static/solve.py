@@ -73,7 +73,9 @@ class StaticResult:
             "quadrature_degree": self.model.scene.discretization.quadrature,
             "formulation": self.model.scene.discretization.formulation,
             "physics": self.model.physics,
-            "warnings": self.model.warnings,
+            **({"friction_unsettled": r.friction_unsettled} if r.friction_unsettled else {}),
+            "warnings": self.model.warnings + ([UNSETTLED.format(n=len(r.friction_unsettled))]
+                                               if r.friction_unsettled else []),
             "materials": self.model.materials_report(),
             "probes": {n: {"point": self.model.scene.output.probes[n], "displacement": v,
                            "material": inside.get(n), **self.probe_stresses.get(n, {})}
@@ -101,6 +103,10 @@ def max_norm(f: fem.Function) -> float:
 UNCHECKED_MIXED = ("volume control in the mixed formulation: states are accepted without the stability check (its "
                    "inertia test needs the displacement's own energy; the mixed energy is a saddle in (u, p)); "
                    "results.json stability_checked = false")
+
+
+UNSETTLED = ("friction: in {n} load steps the lagged normal forces still moved after the last re-lag (8 a step; "
+             "results.json friction_unsettled lists their load factors): smaller load steps (solver.max_step) settle")
 
 
 UNCOUNTED = ("volume control: states were accepted without the stability check (the tangent's inertia is counted by "
