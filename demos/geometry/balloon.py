@@ -8,9 +8,7 @@ planes, where rollers hold it and x . n = 0 closes the cavity).
 import argparse
 from pathlib import Path
 
-import gmsh
-
-from fem_forms.meshes.occ_parts import name_boundary, symmetry_plane
+from fem_forms.meshes.occ_parts import symmetry_plane, write_part
 
 # the inflated segment, the design's target (m): outer radius 15 mm, wall 3 mm, a straight part 60 mm long
 OUTER, WALL, STRAIGHT = 0.015, 0.003, 0.060
@@ -25,27 +23,14 @@ def capsule(occ, radius: float, half: float) -> list:
 
 def build(out: Path, h: float = 0.003) -> Path:
     """Write the eighth segment's mesh (cell size h down to h/2) to `out`."""
-    gmsh.initialize()
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.model.add("balloon")
-        occ = gmsh.model.occ
-        half = STRAIGHT / 2
+    half = STRAIGHT / 2
+
+    def eighth(occ):
         shell, _ = occ.cut(capsule(occ, OUTER, half), capsule(occ, OUTER - WALL, half))
         size = half + OUTER
-        eighth, _ = occ.intersect(shell, [(3, occ.addBox(0, 0, 0, size, size, size))])
-        occ.synchronize()
-        volume = eighth[0][1]
-        gmsh.model.addPhysicalGroup(3, [volume], 1)
-        name_boundary(gmsh, [volume], lambda box: symmetry_plane(box) or         # else how far from the axis
+        return occ.intersect(shell, [(3, occ.addBox(0, 0, 0, size, size, size))])[0]
+    return write_part(out, eighth, h, 0.5 * h, lambda box: symmetry_plane(box) or     # else how far from the axis
                       ("outer" if max(box[4], box[5]) > OUTER - WALL / 2 else "inner"))   # the wall reaches
-        gmsh.option.setNumber("Mesh.CharacteristicLengthMax", h)
-        gmsh.option.setNumber("Mesh.CharacteristicLengthMin", 0.5 * h)
-        gmsh.model.mesh.generate(3)
-        gmsh.write(str(out))
-    finally:
-        gmsh.finalize()
-    return out
 
 
 if __name__ == "__main__":

@@ -62,15 +62,23 @@ class ForwardOnRest:
         problem = self._problem
         problem.set_load = None
         self.load.set(1.0)
-        if self.standing is not None:
-            return self._solve_standing(fallback)
+        if self.standing is not None and (failed := self._start_standing(fallback)) is not None:
+            return self._keep(failed)
         rep = continuation.solve(problem, driver=self._driver)
         if not rep.converged and fallback:
             self.u.x.array[:] = 0.0
-            problem.set_load = self.load.set
+            self.u.x.scatter_forward()
+            problem.set_load = self._set_load
             rep = continuation.solve(problem, steps=max(self.scene.solver.steps, 4),
-                               max_cutbacks=self.scene.solver.max_cutbacks, driver=self._driver)
+                                     max_cutbacks=self.scene.solver.max_cutbacks, driver=self._driver)
+            problem.set_load = None
         return self._keep(rep)
+
+    def _set_load(self, lam: float) -> None:
+        """The load factor of the fallback's steps; standing on obstacles, each step's friction anchored at rest."""
+        self.load.set(lam)
+        if self.standing is not None:
+            self.standing.lag()
 
     @property
     def driver(self) -> snes.SNESDriver | None:
@@ -85,16 +93,15 @@ class ForwardOnRest:
             self.u.x.array[:] = self._u_ok
         return rep
 
-    def _solve_standing(self, fallback: bool) -> SolveReport:
-        """Equilibrium on the obstacles from the rest shape mesh + d, friction anchored there (the continuation
-        re-lags it at the equilibrium until its normal forces settle). A start that crosses an obstacle keeps the
-        last deformed shape instead (else, with `fallback`, starts from rest); a rest shape through an obstacle has
-        no equilibrium."""
-        problem, standing = self._problem, self.standing
+    def _start_standing(self, fallback: bool) -> SolveReport | None:
+        """Before a solve on the obstacles: the rest shape mesh + d (through an obstacle: no equilibrium, a failed
+        report), a start that crosses no obstacle (else the last deformed shape kept; else, with `fallback`, rest)
+        and friction anchored at the rest shape (the continuation re-lags it at the equilibrium until its normal
+        forces settle); None when the solve may go on."""
+        standing, x = self.standing, self.u.vector
         if (gap := standing.follow_rest()) <= 0.0:
             why = f"the rest shape crosses an obstacle (smallest distance {gap:.3g} m)"
-            return self._keep(SolveReport(False, 0.0, 0, float("nan"), message=why))
-        x = self.u.vector
+            return SolveReport(False, 0.0, 0, float("nan"), message=why)
         if standing.term.inadmissible(x) is not None:       # the last deformed shape, kept
             self.u.x.array[:] = self._u_ok - (self.d.x.array - self._d_ok)
             self.u.x.scatter_forward()
@@ -102,16 +109,4 @@ class ForwardOnRest:
             self.u.x.array[:] = 0.0
             self.u.x.scatter_forward()
         standing.lag()
-        rep = continuation.solve(problem, driver=self._driver)
-        if not rep.converged and fallback:
-            self.u.x.array[:] = 0.0
-            self.u.x.scatter_forward()
-
-            def set_load(lam: float) -> None:              # each load step anchored at rest
-                self.load.set(lam)
-                standing.lag()
-            problem.set_load = set_load
-            rep = continuation.solve(problem, steps=max(self.scene.solver.steps, 4),
-                                     max_cutbacks=self.scene.solver.max_cutbacks, driver=self._driver)
-            problem.set_load = None
-        return self._keep(rep)
+        return None

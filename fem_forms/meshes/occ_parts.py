@@ -6,9 +6,11 @@ from pathlib import Path
 from typing import Callable
 
 
-def mesh_part(path: Path | None, build: Callable, h: float) -> int:
+def mesh_part(path: Path | None, build: Callable, h: float, h_min: float | None = None,
+              name_of: Callable | None = None) -> int:
     """Mesh the volumes `build(gmsh.model.occ)` returns (gmsh dim-tags) with tetrahedra of size h down to
-    h/3 as one physical volume, write them to `path` (None: only count) and return the tetrahedra's number."""
+    h_min (default h/3) as one physical volume, their boundary's groups named by `name_of` (name_boundary), write
+    them to `path` (None: only count) and return the tetrahedra's number."""
     import gmsh                                      # 0.2-0.5 s to import: only when a part is built
     gmsh.initialize()
     try:
@@ -17,8 +19,10 @@ def mesh_part(path: Path | None, build: Callable, h: float) -> int:
         volumes = [t for d, t in build(gmsh.model.occ) if d == 3]
         gmsh.model.occ.synchronize()
         gmsh.model.addPhysicalGroup(3, volumes, 1)
+        if name_of is not None:
+            name_boundary(gmsh, volumes, name_of)
         gmsh.option.setNumber("Mesh.CharacteristicLengthMax", h)
-        gmsh.option.setNumber("Mesh.CharacteristicLengthMin", h / 3)
+        gmsh.option.setNumber("Mesh.CharacteristicLengthMin", h / 3 if h_min is None else h_min)
         gmsh.model.mesh.generate(3)
         if path is not None:
             gmsh.write(str(path))
@@ -27,9 +31,10 @@ def mesh_part(path: Path | None, build: Callable, h: float) -> int:
         gmsh.finalize()
 
 
-def write_part(path: Path, build: Callable, h: float) -> Path:
+def write_part(path: Path, build: Callable, h: float, h_min: float | None = None,
+               name_of: Callable | None = None) -> Path:
     """mesh_part written to `path`; the path (for a scene's mesh.file)."""
-    mesh_part(path, build, h)
+    mesh_part(path, build, h, h_min, name_of)
     return path
 
 

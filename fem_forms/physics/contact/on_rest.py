@@ -12,7 +12,6 @@ import numpy as np
 from petsc4py import PETSc
 
 from fem_forms.errors import InputError
-from fem_forms.physics.contact.hessian_blocks import add_node_blocks
 from fem_forms.physics.contact.lagging import Lag, lag_friction
 from fem_forms.physics.contact.term import SLIP_RATE
 
@@ -71,20 +70,8 @@ class StandingRest:
     def add_barrier_hessian(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
         """The obstacles' barrier Hessian alone into A (all rows): the barrier depends on X + u, so the rest shape
         moves it as u does."""
-        t = self.term
-        friction, t.friction = t.friction, []
-        try:
-            t.add_hessian(x, A, np.empty(0, PETSc.IntType))
-        finally:
-            t.friction = friction
+        self.term.add_hessian(x, A, np.empty(0, PETSc.IntType), friction=False)
 
     def add_friction_hessian(self, x: PETSc.Vec, A: PETSc.Mat, constrained: np.ndarray) -> None:
         """The anchored friction's Hessian alone into A, constrained rows and columns left out."""
-        t = self.term
-        p = t.surface.positions(x)
-        owned = np.zeros(t.surface.size, bool)
-        owned[t.surface.owned] = True
-        for fr in t.friction:
-            if fr is not None:
-                keep = owned[fr.nodes]
-                add_node_blocks(A, t.surface, fr.nodes[keep], fr.hessian(p)[keep], constrained)
+        self.term.add_hessian(x, A, constrained, barrier=False)

@@ -19,22 +19,18 @@ def obstacle_reports(term, x: PETSc.Vec) -> dict:
     p = surface.positions(x)
     out = {}
     friction = term.friction or [None] * len(term.obstacles)
-    for ob, (act, d, g, *_), fr in zip(term.obstacles, term._gaps(p), friction):
-        push = -(term.kappa * surface.area[act] * barrier_first(d, term.dhat))
-        pressure = push / surface.area[act] if len(act) else push
+    for ob, (act, d, *_), (_, nodal), fr in zip(term.obstacles, term._gaps(p), term.nodal_forces(x), friction):
+        pressure = -term.kappa * barrier_first(d, term.dhat)
         touching = np.zeros(surface.size, bool)
         touching[act] = True
-        normal_force = push[:, None] * g
-        force = normal_force.sum(axis=0)
-        entry = {"area": float(surface.face_areas()[touching[surface.faces].all(axis=1)].sum()),
+        entry = {"force": nodal.sum(axis=0).tolist(),
+                 "area": float(surface.face_areas()[touching[surface.faces].all(axis=1)].sum()),
                  "max_pressure": float(pressure.max(initial=0.0)), "active_points": int(len(act))}
         if fr is not None:
-            tangential = -fr.gradient(p)
-            force = force + tangential.sum(axis=0)
-            lam = np.maximum(fr.normal_force, 1e-300)
-            use = np.linalg.norm(tangential, axis=1) / (fr.mu * lam)
+            tangential = nodal[len(act):]                   # nodal_forces: the pushes, then the friction nodes'
+            use = np.linalg.norm(tangential, axis=1) / (fr.mu * np.maximum(fr.normal_force, 1e-300))
             slip = np.linalg.norm(fr.slip(p), axis=1)
             entry.update(friction_force=tangential.sum(axis=0).tolist(), friction_use=float(use.max(initial=0.0)),
                          sliding_points=int(np.sum(slip >= fr.eps)))
-        out[ob.name] = {"force": force.tolist(), **entry}
+        out[ob.name] = entry
     return out

@@ -165,9 +165,7 @@ class ContactTerm(ArrayTerm):
                 fr.obstacle_move = ob.offset - start
         self.lag.moves = [ob.offset - start for ob, start in zip(self.obstacles, starts)]
 
-    def relag(self, x: PETSc.Vec, tolerance: float) -> float:
-        """The obstacles' friction re-lagged at x if its normal forces changed by more than `tolerance` (lagging.py)."""
-        return relag(self, x, tolerance)
+    relag = relag          # (x, tolerance): the friction re-lagged at x where its normal forces moved (lagging.py)
 
     def _contacts(self, p: np.ndarray) -> tuple[list, list]:
         """At positions p: per obstacle, the surface points' distances to it; per IPC surface, how many pairs."""
@@ -252,21 +250,23 @@ class ContactTerm(ArrayTerm):
             for c in self.ipc:
                 rows[self.surface.owned_local] += c.gradient(p)[self.surface.owned]
 
-    def add_hessian(self, x: PETSc.Vec, A: PETSc.Mat, constrained: np.ndarray) -> None:
+    def add_hessian(self, x: PETSc.Vec, A: PETSc.Mat, constrained: np.ndarray, barrier: bool = True,
+                    friction: bool = True) -> None:
+        """The barriers' and the obstacles' friction's Hessian into A (a standing design's adjoint takes each alone)."""
         p = self.surface.positions(x)
         gaps = self._gaps(p)
         owned = np.zeros(self.surface.size, bool)
         owned[self.surface.owned] = True
-        for c in self.ipc:
+        for c in self.ipc if barrier else ():
             add_triangle_hessian(A, c.hessian(p), self.surface, owned, constrained)
         area = self.surface.area
         for (act, d, g, H, _), fr in zip(gaps, self.friction or [None] * len(gaps)):
-            if fr is not None:
+            if fr is not None and friction:
                 keep = owned[fr.nodes]
                 add_node_blocks(A, self.surface, fr.nodes[keep], fr.hessian(p)[keep], constrained)
             keep = owned[act]
             act, d, g, H = act[keep], d[keep], g[keep], H[keep]
-            if not len(act):
+            if not len(act) or not barrier:
                 continue
             w = self.kappa * area[act]
             blocks = (w * barrier_second(d, self.dhat))[:, None, None] * g[:, :, None] * g[:, None, :] \
