@@ -5,7 +5,8 @@ w = rho_bar^p (Bendsoe 1989's penalisation, p = 3 by default: intermediate densi
 volume) of the filtered density rho_f = M rho, M_ij = H_ij v_j / sum_k H_ik v_k, H_ij = max(0, r - |c_i - c_j|)
 between cell centres c and with cell volumes v (the density filter of Bruns & Tortorelli 2001: a smallest feature
 of about r, no checkerboards), projected to rho_bar by a smoothed Heaviside (sharper stage by stage). The mismatch
-is J = 1/2 sum_p |x_p + u(x_p) - t_p|^2 / L^2 (L the part's size); its gradient takes one adjoint solve
+is J = 1/2 sum_p |x_p + u(x_p) - t_p|^2 / L^2 (L the part's size), plus 1/2 (theta - theta_t)^2 for each target
+angle (a segment between two probes turned about an axis, radians); its gradient takes one adjoint solve
 K^T lambda = dJ/du at the equilibrium and dJ/dw = -d/dw [R(u, w) . lambda], chained through the SIMP law, the
 projection and the filter's transpose (and the density, where the two materials' differ and gravity acts).
 
@@ -27,6 +28,7 @@ import ufl
 from fem_forms.errors import SolveError
 from fem_forms.meshes import mesh_size
 from fem_forms.output.probes import nearest_nodes
+from fem_forms.physics.scalars import coupling_forms
 from fem_forms.solvers.linear import make_ksp
 
 
@@ -84,17 +86,33 @@ def density_filter(centres: np.ndarray, volumes: np.ndarray, radius: float) -> s
     return sparse.diags(1.0 / np.asarray(H.sum(axis=1)).ravel()) @ H
 
 
+@dataclass
+class TargetAngle:
+    """A segment's rotation about an axis as a target: the segment from probe `start` to probe `end` (indices into
+    the targets' points), the angle (radians) it should turn by about the unit vector `axis`."""
+    start: int
+    end: int
+    angle: float
+    axis: np.ndarray
+
+
 class TargetPoints:
-    """Probes snapped to their nearest displacement node (on the lowest rank owning one as near), and their
-    target positions: the mismatch, and its derivative with respect to the owned displacement dofs."""
+    """Probes snapped to their nearest displacement node (on the lowest rank owning one as near), their target
+    positions (only the `counted` coordinates count) and target angles (a segment between two probes turned about
+    an axis): the mismatch, and its derivative with respect to the owned displacement dofs."""
 
     def __init__(self, V: fem.FunctionSpace, points: np.ndarray, targets: np.ndarray, length: float,
-                 counted: np.ndarray | None = None):
+                 counted: np.ndarray | None = None, angles: tuple = ()):
         self.points, self.targets, self.length = np.atleast_2d(points), np.atleast_2d(targets), length
         self.counted = np.ones_like(self.points) if counted is None else np.asarray(counted, dtype=float)
+        self.angles = tuple(angles)
         comm = V.mesh.comm
         self.node, self.at = nearest_nodes(V, self.points)      # the snapped nodes (local index on their owner)
         self.comm = comm
+        for a in self.angles:
+            if np.linalg.norm(self._frame(a)[0]) < 1e-9 * length:
+                raise SolveError("layout design: a target angle's segment lies along its axis (its probes snapped "
+                                 "to the same line): no rotation about it to measure")
 
     def positions(self, u: fem.Function) -> np.ndarray:
         """x_p + u(x_p) of every probe, on every rank."""
@@ -108,16 +126,54 @@ class TargetPoints:
         """Position minus target of every probe, 0 in the coordinates that do not count."""
         return (self.positions(u) - self.targets) * self.counted
 
+    def _frame(self, a: TargetAngle) -> tuple[np.ndarray, np.ndarray]:
+        """(the rest segment's part across the axis, the axis cross it): the turned segment s has the angle
+        atan2(b . s, a . s) about the axis (right-handed)."""
+        s0 = self.at[a.end] - self.at[a.start]
+        across = s0 - (s0 @ a.axis) * a.axis
+        return across, np.cross(a.axis, across)
+
+    def turned(self, u: fem.Function) -> np.ndarray:
+        """Each target angle's segment's rotation about its axis (radians, in (-pi, pi])."""
+        x = self.positions(u)
+        out = []
+        for a in self.angles:
+            across, normal = self._frame(a)
+            s = x[a.end] - x[a.start]
+            out.append(np.arctan2(normal @ s, across @ s))
+        return np.array(out)
+
+    def angle_misses(self, u: fem.Function) -> np.ndarray:
+        """Turned minus target angle of each target angle (radians, wrapped into [-pi, pi))."""
+        target = np.array([a.angle for a in self.angles])
+        return np.mod(self.turned(u) - target + np.pi, 2 * np.pi) - np.pi
+
     def mismatch(self, u: fem.Function) -> float:
-        return 0.5 * float(np.sum(self.misses(u) ** 2)) / self.length ** 2
+        """J = 1/2 sum |miss|^2 / L^2 over the positions + 1/2 sum (angle miss)^2 (radians)."""
+        return 0.5 * float(np.sum(self.misses(u) ** 2)) / self.length ** 2 + \
+            0.5 * float(np.sum(self.angle_misses(u) ** 2))
+
+    def allowed(self, reach: float, reach_angle: float) -> float:
+        """J when every position target is missed by `reach` (m) and every angle by `reach_angle` (radians)."""
+        positions = int(np.count_nonzero(self.counted.any(axis=1)))
+        return 0.5 * (positions * reach ** 2 / self.length ** 2 + len(self.angles) * reach_angle ** 2)
 
     def gradient(self, u: fem.Function, out: PETSc.Vec) -> None:
         """dJ/du into `out` (owned entries)."""
         out.set(0.0)
-        miss = self.misses(u) / self.length ** 2
+        slope = self.misses(u) / self.length ** 2
+        if self.angles:
+            x, misses = self.positions(u), self.angle_misses(u)
+            for a, miss in zip(self.angles, misses):
+                across, normal = self._frame(a)
+                s = x[a.end] - x[a.start]
+                c, n = across @ s, normal @ s
+                d_angle = (c * normal - n * across) / (c * c + n * n)       # d atan2(n, c) / ds
+                slope[a.end] += miss * d_angle
+                slope[a.start] -= miss * d_angle
         for i, k in enumerate(self.node):
             if k >= 0:
-                out.array[3 * k:3 * k + 3] += miss[i]
+                out.array[3 * k:3 * k + 3] += slope[i]
 
 
 @dataclass
@@ -152,6 +208,7 @@ class LayoutGradient:
             self.dwork_dm = None if dm.empty() else fem.form(dm)
         self.K = fpetsc.create_matrix(model.compiled("jacobian"))
         self.ksp = make_ksp(None, "lu", "fem_forms_layout_", comm=model.mesh.comm)
+        self.border = Border(model) if model.global_scalars() else None
         self.evaluations = 0
 
     def projected(self, rho_f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -198,13 +255,20 @@ class LayoutGradient:
         self.ksp.setOperators(self.K)
         rhs = self.K.createVecLeft()
         self.targets.gradient(model.u, rhs)
-        fpetsc.set_bc(rhs, model.bcs, scale=0.0)
-        lam = self.K.createVecRight()
-        self.ksp.solveTranspose(rhs, lam)
-        if self.ksp.getConvergedReason() < 0:
-            raise SolveError(f"layout design: the adjoint solve failed ({self.ksp.getConvergedReason()})")
+        lam = self._solve_transposed(rhs)
+        if self.border is not None:
+            lam = self.border.adjoint(lam, self._solve_transposed)
         self.adjoint.x.array[:len(lam.array)] = lam.array
         self.adjoint.x.scatter_forward()
+
+    def _solve_transposed(self, rhs: PETSc.Vec) -> PETSc.Vec:
+        """K^T x = rhs with x = 0 on supported dofs (rhs zeroed there first)."""
+        fpetsc.set_bc(rhs, self.model.bcs, scale=0.0)
+        x = self.K.createVecRight()
+        self.ksp.solveTranspose(rhs, x)
+        if self.ksp.getConvergedReason() < 0:
+            raise SolveError(f"layout design: the adjoint solve failed ({self.ksp.getConvergedReason()})")
+        return x
 
     def _cellwise(self, form: fem.Form) -> np.ndarray:
         """-d/d(field) of R . lambda per cell (design order)."""
@@ -219,6 +283,43 @@ class LayoutGradient:
         if self.dwork_dm is not None:
             dJ = dJ + self._cellwise(self.dwork_dm) * (self.density.placed - self.density.body)
         return self.filter.T @ (dJ * slope)
+
+
+class Border:
+    """The adjoint of the bordered equilibrium (a volume-controlled cavity: its pressure p an unknown beside u,
+    R(u, p) = 0 and c(u, p) = 0). With the Jacobian [K R_p; c_u c_p], the adjoint [lambda; mu] solves
+    K^T lambda + sum_i c_u_i mu_i = dJ/du and R_p_j . lambda + sum_i c_p_ij mu_i = 0 (J and c do not depend on
+    the layout's fields, so dJ/dw is -d/dw (R . lambda) as before): lambda = a - sum_i b_i mu_i from
+    a = K^-T dJ/du, b_i = K^-T c_u_i, and the m x m system for mu."""
+
+    def __init__(self, model):
+        forms = coupling_forms(model.global_scalars(), model.residual, model.u)
+        self.R_p = [fem.form(f) for f in forms["R_p"]]
+        self.c_u = [fem.form(f) for f in forms["c_u"]]
+        self.c_p = [[fem.form(f) if isinstance(f, ufl.Form) else f for f in row] for row in forms["c_p"]]
+        self.comm = model.mesh.comm
+
+    def _number(self, c) -> float:
+        """c_p_ij's value: 0 (None), a number, or a form's integral over all ranks."""
+        return 0.0 if c is None else float(c) if isinstance(c, (int, float)) else \
+            self.comm.allreduce(fem.assemble_scalar(c), op=MPI.SUM)
+
+    @staticmethod
+    def _vector(form: fem.Form) -> PETSc.Vec:
+        vec = fpetsc.assemble_vector(form)
+        vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        return vec
+
+    def adjoint(self, a: PETSc.Vec, solve_transposed) -> PETSc.Vec:
+        """lambda from a = K^-T dJ/du, solving K^T b_i = c_u_i with `solve_transposed`."""
+        b = [solve_transposed(self._vector(f)) for f in self.c_u]
+        R_p = [self._vector(f) for f in self.R_p]
+        M = np.array([[R_p[j].dot(b[i]) - self._number(self.c_p[i][j]) for i in range(len(b))]
+                      for j in range(len(R_p))])
+        mu = np.linalg.solve(M, np.array([v.dot(a) for v in R_p]))
+        for b_i, mu_i in zip(b, mu):
+            a.axpy(-mu_i, b_i)
+        return a
 
 
 def part_length(model) -> float:
@@ -254,10 +355,11 @@ BOUND_TOLERANCE = 1e-3                  # a placed fraction this far over its bo
 
 
 def optimize_layout(gradient: LayoutGradient, max_fraction: float, iterations: int = 100, reach: float = 1e-4,
-                    on_iteration=None) -> LayoutResult:
+                    on_iteration=None, reach_angle: float = np.radians(0.5)) -> LayoutResult:
     """Of the layouts within the placed fraction's bound that bring every target within about `reach` (m, in its
-    counted coordinates), the one with the least placed material: scipy's L-BFGS-B on f = J / J_reach + fraction +
-    kappa max(0, fraction - max_fraction)^2 over 0 <= rho <= 1 (J_reach = n_targets reach^2 / (2 L^2): the mismatch
+    counted coordinates; each target angle within `reach_angle`, radians), the one with the least placed material:
+    scipy's L-BFGS-B on f = J / J_reach + fraction +
+    kappa max(0, fraction - max_fraction)^2 over 0 <= rho <= 1 (J_reach = TargetPoints.allowed: the mismatch
     counts once the targets are farther than `reach`, the material always), in stages of sharper projection
     (STAGES), each from the last one's layout, kappa x100 after a stage that ended over the bound. At most
     `iterations` layouts. Less material is the tie-breaker among the many layouts that reach a few targets; with
@@ -265,7 +367,7 @@ def optimize_layout(gradient: LayoutGradient, max_fraction: float, iterations: i
     stiffness). Every rank takes rank 0's value and gradient: the same steps everywhere."""
     from scipy.optimize import minimize
     cells, comm = gradient.cells, gradient.cells.comm
-    allowed = len(gradient.targets.points) * reach ** 2 / (2 * gradient.targets.length ** 2)
+    allowed = gradient.targets.allowed(reach, reach_angle)
     rho = np.full(cells.size, max_fraction)
     history, converged, count, kappa, last = [], False, 0, 1e3, {}
 

@@ -17,8 +17,8 @@ def cavity_rules(loads: list, analysis: str, control: str) -> list[str]:
             raise InputError(f"load[{i}].name: {ld.name!r} already names load[{seen[ld.name]}]")
         seen[ld.name] = i
         names.append(ld.name)
-        if ld.volume is not None and analysis not in ("static", "inverse"):
-            raise InputError(f"load[{i}].volume: volume control is for analysis = 'static' or 'inverse' (this "
+        if ld.volume is not None and analysis not in ("static", "inverse", "design"):
+            raise InputError(f"load[{i}].volume: volume control is for analysis = 'static', 'inverse' or 'design' (this "
                              f"scene's is {analysis!r}); give the cavity's pressure instead")
         if ld.volume is not None and control == "arc-length":
             raise InputError(f"load[{i}].volume: solver.control = 'arc-length' steps the load factor; a volume-"

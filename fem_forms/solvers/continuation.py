@@ -150,13 +150,14 @@ def next_increment(lam: float, dlam: float, hold: bool, max_step: float) -> floa
 
 
 def _finish(report: SolveReport, drv: SNESDriver, assembly0: float, t0: float, own_driver: bool) -> SolveReport:
-    """Timings into the report; a driver built for this solve is destroyed."""
+    """Timings into the report; a driver built for this solve is destroyed (its options leave PETSc's database,
+    which holds 512: a design's hundreds of solves would fill it)."""
     report.assembly_time = drv.assembly_time - assembly0
     report.solve_time = time.perf_counter() - t0 - report.assembly_time
     stability = acceptance.stability_check(drv)
     report.stability_checked = None if stability is None else stability.counted
     if own_driver:
-        drv.snes.destroy()
+        drv.destroy()
     progress.report("solve_done", converged=report.converged)
     return report
 

@@ -60,7 +60,8 @@ def sample(k: Key, tmp: Path):
 
 
 CROSS_KEY_NEEDS = {"material": {"E": 1e6, "nu": 0.3},       # what the rules after the declarations ask
-                   "contact": {"self": True}}                 # something to touch
+                   "contact": {"self": True},                 # something to touch
+                   "design": {"target": [{"probe": "p", "position": [0.0, 0.0, 0.0]}]}}   # a position or an angle
 CASE_NEEDS = {("load", "inflation"): {"pressure": 1e3},       # one of pressure or volume (neither is required alone)
               ("load", "pressure"): {"pressure": 1e3}}        # pressure, or value (its first spelling)
 

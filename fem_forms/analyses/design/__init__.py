@@ -15,8 +15,8 @@ import numpy as np
 
 from fem_forms import progress
 from fem_forms.analyses.static.solve import solve_static
-from fem_forms.design.layout import (CellVector, LayoutGradient, LayoutMaterial, PlacedDensity, TargetPoints,
-                                     optimize_layout, part_length)
+from fem_forms.design.layout import (CellVector, LayoutGradient, LayoutMaterial, PlacedDensity, TargetAngle,
+                                     TargetPoints, optimize_layout, part_length)
 from fem_forms.errors import InputError, SolveError
 from fem_forms.materials.constants import bind_constants
 from fem_forms.meshes import load_mesh
@@ -72,15 +72,39 @@ def build_design(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> LayoutGradien
                          weight)
     model = build_model(scene, mix, comm=comm, loaded=loaded)
     cells = CellVector(weight.function_space)
-    probes = scene.output.probes
-    points = np.array([probes[t["probe"]] for t in d.target], dtype=float)
-    counted = np.array([[float(i in t["axes"]) for i in range(3)] for t in d.target])
-    targets = TargetPoints(model.V, points, np.array([t["position"] for t in d.target], dtype=float),
-                           part_length(model), counted)
+    targets = TargetPoints(model.V, *_target_rows(scene), part_length(model), *_counted_and_angles(scene))
     radius = d.filter_radius or 2.0 * float(np.mean(cells.volumes)) ** (1.0 / 3.0)
     return LayoutGradient(model, weight, cells, targets, radius, d.penalty, solve=warm_solver(scene),
                           domain=_domain(model, cells, names.index(d.materials[1])),
                           density=PlacedDensity(model.parameters.density, body.rho, placed.rho))
+
+
+def _positions(d) -> list:
+    """[design]'s target tables that place a probe (the others turn a segment: `angle`)."""
+    return [t for t in d.target if t.get("position") is not None]
+
+
+def _angles(d) -> list:
+    return [t for t in d.target if t.get("angle") is not None]
+
+
+def _target_rows(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
+    """The targets' probe points and positions: one row per position target, then two per angle target (its
+    segment's ends, `from` then `probe`, at their own rest points: not counted)."""
+    probes = scene.output.probes
+    rows = [(probes[t["probe"]], t["position"]) for t in _positions(scene.design)] + \
+        [(probes[n], probes[n]) for t in _angles(scene.design) for n in (t["from"], t["probe"])]
+    return np.array([r[0] for r in rows], dtype=float), np.array([r[1] for r in rows], dtype=float)
+
+
+def _counted_and_angles(scene: Scene) -> tuple[np.ndarray, tuple]:
+    """The position rows' counted coordinates (none on an angle's rows) and the TargetAngles on those rows."""
+    placed, angles = _positions(scene.design), _angles(scene.design)
+    counted = np.array([[float(i in t["axes"]) for i in range(3)] for t in placed] +
+                       [[0.0] * 3] * (2 * len(angles))).reshape(-1, 3)
+    return counted, tuple(TargetAngle(len(placed) + 2 * k, len(placed) + 2 * k + 1, float(np.radians(t["angle"])),
+                                      np.asarray(t["about"], dtype=float) / np.linalg.norm(t["about"]))
+                          for k, t in enumerate(angles))
 
 
 def run(scene: Scene, out, echo: bool = False) -> dict:
@@ -101,7 +125,8 @@ def run(scene: Scene, out, echo: bool = False) -> dict:
             print(f"  layout {k}: mismatch J = {J:.4e}, placed fraction {fraction:.3f}, projection beta "
                   f"{design.beta:g}", file=sys.stderr, flush=True)
 
-    result = optimize_layout(design, d.stiff_fraction, d.iterations, d.reach, on_iteration=said)
+    result = optimize_layout(design, d.stiff_fraction, d.iterations, d.reach, on_iteration=said,
+                             reach_angle=np.radians(d.reach_angle))
     cast = result.rho_bar >= CAST_AT
     design.set_layout(cast.astype(float))
     report = design.solve(design.model)
@@ -125,6 +150,8 @@ def run(scene: Scene, out, echo: bool = False) -> dict:
         for name, t in s["targets"].items():
             print(f"  {name}: reached {np.round(t['reached'], 6).tolist()} m, {t['distance_m'] * 1e3:.3g} mm from "
                   f"the target")
+        for name, t in s["angles"].items():
+            print(f"  {name}: turned {t['reached_deg']:.2f} deg (target {t['target_deg']:g} deg)")
         if not s["within_bound"]:
             print(f"fem-forms: warning: the targets need more {d.materials[1]} than design.stiff_fraction = "
                   f"{d.stiff_fraction} allows: the layout at the bound misses them by the distances above",
@@ -137,6 +164,8 @@ def _design_summary(design: LayoutGradient, result, cast: np.ndarray, d) -> dict
     volumes, domain = design.cells.volumes, design.domain > 0
     reached = design.targets.positions(design.model.u)
     misses = design.targets.misses(design.model.u)          # in the counted coordinates
+    turned, angle_misses = design.targets.turned(design.model.u), design.targets.angle_misses(design.model.u)
+    placed, angles = _positions(d), _angles(d)
     domain_volume = float(volumes @ domain)
     fraction_cast = float(volumes @ cast) / domain_volume
     gray = (result.rho_bar > 0.1) & (result.rho_bar < 0.9) & domain
@@ -153,7 +182,11 @@ def _design_summary(design: LayoutGradient, result, cast: np.ndarray, d) -> dict
             "targets": {t["probe"]: {"target": t["position"], "axes": ["xyz"[a] for a in t["axes"]],
                                      "node": design.targets.at[i].tolist(), "reached": reached[i].tolist(),
                                      "distance_m": float(np.linalg.norm(misses[i]))}
-                        for i, t in enumerate(d.target)},
+                        for i, t in enumerate(placed)},
+            "angles": {f"{t['from']}->{t['probe']}": {"target_deg": t["angle"], "about": list(t["about"]),
+                                                      "reached_deg": float(np.degrees(turned[k])),
+                                                      "miss_deg": float(np.degrees(angle_misses[k]))}
+                       for k, t in enumerate(angles)},
             "evaluations": design.evaluations}
 
 

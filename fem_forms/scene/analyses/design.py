@@ -9,9 +9,14 @@ from fem_forms.scene.reader import Key, Section, Table
 
 TARGET_KEYS = (
     Key("probe", "string", "name of an [output.probes] point", required=True),
-    Key("position", "vector", "where that point should be in the loaded part", unit="m", required=True, length=3),
+    Key("position", "vector", "where that point should be in the loaded part (or give `angle`)", unit="m",
+        length=3),
     Key("axes", "axes", "the position's coordinates that count (the others are free: a tip's height, say)",
         default=["x", "y", "z"]),
+    Key("angle", "number", "instead of a position: how far the segment from probe `from` to `probe` should turn "
+        "about `about` in the loaded part (right-handed, within -180..180)", unit="deg", minimum=-180, maximum=180),
+    Key("from", "string", "the segment's other end (an [output.probes] point), with `angle`"),
+    Key("about", "vector", "the axis the angle turns about, with `angle`", length=3),
 )
 DESIGN_KEYS = (
     Key("materials", "names", "the two [[material]] names: the body's (everywhere the design puts nothing else) "
@@ -28,6 +33,8 @@ DESIGN_KEYS = (
     Key("reach", "number", "how near its target the layout must bring each probe (in the target's counted "
         "coordinates, root mean square over the targets): the design is the least placed material that does",
         unit="m", default=1e-4, exclusive_minimum=0),
+    Key("reach_angle", "number", "how near its target each target angle must come (root mean square)", unit="deg",
+        default=0.5, exclusive_minimum=0),
     Key("target", "tables", "[[design.target]]: a probe and where it should be in the loaded part", required=True,
         keys=TARGET_KEYS),
 )
@@ -39,6 +46,22 @@ DesignSpec = spec_class("DesignSpec", "[design]: which material goes where so th
 def _rules(s, t: Table) -> None:
     if not s.target:
         raise InputError(f"{t.key('target')}: give at least one [[design.target]] (a probe and its position)")
+    for i, target in enumerate(s.target):
+        where = f"{t.key('target')}[{i}]"
+        given = {k for k, v in target.items() if v is not None}
+        if ("position" in given) == ("angle" in given):
+            raise InputError(f"{where}: give either `position` (where the probe should be) or `angle` (how far the "
+                             "segment from `from` to the probe should turn), not both or neither")
+        if "angle" in given:
+            if "from" not in given or "about" not in given:
+                raise InputError(f"{where}: an `angle` target needs `from` (the segment's other probe) and `about` "
+                                 "(the axis it turns about)")
+            if target["from"] == target["probe"]:
+                raise InputError(f"{where}.from = {target['from']!r}: the segment's two ends are the same probe")
+            if sum(c * c for c in target["about"]) == 0:
+                raise InputError(f"{where}.about: the zero vector is no axis")
+        elif "from" in given or "about" in given:
+            raise InputError(f"{where}: `from` and `about` belong to an `angle` target")
 
 
 def _check(scene) -> None:
@@ -66,9 +89,10 @@ def _check(scene) -> None:
         raise InputError("mesh.cell = 'prism': a design writes its layout for tetrahedra and hexahedra only")
     probes = scene.output.probes
     for i, target in enumerate(d.target):
-        if target["probe"] not in probes:
-            raise InputError(f"design.target[{i}].probe = {target['probe']!r}: no such point in [output.probes] "
-                             f"(it has: {', '.join(map(repr, probes)) or 'none'})")
+        for key in ("probe", "from"):
+            if target.get(key) is not None and target[key] not in probes:
+                raise InputError(f"design.target[{i}].{key} = {target[key]!r}: no such point in [output.probes] "
+                                 f"(it has: {', '.join(map(repr, probes)) or 'none'})")
     if scene.thermal is not None:
         raise InputError("thermal: not implemented in a design")
 
