@@ -184,14 +184,20 @@ class PlacedDensity:
     placed: float
 
 
+NEAR_HALVINGS = 3      # a layout the near solve misses is approached in steps of 1/2, 1/4, 1/8 of the way
+
+
 class LayoutGradient:
-    """J(rho) and dJ/drho for one model whose material is a LayoutMaterial: `solve(model)` runs its equilibrium.
+    """J(rho) and dJ/drho for one model whose material is a LayoutMaterial: `solve(model)` runs its equilibrium
+    along the load path, `near(model)` (optional) from a nearby layout's equilibrium in one step.
     `domain` (a boolean per cell, design order): where the placed material may go (elsewhere w = 0)."""
 
     def __init__(self, model, weight: fem.Function, cells: CellVector, targets: TargetPoints, radius: float,
-                 penalty: float, solve, domain: np.ndarray | None = None, density: PlacedDensity | None = None):
+                 penalty: float, solve, domain: np.ndarray | None = None, density: PlacedDensity | None = None,
+                 near=None):
         self.model, self.weight, self.cells, self.targets = model, weight, cells, targets
-        self.penalty, self.solve, self.density = penalty, solve, density
+        self.penalty, self.solve, self.near, self.density = penalty, solve, near, density
+        self._last = None                                 # the last layout solved (rho_bar)
         self.domain = np.ones(cells.size) if domain is None else np.asarray(domain, dtype=float)
         self.beta = 0.0                                   # the projection's sharpness (the optimizer raises it)
         self.radius = radius
@@ -239,12 +245,52 @@ class LayoutGradient:
 
     def value(self, rho: np.ndarray) -> float:
         """J at rho (the equilibrium solved from the last state)."""
-        self.set_layout(self.layout(rho))
-        report = self.solve(self.model)
+        report = self.equilibrium(self.layout(rho))
         self.evaluations += 1
         if not report.converged:
             raise SolveError(f"layout design: no equilibrium for this layout ({report.message})")
         return self.targets.mismatch(self.model.u)
+
+    def equilibrium(self, rho_bar: np.ndarray):
+        """The model's equilibrium with layout rho_bar: `solve(model)` (from the state it has) where there is no
+        `near` solver or no layout solved yet; else `near(model)` from the last layout's equilibrium, and where
+        that fails through layouts between the two (halving the way, NEAR_HALVINGS times at most), and only then
+        `solve` from rest. A trial layout of the optimizer may lie far from the last one."""
+        if self.near is None or self._last is None:
+            return self._solved(rho_bar, self.solve)
+        start, t, step = self._last, 0.0, 1.0
+        while step >= 0.5 ** NEAR_HALVINGS:           # each success moves >= 1/8 of the way, each failure halves
+            saved = self._state()
+            report = self._solved(start + min(t + step, 1.0) * (rho_bar - start), self.near, keep_last=False)
+            if report.converged:
+                t = min(t + step, 1.0)
+                if t == 1.0:
+                    self._last = rho_bar
+                    return report
+            else:
+                self._restore(saved)
+                step *= 0.5
+        return self._from_rest(rho_bar)
+
+    def _solved(self, rho_bar: np.ndarray, solve, keep_last: bool = True):
+        self.set_layout(rho_bar)
+        report = solve(self.model)
+        if report.converged and keep_last:
+            self._last = rho_bar
+        return report
+
+    def _from_rest(self, rho_bar: np.ndarray):
+        """The scene's load path from rest (the displacement and the global scalars at 0)."""
+        self._restore((np.zeros_like(self.model.unknown.x.array), [0.0] * len(self.model.global_scalars())))
+        return self._solved(rho_bar, self.solve)
+
+    def _state(self) -> tuple:
+        return self.model.unknown.x.array.copy(), [float(s.value.value) for s in self.model.global_scalars()]
+
+    def _restore(self, state: tuple) -> None:
+        self.model.unknown.x.array[:] = state[0]
+        for scalar, value in zip(self.model.global_scalars(), state[1]):
+            scalar.value.value = value
 
     def _adjoint(self) -> None:
         """K^T lambda = dJ/du at the current equilibrium (lambda = 0 on supported dofs)."""

@@ -40,22 +40,11 @@ def _domain(model, cells: CellVector, placed_index: int) -> np.ndarray:
     return cells.gather(regions.index[:cells.n_owned] == placed_index) > 0.5
 
 
-def warm_solver(scene: Scene):
-    """The design's equilibrium solve: the first layout along the scene's load steps, each next one from the last
-    layout's equilibrium in one step to full load (a nearby layout's state is a good start), along the load
-    steps again from rest where that fails."""
-    warm = dataclasses.replace(scene, solver=dataclasses.replace(scene.solver, steps=1))
-    started = []
-
-    def solve(model):
-        if started:
-            report = solve_static(warm, model=model, answers=False).report
-            if report.converged:
-                return report
-            model.unknown.x.array[:] = 0.0
-        started.append(True)
-        return solve_static(scene, model=model, answers=False).report
-    return solve
+def near_solver(scene: Scene):
+    """The design's solve from a nearby layout's equilibrium: one step to full load, no cut-backs (a smaller load
+    factor is farther from that state, not nearer); LayoutGradient.equilibrium approaches a far layout in steps."""
+    near = dataclasses.replace(scene, solver=dataclasses.replace(scene.solver, steps=1, max_cutbacks=0))
+    return lambda model: solve_static(near, model=model, answers=False).report
 
 
 def build_design(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> LayoutGradient:
@@ -74,7 +63,8 @@ def build_design(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> LayoutGradien
     cells = CellVector(weight.function_space)
     targets = TargetPoints(model.V, *_target_rows(scene), part_length(model), *_counted_and_angles(scene))
     radius = d.filter_radius or 2.0 * float(np.mean(cells.volumes)) ** (1.0 / 3.0)
-    return LayoutGradient(model, weight, cells, targets, radius, d.penalty, solve=warm_solver(scene),
+    return LayoutGradient(model, weight, cells, targets, radius, d.penalty, near=near_solver(scene),
+                          solve=lambda model: solve_static(scene, model=model, answers=False).report,
                           domain=_domain(model, cells, names.index(d.materials[1])),
                           density=PlacedDensity(model.parameters.density, body.rho, placed.rho))
 
@@ -128,8 +118,7 @@ def run(scene: Scene, out, echo: bool = False) -> dict:
     result = optimize_layout(design, d.stiff_fraction, d.iterations, d.reach, on_iteration=said,
                              reach_angle=np.radians(d.reach_angle))
     cast = result.rho_bar >= CAST_AT
-    design.set_layout(cast.astype(float))
-    report = design.solve(design.model)
+    report = design.equilibrium(cast.astype(float))
     if not report.converged:
         raise SolveError(f"design: the cast layout has no equilibrium under the loads ({report.message})")
     files = write_layout_files(out, design.model.mesh, design.cells.order, cast, tuple(d.materials),
