@@ -9,7 +9,7 @@ down towards its base. With `layer` > 0 the lowest `layer` metres of the base ar
 "cavity" (every chamber and channel wall), "clamp" (x = 0), "outer" (the rest of the outside), volumes
 "body" and (with a layer) "layer".
 
-    python demos/geometry/pneunet.py [--h 0.003] [--out pneunet.msh]
+    python demos/geometry/pneunet.py [--h 0.003] [--layer 0.002] [--half] [--out pneunet.msh]
 """
 import argparse
 import csv
@@ -59,10 +59,11 @@ def chamber_boxes(occ, side: float = SIDE, top: float = TOP, base: float = BASE)
     return boxes
 
 
-def build(out: Path, h: float = 0.003, layer: float = 0.0, **walls: float) -> Path:
+def build(out: Path, h: float = 0.003, layer: float = 0.0, half: bool = False, **walls: float) -> Path:
     """Write the actuator's tetrahedral mesh (cell size about h, metres) to `out`; `layer`: the thickness of
-    a bottom layer meshed as a volume group of its own (0: none); `walls`: side, top, base thicknesses other
-    than the defaults."""
+    a bottom layer meshed as a volume group of its own (0: none); `half`: only the half y <= 0 of the actuator
+    moved to -W/2 <= y <= 0, its cut face "symmetry" in the plane y = 0 (through the origin: it closes the cavity's
+    half); `walls`: side, top, base thicknesses other than the defaults."""
     gmsh.initialize()
     try:
         gmsh.option.setNumber("General.Terminal", 0)
@@ -72,8 +73,12 @@ def build(out: Path, h: float = 0.003, layer: float = 0.0, **walls: float) -> Pa
         cavity, _ = occ.fuse(boxes[:1], boxes[1:])          # one cavity: chambers joined by the channel
         body, _ = occ.cut([(3, occ.addBox(0, 0, 0, L, W, H))], cavity)
         assert len(body) == 1, f"expected one solid, got {body}"
+        y0, width = (-0.5 * W, 0.5 * W) if half else (0.0, W)
+        if half:
+            body, _ = occ.intersect(body, [(3, occ.addBox(0, 0, 0, L, width, H))])
+            occ.translate(body, 0, y0, 0)
         if layer > 0:                                # split off the bottom layer, bonded (one conforming mesh)
-            parts, _ = occ.fragment(body, [(3, occ.addBox(0, 0, 0, L, W, layer))])
+            parts, _ = occ.fragment(body, [(3, occ.addBox(0, y0, 0, L, width, layer))])
             body = [p for p in parts if p[0] == 3]
         occ.synchronize()
         eps = 1e-5                                   # OCC pads bounding boxes by about 1e-7
@@ -83,10 +88,12 @@ def build(out: Path, h: float = 0.003, layer: float = 0.0, **walls: float) -> Pa
             if tags:
                 gmsh.model.setPhysicalName(3, gmsh.model.addPhysicalGroup(3, tags, 1 + k), name)
         def name_of(box):
-            x0, y0, z0, x1, y1, z1 = box
-            if x1 < eps:
+            xa, ya, za, xb, yb, zb = box
+            if xb < eps:
                 return "clamp"
-            outside = x0 > L - eps or y1 < eps or y0 > W - eps or z1 < eps or z0 > H - eps
+            if half and ya > -eps:
+                return "symmetry"
+            outside = xa > L - eps or yb < y0 + eps or ya > y0 + W - eps or zb < eps or za > H - eps
             return "outer" if outside else "cavity"
         name_boundary(gmsh, [t for _, t in body], name_of)                # of the union: no interface
         gmsh.option.setNumber("Mesh.CharacteristicLengthMax", h)
@@ -102,6 +109,7 @@ if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--h", type=float, default=0.003)
     ap.add_argument("--layer", type=float, default=0.0)
+    ap.add_argument("--half", action="store_true", help="the half y <= 0, its cut face 'symmetry' at y = 0")
     ap.add_argument("--out", type=Path, default=Path("pneunet.msh"))
     args = ap.parse_args()
-    print(build(args.out, args.h, args.layer))
+    print(build(args.out, args.h, args.layer, args.half))

@@ -18,7 +18,6 @@ from dataclasses import dataclass
 
 from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
-from mpi4py import MPI
 import numpy as np
 from petsc4py import PETSc
 from scipy import sparse
@@ -26,9 +25,8 @@ from scipy.spatial import cKDTree
 import ufl
 
 from fem_forms.errors import SolveError
-from fem_forms.meshes import mesh_size
-from fem_forms.output.probes import nearest_nodes
-from fem_forms.physics.scalars import coupling_forms
+from fem_forms.design.bordered_adjoint import Border
+from fem_forms.design.layout_targets import TargetPoints
 from fem_forms.solvers.linear import make_ksp
 
 
@@ -84,96 +82,6 @@ def density_filter(centres: np.ndarray, volumes: np.ndarray, radius: float) -> s
     H.setdiag(radius)                        # each cell's own weight r, whether or not scipy kept distance 0
     H = H @ sparse.diags(volumes)
     return sparse.diags(1.0 / np.asarray(H.sum(axis=1)).ravel()) @ H
-
-
-@dataclass
-class TargetAngle:
-    """A segment's rotation about an axis as a target: the segment from probe `start` to probe `end` (indices into
-    the targets' points), the angle (radians) it should turn by about the unit vector `axis`."""
-    start: int
-    end: int
-    angle: float
-    axis: np.ndarray
-
-
-class TargetPoints:
-    """Probes snapped to their nearest displacement node (on the lowest rank owning one as near), their target
-    positions (only the `counted` coordinates count) and target angles (a segment between two probes turned about
-    an axis): the mismatch, and its derivative with respect to the owned displacement dofs."""
-
-    def __init__(self, V: fem.FunctionSpace, points: np.ndarray, targets: np.ndarray, length: float,
-                 counted: np.ndarray | None = None, angles: tuple = ()):
-        self.points, self.targets, self.length = np.atleast_2d(points), np.atleast_2d(targets), length
-        self.counted = np.ones_like(self.points) if counted is None else np.asarray(counted, dtype=float)
-        self.angles = tuple(angles)
-        comm = V.mesh.comm
-        self.node, self.at = nearest_nodes(V, self.points)      # the snapped nodes (local index on their owner)
-        self.comm = comm
-        for a in self.angles:
-            if np.linalg.norm(self._frame(a)[0]) < 1e-9 * length:
-                raise SolveError("layout design: a target angle's segment lies along its axis (its probes snapped "
-                                 "to the same line): no rotation about it to measure")
-
-    def positions(self, u: fem.Function) -> np.ndarray:
-        """x_p + u(x_p) of every probe, on every rank."""
-        local = np.zeros_like(self.points)
-        for i, k in enumerate(self.node):
-            if k >= 0:
-                local[i] = u.x.array[3 * k:3 * k + 3]
-        return self.at + self.comm.allreduce(local, op=MPI.SUM)
-
-    def misses(self, u: fem.Function) -> np.ndarray:
-        """Position minus target of every probe, 0 in the coordinates that do not count."""
-        return (self.positions(u) - self.targets) * self.counted
-
-    def _frame(self, a: TargetAngle) -> tuple[np.ndarray, np.ndarray]:
-        """(the rest segment's part across the axis, the axis cross it): the turned segment s has the angle
-        atan2(b . s, a . s) about the axis (right-handed)."""
-        s0 = self.at[a.end] - self.at[a.start]
-        across = s0 - (s0 @ a.axis) * a.axis
-        return across, np.cross(a.axis, across)
-
-    def turned(self, u: fem.Function) -> np.ndarray:
-        """Each target angle's segment's rotation about its axis (radians, in (-pi, pi])."""
-        x = self.positions(u)
-        out = []
-        for a in self.angles:
-            across, normal = self._frame(a)
-            s = x[a.end] - x[a.start]
-            out.append(np.arctan2(normal @ s, across @ s))
-        return np.array(out)
-
-    def angle_misses(self, u: fem.Function) -> np.ndarray:
-        """Turned minus target angle of each target angle (radians, wrapped into [-pi, pi))."""
-        target = np.array([a.angle for a in self.angles])
-        return np.mod(self.turned(u) - target + np.pi, 2 * np.pi) - np.pi
-
-    def mismatch(self, u: fem.Function) -> float:
-        """J = 1/2 sum |miss|^2 / L^2 over the positions + 1/2 sum (angle miss)^2 (radians)."""
-        return 0.5 * float(np.sum(self.misses(u) ** 2)) / self.length ** 2 + \
-            0.5 * float(np.sum(self.angle_misses(u) ** 2))
-
-    def allowed(self, reach: float, reach_angle: float) -> float:
-        """J when every position target is missed by `reach` (m) and every angle by `reach_angle` (radians)."""
-        positions = int(np.count_nonzero(self.counted.any(axis=1)))
-        return 0.5 * (positions * reach ** 2 / self.length ** 2 + len(self.angles) * reach_angle ** 2)
-
-    def gradient(self, u: fem.Function, out: PETSc.Vec) -> None:
-        """dJ/du into `out` (owned entries)."""
-        out.set(0.0)
-        slope = self.misses(u) / self.length ** 2
-        if self.angles:
-            x, misses = self.positions(u), self.angle_misses(u)
-            for a, miss in zip(self.angles, misses):
-                across, normal = self._frame(a)
-                s = x[a.end] - x[a.start]
-                c, n = across @ s, normal @ s
-                d_angle = (c * normal - n * across) / (c * c + n * n)       # d atan2(n, c) / ds
-                slope[a.end] += miss * d_angle
-                slope[a.start] -= miss * d_angle
-        for i, k in enumerate(self.node):
-            if k >= 0:
-                out.array[3 * k:3 * k + 3] += slope[i]
 
 
 @dataclass
@@ -245,7 +153,11 @@ class LayoutGradient:
 
     def value(self, rho: np.ndarray) -> float:
         """J at rho (the equilibrium solved from the last state)."""
-        report = self.equilibrium(self.layout(rho))
+        return self.value_of_layout(self.layout(rho))
+
+    def value_of_layout(self, rho_bar: np.ndarray) -> float:
+        """J of the layout rho_bar (projected densities) at its equilibrium."""
+        report = self.equilibrium(rho_bar)
         self.evaluations += 1
         if not report.converged:
             raise SolveError(f"layout design: no equilibrium for this layout ({report.message})")
@@ -270,7 +182,7 @@ class LayoutGradient:
             else:
                 self._restore(saved)
                 step *= 0.5
-        return self._from_rest(rho_bar)
+        return self.from_rest(rho_bar)
 
     def _solved(self, rho_bar: np.ndarray, solve, keep_last: bool = True):
         self.set_layout(rho_bar)
@@ -279,7 +191,7 @@ class LayoutGradient:
             self._last = rho_bar
         return report
 
-    def _from_rest(self, rho_bar: np.ndarray):
+    def from_rest(self, rho_bar: np.ndarray):
         """The scene's load path from rest (the displacement and the global scalars at 0)."""
         self._restore((np.zeros_like(self.model.unknown.x.array), [0.0] * len(self.model.global_scalars())))
         return self._solved(rho_bar, self.solve)
@@ -329,124 +241,3 @@ class LayoutGradient:
         if self.dwork_dm is not None:
             dJ = dJ + self._cellwise(self.dwork_dm) * (self.density.placed - self.density.body)
         return self.filter.T @ (dJ * slope)
-
-
-class Border:
-    """The adjoint of the bordered equilibrium (a volume-controlled cavity: its pressure p an unknown beside u,
-    R(u, p) = 0 and c(u, p) = 0). With the Jacobian [K R_p; c_u c_p], the adjoint [lambda; mu] solves
-    K^T lambda + sum_i c_u_i mu_i = dJ/du and R_p_j . lambda + sum_i c_p_ij mu_i = 0 (J and c do not depend on
-    the layout's fields, so dJ/dw is -d/dw (R . lambda) as before): lambda = a - sum_i b_i mu_i from
-    a = K^-T dJ/du, b_i = K^-T c_u_i, and the m x m system for mu."""
-
-    def __init__(self, model):
-        forms = coupling_forms(model.global_scalars(), model.residual, model.u)
-        self.R_p = [fem.form(f) for f in forms["R_p"]]
-        self.c_u = [fem.form(f) for f in forms["c_u"]]
-        self.c_p = [[fem.form(f) if isinstance(f, ufl.Form) else f for f in row] for row in forms["c_p"]]
-        self.comm = model.mesh.comm
-
-    def _number(self, c) -> float:
-        """c_p_ij's value: 0 (None), a number, or a form's integral over all ranks."""
-        return 0.0 if c is None else float(c) if isinstance(c, (int, float)) else \
-            self.comm.allreduce(fem.assemble_scalar(c), op=MPI.SUM)
-
-    @staticmethod
-    def _vector(form: fem.Form) -> PETSc.Vec:
-        vec = fpetsc.assemble_vector(form)
-        vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        return vec
-
-    def adjoint(self, a: PETSc.Vec, solve_transposed) -> PETSc.Vec:
-        """lambda from a = K^-T dJ/du, solving K^T b_i = c_u_i with `solve_transposed`."""
-        b = [solve_transposed(self._vector(f)) for f in self.c_u]
-        R_p = [self._vector(f) for f in self.R_p]
-        M = np.array([[R_p[j].dot(b[i]) - self._number(self.c_p[i][j]) for i in range(len(b))]
-                      for j in range(len(R_p))])
-        mu = np.linalg.solve(M, np.array([v.dot(a) for v in R_p]))
-        for b_i, mu_i in zip(b, mu):
-            a.axpy(-mu_i, b_i)
-        return a
-
-
-def part_length(model) -> float:
-    """The part's size for the mismatch's scale: its bounding box's diagonal (all ranks)."""
-    x = model.mesh.geometry.x
-    comm = model.mesh.comm
-    lo = np.min(comm.allgather(x.min(axis=0) if len(x) else np.full(3, np.inf)), axis=0)
-    hi = np.max(comm.allgather(x.max(axis=0) if len(x) else np.full(3, -np.inf)), axis=0)
-    return float(np.linalg.norm(hi - lo)) or mesh_size(model.mesh)
-
-
-
-
-
-@dataclass
-class LayoutResult:
-    """The optimised layout: densities (raw and projected, in the design's cell order), J per layout tried."""
-    rho: np.ndarray
-    rho_bar: np.ndarray
-    history: list
-    objective: float
-    stiff_fraction: float
-    iterations: int
-    converged: bool
-
-
-class _Spent(Exception):
-    """The optimizer asked for more layouts than it may try."""
-
-
-STAGES = (1.0, 2.0, 4.0, 8.0, 16.0)     # the projection's sharpness beta, stage by stage
-BOUND_TOLERANCE = 1e-3                  # a placed fraction this far over its bound counts as over
-
-
-def optimize_layout(gradient: LayoutGradient, max_fraction: float, iterations: int = 100, reach: float = 1e-4,
-                    on_iteration=None, reach_angle: float = np.radians(0.5)) -> LayoutResult:
-    """Of the layouts within the placed fraction's bound that bring every target within about `reach` (m, in its
-    counted coordinates; each target angle within `reach_angle`, radians), the one with the least placed material:
-    scipy's L-BFGS-B on f = J / J_reach + fraction +
-    kappa max(0, fraction - max_fraction)^2 over 0 <= rho <= 1 (J_reach = TargetPoints.allowed: the mismatch
-    counts once the targets are farther than `reach`, the material always), in stages of sharper projection
-    (STAGES), each from the last one's layout, kappa x100 after a stage that ended over the bound. At most
-    `iterations` layouts. Less material is the tie-breaker among the many layouts that reach a few targets; with
-    SIMP and the projection that layout is black and white (an intermediate density pays volume for little
-    stiffness). Every rank takes rank 0's value and gradient: the same steps everywhere."""
-    from scipy.optimize import minimize
-    cells, comm = gradient.cells, gradient.cells.comm
-    allowed = gradient.targets.allowed(reach, reach_angle)
-    rho = np.full(cells.size, max_fraction)
-    history, converged, count, kappa, last = [], False, 0, 1e3, {}
-
-    def f(x):
-        nonlocal count
-        if count >= iterations:
-            raise _Spent
-        x = comm.bcast(np.asarray(x, dtype=float))
-        J = gradient.value(x)
-        fraction, d_fraction = gradient.fraction(x)
-        over = max(fraction - max_fraction, 0.0)
-        history.append(J)
-        if on_iteration is not None:
-            on_iteration(count, J, fraction)
-        count += 1
-        last["x"] = x
-        value = J / allowed + fraction + kappa * over ** 2
-        grad = gradient.gradient(x) / allowed + (1 + 2 * kappa * over) * d_fraction
-        return comm.bcast((value, grad))
-
-    stages = STAGES[-min(len(STAGES), iterations):]
-    for i, beta in enumerate(stages):
-        gradient.beta = beta
-        budget = max(1, (iterations - count) // (len(stages) - i))
-        try:
-            out = minimize(f, rho, jac=True, method="L-BFGS-B", bounds=[(0.0, 1.0)] * cells.size,
-                           options={"maxfun": budget, "maxiter": budget})
-            rho, done = comm.bcast(np.clip(out.x, 0.0, 1.0)), bool(out.success)
-        except _Spent:
-            rho, done = last.get("x", rho), False
-        over = gradient.fraction(rho)[0] - max_fraction > BOUND_TOLERANCE
-        converged = done and i == len(stages) - 1 and not over
-        if over:
-            kappa = min(100 * kappa, 1e12)
-    J = gradient.value(rho)
-    return LayoutResult(rho, gradient.layout(rho), history, J, gradient.fraction(rho)[0], count, converged)

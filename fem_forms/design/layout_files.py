@@ -31,9 +31,10 @@ def positively_oriented(points: np.ndarray, cells: np.ndarray) -> np.ndarray:
 
 
 def write_layout_files(out: Path, mesh, order: np.ndarray, placed: np.ndarray, names: tuple[str, str],
-                       picture: bool = True) -> dict:
+                       picture: bool = True, facet_groups: dict | None = None) -> dict:
     """placed.stl, body.stl, layout.msh and (with `picture`) layout.png for the cells `placed` (design order) of
-    the placed material names[1] in the body names[0]; {what: file name}."""
+    the placed material names[1] in the body names[0]; {what: file name}. layout.msh keeps `facet_groups` (rank 0:
+    the scene mesh's named boundaries, as fields.gather_facet_groups gives them) for the scene's supports and loads."""
     gathered = gather_mesh(mesh)
     files = {"placed_stl": "placed.stl", "body_stl": "body.stl", "layout_mesh": "layout.msh"}
     if picture:
@@ -49,7 +50,7 @@ def write_layout_files(out: Path, mesh, order: np.ndarray, placed: np.ndarray, n
             write_stl(out / files[key], points, tris, name)
             surfaces[name] = tris
         write_volume_mesh(out / files["layout_mesh"], points, cells, cell_name,
-                          cell_groups={names[0]: ~member, names[1]: member})
+                          facet_groups=facet_groups, cell_groups={names[0]: ~member, names[1]: member})
         if picture:
             _picture(out / files["layout_picture"], points, surfaces, names)
     mesh.comm.barrier()

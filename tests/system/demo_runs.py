@@ -40,6 +40,7 @@ CHECKS = {"loaded_vs_unloaded_modes": "test_loaded_vs_unloaded_modes_demo",    #
           "figure_on_table": "test_figure_on_table_demo",
           "standing_figure": "test_standing_figure_demo",
           "balloon_segment": "test_balloon_segment_demo",
+          "pneunet_layout": "test_pneunet_layout_demo",
           "bimetal_strip": "test_bimetal_strip_demo",
           "printed_hook": "test_printed_hook_demo",
           "torn_silicone_strip": "test_torn_silicone_strip_demo",

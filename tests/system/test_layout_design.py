@@ -46,8 +46,8 @@ def measure(case: str = "beam", mesh: str = "") -> dict:
     from mpi4py import MPI
     import fem_forms as ff
     from fem_forms.analyses.static.solve import solve_static
-    from fem_forms.design.layout import (CellVector, LayoutGradient, LayoutMaterial, PlacedDensity, TargetAngle,
-                                         TargetPoints, part_length)
+    from fem_forms.design.layout import CellVector, LayoutGradient, LayoutMaterial, PlacedDensity
+    from fem_forms.design.layout_targets import TargetAngle, TargetPoints, part_length
     from fem_forms.materials.constants import bind_constants
     from fem_forms.materials.hyperelastic import NeoHookean
     from fem_forms.meshes import load_mesh
