@@ -104,6 +104,34 @@ def test_the_gradient_of_a_target_angle_passes_the_taylor_test():
     turned = measure("angle")
     assert np.all(np.abs(_taylor_rates(turned) - 2.0) < 0.1), _taylor_rates(turned)
     assert turned["remainders"][-1] < 0.05 * abs(0.005 * turned["g_dot_d"])
+    p = mpirun([__file__, "angle"])
+    assert p.returncode == 0, p.stderr
+    two = json.loads(p.stdout.strip().splitlines()[-1])
+    assert abs(two["J"] - turned["J"]) < 1e-10 * turned["J"]
+    assert abs(two["g_dot_d"] - turned["g_dot_d"]) < 1e-8 * abs(turned["g_dot_d"])
+
+
+def test_the_cast_threshold_is_the_least_material_that_reaches_the_targets():
+    """cast_layout on a stand-in design whose mismatch falls with the cast's cell count (none reach at
+    1/2): it picks the threshold whose cast reaches `allowed` with the fewest cells, leaves out a cast over the
+    bound, and where no cast reaches, the nearest one."""
+    from types import SimpleNamespace
+    from fem_forms.design.layout_optimizer import cast_layout
+    rho_bar = np.linspace(0.05, 0.95, 10)               # cast at t keeps the cells with rho_bar >= t
+    tried = []
+
+    def value_of_layout(cast):
+        tried.append(int(cast.sum()))
+        return {5: 4.0, 6: 2.0, 4: 6.0, 7: 0.5, 3: 8.0, 8: 0.4, 2: 9.0, 9: 0.3, 1: 9.5}[int(cast.sum())]
+    design = SimpleNamespace(cells=SimpleNamespace(volumes=np.ones(10)), domain=np.ones(10),
+                             value_of_layout=value_of_layout)
+    cast, level, J = cast_layout(design, rho_bar, max_fraction=1.0, allowed=1.0)
+    assert int(cast.sum()) == 7 and level == 0.3 and J == 0.5        # 8 and 9 cells reach too, with more
+    tried.clear()
+    cast, level, J = cast_layout(design, rho_bar, max_fraction=0.75, allowed=1.0)
+    assert int(cast.sum()) == 7 and 8 not in tried and 9 not in tried   # over 0.75 + 0.02: not tried
+    cast, level, J = cast_layout(design, rho_bar, max_fraction=0.65, allowed=1.0)
+    assert int(cast.sum()) == 6 and J == 2.0                          # none within reach: the nearest
 
 
 def test_the_gradient_under_volume_control_passes_the_taylor_test_on_one_and_two_ranks(tmp_path):
