@@ -6,8 +6,9 @@ volume) of the filtered density rho_f = M rho, M_ij = H_ij v_j / sum_k H_ik v_k,
 between cell centres c and with cell volumes v (the density filter of Bruns & Tortorelli 2001: a smallest feature
 of about r, no checkerboards), projected to rho_bar by a smoothed Heaviside (sharper stage by stage). The mismatch
 is J = 1/2 sum_p |x_p + u(x_p) - t_p|^2 / L^2 (L the part's size), plus 1/2 (theta - theta_t)^2 for each target
-angle (a segment between two probes turned about an axis, radians); its gradient takes one adjoint solve
-K^T lambda = dJ/du at the equilibrium and dJ/dw = -d/dw [R(u, w) . lambda], chained through the SIMP law, the
+angle (a segment between two probes turned about an axis, radians: design/layout_targets.py); its gradient takes
+one adjoint solve K^T lambda = dJ/du at the equilibrium (1 + m transposed solves with m volume-controlled cavities:
+design/bordered_adjoint.py) and dJ/dw = -d/dw [R(u, w) . lambda], chained through the SIMP law, the
 projection and the filter's transpose (and the density, where the two materials' differ and gravity acts).
 
 The design vector is global (every rank holds all cells, in an order of their own by centre): the filter and the
@@ -185,16 +186,23 @@ class LayoutGradient:
         return self.from_rest(rho_bar)
 
     def _solved(self, rho_bar: np.ndarray, solve, keep_last: bool = True):
+        """`solve` with layout rho_bar; with `keep_last`, the last layout solved becomes this one, or none (and
+        the state rest) where it failed: no later near solve starts from a state that is no layout's."""
         self.set_layout(rho_bar)
         report = solve(self.model)
-        if report.converged and keep_last:
-            self._last = rho_bar
+        if keep_last:
+            self._last = rho_bar if report.converged else None
+            if not report.converged:
+                self._restore(self._rest())
         return report
 
     def from_rest(self, rho_bar: np.ndarray):
         """The scene's load path from rest (the displacement and the global scalars at 0)."""
-        self._restore((np.zeros_like(self.model.unknown.x.array), [0.0] * len(self.model.global_scalars())))
+        self._restore(self._rest())
         return self._solved(rho_bar, self.solve)
+
+    def _rest(self) -> tuple:
+        return np.zeros_like(self.model.unknown.x.array), [0.0] * len(self.model.global_scalars())
 
     def _state(self) -> tuple:
         return self.model.unknown.x.array.copy(), [float(s.value.value) for s in self.model.global_scalars()]

@@ -51,9 +51,10 @@ class TargetPoints:
                 local[i] = u.x.array[3 * k:3 * k + 3]
         return self.at + self.comm.allreduce(local, op=MPI.SUM)
 
-    def misses(self, u: fem.Function) -> np.ndarray:
-        """Position minus target of every probe, 0 in the coordinates that do not count."""
-        return (self.positions(u) - self.targets) * self.counted
+    def misses(self, u: fem.Function, x: np.ndarray | None = None) -> np.ndarray:
+        """Position minus target of every probe, 0 in the coordinates that do not count (x: the positions, if
+        known)."""
+        return ((self.positions(u) if x is None else x) - self.targets) * self.counted
 
     def _frame(self, a: TargetAngle) -> tuple[np.ndarray, np.ndarray]:
         """(the rest segment's part across the axis, the axis cross it): the turned segment s has the angle
@@ -62,44 +63,46 @@ class TargetPoints:
         across = s0 - (s0 @ a.axis) * a.axis
         return across, np.cross(a.axis, across)
 
-    def turned(self, u: fem.Function) -> np.ndarray:
-        """Each target angle's segment's rotation about its axis (radians, in (-pi, pi])."""
-        x = self.positions(u)
+    def _angles(self, x: np.ndarray) -> list[tuple[float, np.ndarray]]:
+        """Each target angle's (turned angle, d angle / d segment) at the positions x: atan2(n, c) of the
+        segment's components c, n along the frame, its derivative (c b - n a) / (c^2 + n^2)."""
         out = []
         for a in self.angles:
             across, normal = self._frame(a)
             s = x[a.end] - x[a.start]
-            out.append(np.arctan2(normal @ s, across @ s))
-        return np.array(out)
+            c, n = across @ s, normal @ s
+            out.append((float(np.arctan2(n, c)), (c * normal - n * across) / max(c * c + n * n, 1e-300)))
+        return out
 
-    def angle_misses(self, u: fem.Function) -> np.ndarray:
+    def turned(self, u: fem.Function, x: np.ndarray | None = None) -> np.ndarray:
+        """Each target angle's segment's rotation about its axis (radians, in (-pi, pi])."""
+        return np.array([t for t, _ in self._angles(self.positions(u) if x is None else x)])
+
+    def angle_misses(self, u: fem.Function, x: np.ndarray | None = None) -> np.ndarray:
         """Turned minus target angle of each target angle (radians, wrapped into [-pi, pi))."""
         target = np.array([a.angle for a in self.angles])
-        return np.mod(self.turned(u) - target + np.pi, 2 * np.pi) - np.pi
+        return np.mod(self.turned(u, x) - target + np.pi, 2 * np.pi) - np.pi
 
     def mismatch(self, u: fem.Function) -> float:
         """J = 1/2 sum |miss|^2 / L^2 over the positions + 1/2 sum (angle miss)^2 (radians)."""
-        return 0.5 * float(np.sum(self.misses(u) ** 2)) / self.length ** 2 + \
-            0.5 * float(np.sum(self.angle_misses(u) ** 2))
+        x = self.positions(u)
+        return 0.5 * float(np.sum(self.misses(u, x) ** 2)) / self.length ** 2 + \
+            0.5 * float(np.sum(self.angle_misses(u, x) ** 2))
 
     def allowed(self, reach: float, reach_angle: float) -> float:
-        """J when every position target is missed by `reach` (m) and every angle by `reach_angle` (radians)."""
+        """J when every position target is missed by `reach` (m) and every angle by `reach_angle` (radians): one
+        budget, so a target nearer than its reach leaves room for another to be farther."""
         positions = int(np.count_nonzero(self.counted.any(axis=1)))
         return 0.5 * (positions * reach ** 2 / self.length ** 2 + len(self.angles) * reach_angle ** 2)
 
     def gradient(self, u: fem.Function, out: PETSc.Vec) -> None:
         """dJ/du into `out` (owned entries)."""
         out.set(0.0)
-        slope = self.misses(u) / self.length ** 2
-        if self.angles:
-            x, misses = self.positions(u), self.angle_misses(u)
-            for a, miss in zip(self.angles, misses):
-                across, normal = self._frame(a)
-                s = x[a.end] - x[a.start]
-                c, n = across @ s, normal @ s
-                d_angle = (c * normal - n * across) / (c * c + n * n)       # d atan2(n, c) / ds
-                slope[a.end] += miss * d_angle
-                slope[a.start] -= miss * d_angle
+        x = self.positions(u)
+        slope = self.misses(u, x) / self.length ** 2
+        for a, miss, (_, d_angle) in zip(self.angles, self.angle_misses(u, x), self._angles(x)):
+            slope[a.end] += miss * d_angle
+            slope[a.start] -= miss * d_angle
         for i, k in enumerate(self.node):
             if k >= 0:
                 out.array[3 * k:3 * k + 3] += slope[i]

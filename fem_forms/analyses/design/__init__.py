@@ -1,6 +1,6 @@
 """analysis = "design": where to put the second material (the stiff one) so that the loaded part's probes reach
 their targets. The layout is optimised as densities (fem_forms/design/layout.py: SIMP, filter, projection, adjoint
-gradient, L-BFGS-B), then cast black and white (a cell is the placed material where its density reaches the threshold
+gradient; layout_optimizer.py: L-BFGS-B), then cast black and white (a cell is the placed material where its density reaches the threshold
 whose cast reaches the targets with the least material, 1/2 first: layout_optimizer.cast_layout) and solved once more
 as cast, from rest: the positions results.json reports are the cast layout's, the files are what to make."""
 from __future__ import annotations
@@ -40,9 +40,13 @@ def _domain(model, cells: CellVector, placed_index: int) -> np.ndarray:
 
 
 def near_solver(scene: Scene):
-    """The design's solve from a nearby layout's equilibrium: one step to full load, no cut-backs (a smaller load
-    factor is farther from that state, not nearer); LayoutGradient.equilibrium approaches a far layout in steps."""
-    near = dataclasses.replace(scene, solver=dataclasses.replace(scene.solver, steps=1, max_cutbacks=0))
+    """The design's solve from a nearby layout's equilibrium: one step to full load (max_step 1), no cut-backs (a
+    smaller load factor is farther from that state, not nearer); LayoutGradient.equilibrium approaches a far layout
+    in steps. None where a load or support follows a history: its corners are steps of their own."""
+    if any(getattr(ld, "history", None) for ld in scene.load) or any(f.history for f in scene.fix):
+        return None
+    near = dataclasses.replace(scene, solver=dataclasses.replace(scene.solver, steps=1, max_cutbacks=0,
+                                                                 max_step=1.0))
     return lambda model: solve_static(near, model=model, answers=False).report
 
 
@@ -116,8 +120,8 @@ def run(scene: Scene, out, echo: bool = False) -> dict:
 
     result = optimize_layout(design, d.stiff_fraction, d.iterations, d.reach, on_iteration=said,
                              reach_angle=np.radians(d.reach_angle))
-    cast, level, _ = cast_layout(design, result.rho_bar, d.stiff_fraction,
-                                 design.targets.allowed(d.reach, np.radians(d.reach_angle)))
+    allowed = design.targets.allowed(d.reach, np.radians(d.reach_angle))
+    cast, level, _ = cast_layout(design, result.rho_bar, d.stiff_fraction, allowed)
     # along the load path from rest, as the part is loaded: measured on the PneuNet, the same cast layout reached
     # from the optimizer's last layout rests in another stable equilibrium (119.27 instead of 119.23 degrees)
     report = design.from_rest(cast.astype(float))
@@ -134,6 +138,9 @@ def run(scene: Scene, out, echo: bool = False) -> dict:
     summary = {**header("design", scene, comm, design.model.dofs, time.perf_counter() - t0),
                "converged": True, "design": {**_design_summary(design, result, cast, d), "cast_threshold": level},
                "files": files}
+    summary["design"]["targets_reached"] = bool(summary["design"]["mismatch_cast"] <= allowed)
+    said_warnings = _warnings(summary["design"], d)
+    summary["warnings"] = list(design.model.warnings) + said_warnings
     results.write_json_atomic(out / "results.json", summary, comm)
     if echo and comm.rank == 0:
         s = summary["design"]
@@ -145,11 +152,25 @@ def run(scene: Scene, out, echo: bool = False) -> dict:
                   f"the target")
         for name, t in s["angles"].items():
             print(f"  {name}: turned {t['reached_deg']:.2f} deg (target {t['target_deg']:g} deg)")
-        if not s["within_bound"]:
-            print(f"fem-forms: warning: the targets need more {d.materials[1]} than design.stiff_fraction = "
-                  f"{d.stiff_fraction} allows: the layout at the bound misses them by the distances above",
-                  file=sys.stderr)
+        for line in said_warnings:
+            print(f"fem-forms: warning: {line}", file=sys.stderr)
     return summary
+
+
+def _warnings(s: dict, d) -> list[str]:
+    """What results.json `warnings` and the run's stderr say of a design: targets out of reach, a cast over the
+    bound."""
+    out = []
+    if not s["targets_reached"]:
+        out.append(f"the cast layout misses the targets by more than their reach (design.targets and design.angles "
+                   f"in results.json): {d.materials[1]} in {s['placed_fraction_cast']:.1%} of its domain (bound "
+                   f"{d.stiff_fraction:.0%}), the optimizer "
+                   f"{'converged' if s['optimizer_converged'] else 'stopped'} after {s['layouts_tried']} layouts, "
+                   f"{s['gray_fraction']:.0%} of the domain gray before casting")
+    if not s["within_bound"]:
+        out.append(f"the cast layout holds more {d.materials[1]} than design.stiff_fraction = {d.stiff_fraction} "
+                   f"allows ({s['placed_fraction_cast']:.1%}: the optimum at its bound rounded up)")
+    return out
 
 
 def _design_summary(design: LayoutGradient, result, cast: np.ndarray, d) -> dict:

@@ -27,15 +27,18 @@ DESIGN_KEYS = (
         exclusive_minimum=0, default_note="2 x the cells' mean size"),
     Key("penalty", "number", "SIMP exponent p: a cell of density rho has the energy (1 - rho^p) psi_body + "
         "rho^p psi_placed", default=3.0, minimum=1, maximum=6),
-    Key("iterations", "integer", "layouts the optimizer may try (each one equilibrium and one adjoint solve; the "
-        "cast layout is solved once more)",
+    Key("iterations", "integer", "layouts the optimizer may try (each one equilibrium and one adjoint solve; then "
+        "up to nine casts of the optimum at thresholds 0.1 ... 0.9, and the chosen one once more from rest)",
         default=100, minimum=1),
     Key("reach", "number", "how near its target the layout must bring each probe (in the target's counted "
-        "coordinates, root mean square over the targets): the design is the least placed material that does",
+        "coordinates; with reach_angle one budget, root mean square over the targets): the design is the least "
+        "placed material that does",
         unit="m", default=1e-4, exclusive_minimum=0),
-    Key("reach_angle", "number", "how near its target each target angle must come (root mean square)", unit="deg",
+    Key("reach_angle", "number", "how near its target each target angle must come (with reach one budget)",
+        unit="deg",
         default=0.5, exclusive_minimum=0),
-    Key("target", "tables", "[[design.target]]: a probe and where it should be in the loaded part", required=True,
+    Key("target", "tables", "[[design.target]]: a probe and where it should be in the loaded part, or how far a "
+        "segment between two probes should turn", required=True,
         keys=TARGET_KEYS),
 )
 
@@ -45,7 +48,8 @@ DesignSpec = spec_class("DesignSpec", "[design]: which material goes where so th
 
 def _rules(s, t: Table) -> None:
     if not s.target:
-        raise InputError(f"{t.key('target')}: give at least one [[design.target]] (a probe and its position)")
+        raise InputError(f"{t.key('target')}: give at least one [[design.target]] (a probe and its position, or an "
+                         "angle)")
     for i, target in enumerate(s.target):
         where = f"{t.key('target')}[{i}]"
         given = {k for k, v in target.items() if v is not None}
@@ -93,6 +97,15 @@ def _check(scene) -> None:
             if target.get(key) is not None and target[key] not in probes:
                 raise InputError(f"design.target[{i}].{key} = {target[key]!r}: no such point in [output.probes] "
                                  f"(it has: {', '.join(map(repr, probes)) or 'none'})")
+        if target.get("angle") is not None:
+            segment = [b - a for a, b in zip(probes[target["from"]], probes[target["probe"]])]
+            axis = target["about"]
+            cross = [segment[1] * axis[2] - segment[2] * axis[1], segment[2] * axis[0] - segment[0] * axis[2],
+                     segment[0] * axis[1] - segment[1] * axis[0]]
+            if sum(c * c for c in cross) <= 1e-12 * sum(c * c for c in segment) * sum(c * c for c in axis):
+                raise InputError(f"design.target[{i}].about = {list(axis)}: the segment from "
+                                 f"{target['from']!r} to {target['probe']!r} lies along it (no turn about it to "
+                                 "measure)")
     if scene.thermal is not None:
         raise InputError("thermal: not implemented in a design")
 
