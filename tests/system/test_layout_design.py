@@ -295,6 +295,8 @@ def test_a_design_scene_that_cannot_work_is_refused_in_one_line():
                             (dict(turn, **{"from": "top"}), r"^design.target\[0\].from = 'top': the segment's two"),
                             (dict(turn, **{"from": "tip"}), r"^design.target\[0\].from = 'tip': no such point"),
                             (dict(turn, about=[0, 0, 0]), r"^design.target\[0\].about: the zero vector"),
+                            (dict(turn, about=[0, 0, 2]),
+                             r"^design.target\[0\].about = \[0.0, 0.0, 2.0\]: the segment from"),
                             (dict(turn, angle=200.0), r"^design.target\[0\].angle = 200.0"),
                             ({"probe": "top", "position": [0.1, 0, 0], "about": [0, 1, 0]},
                              r"^design.target\[0\]: `from` and `about` belong to an `angle`")):
