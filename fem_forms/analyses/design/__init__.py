@@ -1,8 +1,9 @@
 """analysis = "design": where to put the second material (the stiff one) so that the loaded part's probes reach
 their targets. The layout is optimised as densities (fem_forms/design/layout.py: SIMP, filter, projection, adjoint
-gradient; layout_optimizer.py: L-BFGS-B), then cast black and white (a cell is the placed material where its density reaches the threshold
-whose cast reaches the targets with the least material, 1/2 first: layout_optimizer.cast_layout) and solved once more
-as cast, from rest: the positions results.json reports are the cast layout's, the files are what to make."""
+gradient; layout_optimizer.py: L-BFGS-B), then cast black and white (a cell is the placed material where its
+density reaches the threshold whose cast reaches the targets with the least material, 1/2 first:
+layout_optimizer.cast_layout) and solved once more as cast, from rest: the positions results.json reports are the
+cast layout's, the files are what to make."""
 from __future__ import annotations
 
 import dataclasses
