@@ -19,8 +19,9 @@ class AdjointDesign:
     """J(d) = 1/2 m^T W m + 1/2 d^T R d with m = d + u(d) the mismatch (deformed minus target
     position), W the matching weight (mass matrix of the matched volume over its volume, or 1/n at
     the matched points' dofs) and R the regularisation (smoothness * stiffness of grad d, stay_close *
-    mass). The gradient needs one adjoint solve K mu = W m: dJ/dd = W m - B^T mu + R d, with
-    B = dR_u/dd. Gauss-Newton products H p = A^T W A p + R p, A = I - K^-1 B, reuse K's factors."""
+    mass). The gradient needs one adjoint solve K^T mu = W m: dJ/dd = W m - B^T mu + R d, with
+    B = dR_u/dd. Gauss-Newton products H p = A^T W A p + R p, A = I - K^-1 B, reuse K's factors (K is not
+    symmetric under a follower pressure: the transposes are K's own)."""
 
     def __init__(self, fwd: ForwardOnRest):
         self.fwd = fwd
@@ -111,11 +112,12 @@ class AdjointDesign:
             A.assemble()
         self.C.zeroRowsColumns(self.pinned, 1.0)
 
-    def _solve_K(self, rhs: PETSc.Vec) -> PETSc.Vec:
-        """K x = rhs with homogeneous conditions on supported dofs (K was assembled with them)."""
+    def _solve_K(self, rhs: PETSc.Vec, transposed: bool = False) -> PETSc.Vec:
+        """K x = rhs (K^T x = rhs with `transposed`: the adjoint's, K not symmetric under a follower pressure) with
+        homogeneous conditions on supported dofs (K was assembled with them)."""
         fpetsc.set_bc(rhs, self.fwd.bcs, scale=0.0)
         x = rhs.duplicate()
-        self.ksp.solve(rhs, x)
+        (self.ksp.solveTranspose if transposed else self.ksp.solve)(rhs, x)
         if self.ksp.getConvergedReason() < 0:
             raise SolveError(f"adjoint: linear solve failed ({self.ksp.getConvergedReason()})")
         return x
@@ -169,7 +171,7 @@ class AdjointDesign:
         self.ksp_C.setOperators(self.C)
         d = self.vec()
         d.array[:] = fwd.d.x.array[:self.n]
-        mu = self._solve_K(self._Wm.copy())
+        mu = self._solve_K(self._Wm.copy(), transposed=True)
         g = self._Wm + self.R * d
         g.axpy(-1.0, self._BT(mu))
         out = g.array.copy()
@@ -222,21 +224,22 @@ class AdjointDesign:
         b = self.weigh(a)
         if self.damping:
             b.axpy(self.damping, self.D * a)
-        r = b - self._BT(self._solve_K(b.copy())) + self.R * q
+        r = b - self._BT(self._solve_K(b.copy(), transposed=True)) + self.R * q
         if self.damping and self._free is not None:
             r.axpy(self.damping, self.D * q)
         r.array[self.fixed] = 0.0
         r.copy(out)
 
     def precondition(self, r: PETSc.Vec, out: PETSc.Vec) -> None:
-        """out = A^-1 N^-1 A^-T r = C^-1 K N^-1 K C^-T r: the inverse of the damped Gauss-Newton
+        """out = A^-1 N^-1 A^-T r = C^-1 K N^-1 K^T C^-T r: the inverse of the damped Gauss-Newton
         matrix when R = 0 (exact for matching the whole body), a close one otherwise."""
         x = r.copy()
         x.array[self.fixed] = 0.0
         y = self.vec()
         self.ksp_C.solveTranspose(x, y)
         y.array[self.fixed] = 0.0
-        z = self.K * y
+        z = self.vec()
+        self.K.multTranspose(y, z)
         z.array[self.fixed] = 0.0
         w = self.vec()
         self.ksp_N.solve(z, w)

@@ -22,16 +22,15 @@ class ForwardOnRest:
     def __init__(self, scene: Scene, material, loaded: LoadedMesh):
         model = build_model(scene, material, loaded=loaded, rest="designed")
         model.terms.only_ufl("inverse design", but=("contact",))
-        if not model.conservative:
-            raise InputError(f"inverse.method = {scene.inverse.method!r}: follower pressure is supported "
-                             "by the direct method only")
         if model.global_scalars():                # the scene refuses it; a script's call would leave p at 0
             raise InputError(f"inverse.method = {scene.inverse.method!r}: volume control is designed by the "
                              "direct method only")
         self.scene, self.loaded, self.V, self.mesh = scene, loaded, model.V, loaded.mesh
         self.d, self.u = model.rest_offset, model.u
         self.load, self.bcs, self.dx = model.load, model.bcs, model.dx
-        self.energy, self.residual, self.jacobian = model.energy, model.residual, model.jacobian
+        # a follower pressure has no energy: its solves search along the residual, its adjoint solves with K^T
+        self.energy = model.energy if model.conservative else None
+        self.residual, self.jacobian = model.residual, model.jacobian
         self.dres_dd = ufl.derivative(self.residual, self.d, ufl.TrialFunction(self.V))
         self.physics = model.physics
         self.arrays = model.terms.arrays
