@@ -8,6 +8,7 @@ import numpy as np
 from petsc4py import PETSc
 import ufl
 
+from fem_forms.design.bordered_adjoint import Border
 from fem_forms.design.forward_on_rest import ForwardOnRest
 from fem_forms.errors import InputError, SolveError
 from fem_forms.meshes import mesh_size
@@ -97,6 +98,10 @@ class AdjointDesign:
             self._free = (w, e.dot(w))
         self.evaluations = 0
         self.last_failure = ""
+        # volume control: the cavities' pressures are unknowns beside u, their equations depend on d (the rest
+        # cavity's volume): the adjoint and the sensitivities are the bordered system's
+        self.border = Border(fwd.scalars, fwd.residual, fwd.u) if fwd.scalars else None
+        self.c_d = [fem.form(ufl.derivative(sc.equation, fwd.d, test)) for sc in fwd.scalars]
 
     def _add_contact(self, fwd: ForwardOnRest) -> None:
         """The contact's Hessian (barrier and friction) at the last equilibrium into K; the barrier's into B (it
@@ -171,9 +176,8 @@ class AdjointDesign:
         self.ksp_C.setOperators(self.C)
         d = self.vec()
         d.array[:] = fwd.d.x.array[:self.n]
-        mu = self._solve_K(self._Wm.copy(), transposed=True)
         g = self._Wm + self.R * d
-        g.axpy(-1.0, self._BT(mu))
+        g.axpy(-1.0, self._adjoint_shape_term(self._Wm.copy()))
         out = g.array.copy()
         out[self.fixed] = 0.0
         return out
@@ -188,10 +192,31 @@ class AdjointDesign:
     def linear_response(self, s: np.ndarray) -> np.ndarray:
         """du = -K^-1 B s: first-order change of the equilibrium u when d changes by s (owned dofs),
         at the last linearised state; a predictor for the next forward solve."""
-        q, Bq = self.vec(), self.vec()
+        q = self.vec()
         q.array[:] = s
+        return -self._sensitivity(q).array.copy()
+
+    def _sensitivity(self, q: PETSc.Vec) -> PETSc.Vec:
+        """K^-1 B q, or with volume control the displacement part of [K R_p; c_u c_p]^-1 [B q; c_d . q]: minus the
+        equilibrium's change when d changes by q."""
+        Bq = self.vec()
         self.B.mult(q, Bq)
-        return -self._solve_K(Bq).array.copy()
+        if self.border is None:
+            return self._solve_K(Bq)
+        c_d = [Border.vector(f).dot(q) for f in self.c_d]
+        return self.border.forward(Bq, c_d, self._solve_K)[0]
+
+    def _adjoint_shape_term(self, g: PETSc.Vec) -> PETSc.Vec:
+        """B^T K^-T g, or with volume control B^T lambda + sum_i mu_i c_d_i of the bordered adjoint [lambda; mu] of
+        [g; 0]: the d-derivative of the equilibrium's constraint weighted by the adjoint."""
+        lam = self._solve_K(g, transposed=True)
+        mu = []
+        if self.border is not None:
+            lam, mu = self.border.adjoint(lam, lambda r: self._solve_K(r, transposed=True))
+        out = self._BT(lam)
+        for f, mu_i in zip(self.c_d, mu):
+            out.axpy(mu_i, Border.vector(f))
+        return out
 
     def _BT(self, y: PETSc.Vec) -> PETSc.Vec:
         z = self.vec()
@@ -218,13 +243,11 @@ class AdjointDesign:
         table changes nothing (A p = 0) and only this bounds the step."""
         q = p.copy()
         q.array[self.fixed] = 0.0
-        Bq = self.vec()
-        self.B.mult(q, Bq)
-        a = q - self._solve_K(Bq)
+        a = q - self._sensitivity(q)
         b = self.weigh(a)
         if self.damping:
             b.axpy(self.damping, self.D * a)
-        r = b - self._BT(self._solve_K(b.copy(), transposed=True)) + self.R * q
+        r = b - self._adjoint_shape_term(b.copy()) + self.R * q
         if self.damping and self._free is not None:
             r.axpy(self.damping, self.D * q)
         r.array[self.fixed] = 0.0

@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import ufl
 
-from fem_forms.errors import InputError
 from fem_forms.meshes import LoadedMesh
 from fem_forms.physics.admissibility import SmallestValue
 from fem_forms.physics.contact.on_rest import StandingRest
@@ -22,17 +21,15 @@ class ForwardOnRest:
     def __init__(self, scene: Scene, material, loaded: LoadedMesh):
         model = build_model(scene, material, loaded=loaded, rest="designed")
         model.terms.only_ufl("inverse design", but=("contact",))
-        if model.global_scalars():                # the scene refuses it; a script's call would leave p at 0
-            raise InputError(f"inverse.method = {scene.inverse.method!r}: volume control is designed by the "
-                             "direct method only")
         self.scene, self.loaded, self.V, self.mesh = scene, loaded, model.V, loaded.mesh
         self.d, self.u = model.rest_offset, model.u
+        self.scalars = model.global_scalars()     # a volume-controlled cavity's pressure, solved with u
         self.load, self.bcs, self.dx = model.load, model.bcs, model.dx
         # a follower pressure has no energy: its solves search along the residual, its adjoint solves with K^T
         self.energy = model.energy if model.conservative else None
         self.residual, self.jacobian = model.residual, model.jacobian
         self.dres_dd = ufl.derivative(self.residual, self.d, ufl.TrialFunction(self.V))
-        self.physics = model.physics
+        self.physics, self.terms = model.physics, model.terms
         self.arrays = model.terms.arrays
         contact = next((t for t in self.arrays if t.role == "contact"), None)
         self.standing = StandingRest.of(contact) if contact is not None else None
@@ -44,6 +41,7 @@ class ForwardOnRest:
         self._problem: snes.NonlinearProblem | None = None
         self._u_ok = self.u.x.array.copy()
         self._d_ok = self.d.x.array.copy()
+        self._p_ok = [0.0] * len(self.scalars)
 
     def inadmissible(self):
         return self._volume_ratio.positive_or("inverted elements (min det = {value:.3g})")
@@ -55,7 +53,8 @@ class ForwardOnRest:
         if self._driver is None:          # forms compiled and matrix created once for all solves
             self._problem = snes.NonlinearProblem(self.u, self.residual, self.jacobian, self.bcs,
                                                     energy=self.energy, set_load=None,
-                                                    inadmissible=self.inadmissible, array_terms=self.arrays)
+                                                    inadmissible=self.inadmissible, array_terms=self.arrays,
+                                                    scalars=self.scalars)
             self._driver = snes.SNESDriver(self._problem, dict(self.scene.solver.petsc),
                                              self.scene.solver.linear, "fem_forms_fwd_")
         problem = self._problem
@@ -67,6 +66,7 @@ class ForwardOnRest:
         if not rep.converged and fallback:
             self.u.x.array[:] = 0.0
             self.u.x.scatter_forward()
+            self._set_scalars([0.0] * len(self.scalars))
             problem.set_load = self._set_load
             rep = continuation.solve(problem, steps=max(self.scene.solver.steps, 4),
                                      max_cutbacks=self.scene.solver.max_cutbacks, driver=self._driver)
@@ -88,9 +88,15 @@ class ForwardOnRest:
         """The state of a converged solve kept as the next one's fallback; a failed one's undone."""
         if rep.converged:
             self._u_ok, self._d_ok = self.u.x.array.copy(), self.d.x.array.copy()
+            self._p_ok = [float(sc.value.value) for sc in self.scalars]
         else:
             self.u.x.array[:] = self._u_ok
+            self._set_scalars(self._p_ok)
         return rep
+
+    def _set_scalars(self, values: list) -> None:
+        for scalar, value in zip(self.scalars, values):
+            scalar.value.value = value
 
     def _start_standing(self, fallback: bool) -> SolveReport | None:
         """Before a solve on the obstacles: the rest shape mesh + d (through an obstacle: no equilibrium, a failed

@@ -123,7 +123,7 @@ class LayoutGradient:
             self.dwork_dm = None if dm.empty() else fem.form(dm)
         self.K = fpetsc.create_matrix(model.compiled("jacobian"))
         self.ksp = make_ksp(None, "lu", "fem_forms_layout_", comm=model.mesh.comm)
-        self.border = Border(model) if model.global_scalars() else None
+        self.border = Border(model.global_scalars(), model.residual, model.u) if model.global_scalars() else None
         self.evaluations = 0
 
     def projected(self, rho_f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -223,7 +223,7 @@ class LayoutGradient:
         self.targets.gradient(model.u, rhs)
         lam = self._solve_transposed(rhs)
         if self.border is not None:
-            lam = self.border.adjoint(lam, self._solve_transposed)
+            lam = self.border.adjoint(lam, self._solve_transposed)[0]
         self.adjoint.x.array[:len(lam.array)] = lam.array
         self.adjoint.x.scatter_forward()
 

@@ -14,6 +14,7 @@ from fem_forms.design.adjoint import AdjointDesign
 from fem_forms.design.forward_on_rest import ForwardOnRest
 from fem_forms.design.parameters import InverseResult, target_scene
 from fem_forms.meshes import LoadedMesh, load_mesh, mesh_size
+from fem_forms.physics.cavities import cavity_report
 from fem_forms.scene import Scene
 from fem_forms.solvers.linear import make_ksp, make_tao
 
@@ -178,5 +179,6 @@ def solve_adjoint(scene: Scene, material=None, loaded: LoadedMesh | None = None)
     if final is not None:
         res.deformed_offset = fem.Function(V, name="deformed_minus_target")
         res.deformed_offset.x.array[:] = v.x.array + fwd.u.x.array
+    res.cavities = cavity_report(fwd.terms)     # the pressure and the rest volume at the design's equilibrium
     res.solve_time = time.perf_counter() - t0
     return res

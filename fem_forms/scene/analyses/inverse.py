@@ -64,12 +64,13 @@ def _rules(s: InverseSpec, t: Table) -> None:
 
 
 def _check(scene) -> None:
-    """Rules across sections: the mixed u-p formulation and volume-controlled cavities with the direct method only,
-    and not with a carving."""
+    """Rules across sections: the mixed u-p formulation with the direct method only, volume-controlled cavities not
+    with the fixed point, a carving or contact."""
     volume = next((i for i, ld in enumerate(scene.load) if ld.type == "inflation" and ld.volume is not None), None)
-    if volume is not None and (scene.inverse.method != "direct" or scene.balance is not None):
-        raise InputError(f"load[{volume}].volume: volume control in an inverse scene is designed by the direct "
-                         "method only, without [balance] (or give the cavity's pressure)")
+    if volume is not None and (scene.inverse.method == "fixed-point" or scene.balance is not None
+                               or scene.contact is not None):
+        raise InputError(f"load[{volume}].volume: volume control in an inverse scene is designed by the direct or "
+                         "the adjoint method, without [balance] or [contact] (or give the cavity's pressure)")
     if scene.discretization.formulation == "mixed":
         if scene.inverse.method != "direct":
             raise InputError(f"inverse.method = {scene.inverse.method!r}: the mixed formulation is designed by "
