@@ -102,6 +102,7 @@ class AdjointDesign:
         # cavity's volume): the adjoint and the sensitivities are the bordered system's
         self.border = Border(fwd.scalars, fwd.residual, fwd.u) if fwd.scalars else None
         self.c_d = [fem.form(ufl.derivative(sc.equation, fwd.d, test)) for sc in fwd.scalars]
+        self._c_d: list = []                      # their vectors at the last linearisation
 
     def _add_contact(self, fwd: ForwardOnRest) -> None:
         """The contact's Hessian (barrier and friction) at the last equilibrium into K; the barrier's into B (it
@@ -174,6 +175,9 @@ class AdjointDesign:
             self._add_contact(fwd)
             self.ksp.setOperators(self.K)
         self.ksp_C.setOperators(self.C)
+        if self.border is not None:               # the border's vectors and solves, once for this state
+            self.border.linearise(lambda r: self._solve_K(r, transposed=True), self._solve_K)
+            self._c_d = [Border.vector(f) for f in self.c_d]
         d = self.vec()
         d.array[:] = fwd.d.x.array[:self.n]
         g = self._Wm + self.R * d
@@ -203,8 +207,7 @@ class AdjointDesign:
         self.B.mult(q, Bq)
         if self.border is None:
             return self._solve_K(Bq)
-        c_d = [Border.vector(f).dot(q) for f in self.c_d]
-        return self.border.forward(Bq, c_d, self._solve_K)[0]
+        return self.border.forward(self._solve_K(Bq), [c.dot(q) for c in self._c_d])[0]
 
     def _adjoint_shape_term(self, g: PETSc.Vec) -> PETSc.Vec:
         """B^T K^-T g, or with volume control B^T lambda + sum_i mu_i c_d_i of the bordered adjoint [lambda; mu] of
@@ -212,10 +215,10 @@ class AdjointDesign:
         lam = self._solve_K(g, transposed=True)
         mu = []
         if self.border is not None:
-            lam, mu = self.border.adjoint(lam, lambda r: self._solve_K(r, transposed=True))
+            lam, mu = self.border.adjoint(lam)
         out = self._BT(lam)
-        for f, mu_i in zip(self.c_d, mu):
-            out.axpy(mu_i, Border.vector(f))
+        for c, mu_i in zip(self._c_d, mu):
+            out.axpy(mu_i, c)
         return out
 
     def _BT(self, y: PETSc.Vec) -> PETSc.Vec:

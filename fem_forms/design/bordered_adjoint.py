@@ -39,26 +39,30 @@ class Border:
         vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         return vec
 
-    def _c_p(self) -> np.ndarray:
-        return np.array([[self._number(c) for c in row] for row in self.c_p])
+    def linearise(self, solve_transposed, solve=None) -> None:
+        """At the current equilibrium (K factored): the border vectors, c_p, b_i = K^-T c_u_i and the adjoint's m x m
+        matrix; with `solve` (K x = .) also z_j = K^-1 R_p_j and S for the forward solves. Once per linearisation,
+        not per solve: a Gauss-Newton step applies both in every CG iteration."""
+        self.Rp = [self.vector(f) for f in self.R_p]
+        self.cu = [self.vector(f) for f in self.c_u]
+        Cp = np.array([[self._number(c) for c in row] for row in self.c_p])
+        self.b = [solve_transposed(cu.copy()) for cu in self.cu]
+        self.M = np.array([[rp.dot(b_i) for b_i in self.b] for rp in self.Rp]) - Cp.T
+        if solve is not None:
+            self.z = [solve(rp.copy()) for rp in self.Rp]
+            self.S = Cp - np.array([[cu.dot(z_j) for z_j in self.z] for cu in self.cu])
 
-    def adjoint(self, a: PETSc.Vec, solve_transposed) -> tuple[PETSc.Vec, np.ndarray]:
-        """(lambda, mu) from a = K^-T g, solving K^T b_i = c_u_i with `solve_transposed` (a becomes lambda)."""
-        b = [solve_transposed(self.vector(f)) for f in self.c_u]
-        R_p = [self.vector(f) for f in self.R_p]
-        M = np.array([[R_p[j].dot(b[i]) for i in range(len(b))] for j in range(len(R_p))]) - self._c_p().T
-        mu = np.linalg.solve(M, np.array([v.dot(a) for v in R_p]))
-        for b_i, mu_i in zip(b, mu):
+    def adjoint(self, a: PETSc.Vec) -> tuple[PETSc.Vec, np.ndarray]:
+        """(lambda, mu) from a = K^-T g (a becomes lambda), at the last linearisation."""
+        mu = np.linalg.solve(self.M, np.array([rp.dot(a) for rp in self.Rp]))
+        for b_i, mu_i in zip(self.b, mu):
             a.axpy(-mu_i, b_i)
         return a, mu
 
-    def forward(self, r: PETSc.Vec, q: np.ndarray, solve) -> tuple[PETSc.Vec, np.ndarray]:
-        """(du, dp) of [K R_p; c_u c_p] [du; dp] = [r; q], solving K x = . with `solve`."""
-        x = solve(r)
-        z = [solve(self.vector(f)) for f in self.R_p]
-        c_u = [self.vector(f) for f in self.c_u]
-        S = self._c_p() - np.array([[cu.dot(zj) for zj in z] for cu in c_u])
-        dp = np.linalg.solve(S, np.asarray(q, dtype=float) - np.array([cu.dot(x) for cu in c_u]))
-        for z_j, dp_j in zip(z, dp):
+    def forward(self, x: PETSc.Vec, q: np.ndarray) -> tuple[PETSc.Vec, np.ndarray]:
+        """(du, dp) of [K R_p; c_u c_p] [du; dp] = [r; q] from x = K^-1 r (x becomes du), at the last
+        linearisation (taken with `solve`)."""
+        dp = np.linalg.solve(self.S, np.asarray(q, dtype=float) - np.array([cu.dot(x) for cu in self.cu]))
+        for z_j, dp_j in zip(self.z, dp):
             x.axpy(-dp_j, z_j)
         return x, dp

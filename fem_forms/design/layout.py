@@ -223,7 +223,8 @@ class LayoutGradient:
         self.targets.gradient(model.u, rhs)
         lam = self._solve_transposed(rhs)
         if self.border is not None:
-            lam = self.border.adjoint(lam, self._solve_transposed)[0]
+            self.border.linearise(self._solve_transposed)
+            lam = self.border.adjoint(lam)[0]
         self.adjoint.x.array[:len(lam.array)] = lam.array
         self.adjoint.x.scatter_forward()
 
