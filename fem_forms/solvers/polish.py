@@ -20,10 +20,13 @@ _SHORT_STEP = PETSc.SNES.ConvergedReason.CONVERGED_SNORM_RELATIVE
 
 
 def near_equilibrium(driver, reason: int) -> bool:
-    """The energy line search failed with the residual below NEAR of the load scale (no bounds)."""
-    last = driver.history[-1] if driver.history else math.inf
-    return (driver.bounds is None and reason == _FAILED
-            and last < NEAR * (driver.known_load_scale or 0.0))
+    """The energy line search failed with the residual below NEAR of the load scale (no bounds); where no load scale
+    is measured (a time step), below NEAR of the solve's first residual. Measured on the rocking hemisphere (Newmark,
+    600 steps): 41 line searches failed at 1e-8..1e-6 of the first residual, each step then redone from its start."""
+    if not driver.history:
+        return False
+    scale = driver.known_load_scale or driver.history[0]
+    return driver.bounds is None and reason == _FAILED and driver.history[-1] < NEAR * scale
 
 
 def stuck_at_equilibrium(driver, reason: int) -> bool:

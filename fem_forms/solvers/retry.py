@@ -27,6 +27,7 @@ class RetryPolicy:
         self.drv, self.linear_kind = drv, linear_kind
         self.line_searches, self.on_direct, self.plain_start = line_searches, on_direct, plain_start
         self.tried: set[str] = set()                 # the rungs tried at this step size
+        self.factor_per_iteration = False            # a time step's factor renewed at every iteration until accepted
 
     def same_size(self, rec, why: str | None, at: float, report=None) -> bool:
         """After an attempt at load factor or time `at` failed (SNES: `rec.accepted` False) or was rejected (`why`):
@@ -49,8 +50,12 @@ class RetryPolicy:
         return False
 
     def accepted(self) -> None:
-        """A step was accepted: the first line search, full Newton steps again (no merit), every rung available."""
-        if self._line_search(0):
+        """A step was accepted: the first line search, full Newton steps again (no merit), one factor per step again,
+        every rung available."""
+        rebuild = self._line_search(0)
+        if self.factor_per_iteration:
+            self.drv.reuse_factor, self.factor_per_iteration, rebuild = True, False, True
+        if rebuild:
             self.drv.rebuild()
         self.descend(False)
         self.tried.clear()
@@ -80,10 +85,15 @@ class RetryPolicy:
             drv.reuse_factor = True                  # the chord stalled: Newton (the stale LU preconditions)
             return True
         if linear_failed and drv.reuse_factor:
-            if drv.keep_preconditioner:              # a factor kept across time steps: the rebuild factors afresh
-                return self._once("fresh factor")
-            drv.reuse_factor = False                 # a load step's LU too far off: factor every iteration
-            return True
+            if not drv.keep_preconditioner:
+                drv.reuse_factor = False             # a load step's LU too far off: factor every iteration
+                return True
+            if drv.options.get("snes_lag_preconditioner_persists"):
+                return self._once("fresh factor")    # a factor kept across time steps: the rebuild factors afresh
+            if self._once("factor per iteration"):   # a time step's own factor (contact): this step factors at
+                drv.reuse_factor = False             # every iteration; measured on the rocking hemisphere: the
+                self.factor_per_iteration = True     # step's retries were the same failure twice, then 4 cuts
+                return True
         return False
 
     def _line_search(self, which: int) -> bool:

@@ -151,6 +151,20 @@ def test_a_line_search_that_fails_on_round_off_near_the_answer_is_finished_by_fu
     driver.destroy()
 
 
+def test_without_a_load_scale_the_polish_measures_near_against_the_first_residual(monkeypatch):
+    """A time step measures no load scale: a line search failing near its answer (here at 2.5e-7 of the first
+    residual) is finished by full Newton steps all the same (it used to redo the step from its start)."""
+    seen = polished_after(monkeypatch)
+    driver = slow_newton_driver(1e-6)
+    scale, driver._load_scale = driver.load_scale(), None   # unmeasured, as in a time step
+    driver.user_options["snes_atol"] = 1e-10 * scale          # what 3 polish steps of this slow Newton reach
+    record = driver.solve_step()
+    assert driver.known_load_scale is None and seen == [PETSc.SNES.ConvergedReason.DIVERGED_LINE_SEARCH]
+    assert record.reason.startswith("CONVERGED") and record.accepted
+    assert record.residuals[-1] <= 1e-9 * record.residuals[0]
+    driver.destroy()
+
+
 def test_a_polish_that_moves_the_answer_is_not_kept(monkeypatch):
     """The same solve with polish.FINISH_MOVE = 0: the polish's move counts as a jump to another equilibrium (past a
     limit load), so the failed line search stands and the step is rejected."""

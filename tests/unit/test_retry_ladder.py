@@ -8,10 +8,11 @@ from fem_forms.solvers.retry import RetryPolicy
 class Driver:
     """What the ladder reads and changes of an SNES driver."""
 
-    def __init__(self, linear_kind="direct", reuse_factor=False, stale=False, keep=False):
+    def __init__(self, linear_kind="direct", reuse_factor=False, stale=False, keep=False, persists=False):
         self.linear_kind, self.reuse_factor, self.stale = linear_kind, reuse_factor, stale
         self.keep_preconditioner = keep             # kept across solves (a time step's), else each solve's own
         self.user_options, self.bordered, self.rebuilds = {}, None, 0
+        self.options = {"snes_lag_preconditioner_persists": True} if persists else {}   # a factor across steps
 
     def stale_preconditioner_failed(self):
         return self.stale
@@ -56,10 +57,25 @@ def test_a_stalled_chord_becomes_newton_then_a_stale_factor_a_fresh_one():
     assert not policy.same_size(failed("DIVERGED_MAX_IT"), "x", 0.5)     # Newton failed too: cut
     assert policy.same_size(failed("DIVERGED_LINEAR_SOLVE"), "x", 0.25) and drv.reuse_factor is False
     # a factor kept across time steps: one retry on the rebuild's fresh factor, the reuse itself kept
-    drv = Driver("direct", reuse_factor=True, keep=True)
+    drv = Driver("direct", reuse_factor=True, keep=True, persists=True)
     policy = RetryPolicy(drv, "direct")
     assert policy.same_size(failed("DIVERGED_LINEAR_SOLVE"), "x", 0.01) and drv.reuse_factor is True
     assert not policy.same_size(failed("DIVERGED_LINEAR_SOLVE"), "x", 0.01)
+
+
+def test_a_time_steps_own_stale_factor_is_renewed_every_iteration_until_the_step_is_accepted():
+    """A contact step factors once at its start (the factor is not kept across steps): the rebuild's factor would be
+    the same one, so the retry factors at every Newton iteration, for this step (cut or not) until it is accepted."""
+    drv = Driver("direct", reuse_factor=True, keep=True)
+    policy = RetryPolicy(drv, "direct")
+    assert policy.same_size(failed("DIVERGED_LINEAR_SOLVE"), "x", 0.01) and drv.reuse_factor is False
+    assert not policy.same_size(failed("DIVERGED_LINEAR_SOLVE"), "x", 0.01)   # failed again: cut ...
+    assert drv.reuse_factor is False                                          # ... still a factor per iteration
+    rebuilds = drv.rebuilds
+    policy.accepted()
+    assert drv.reuse_factor is True and drv.rebuilds == rebuilds + 1          # one factor per step again
+    policy.accepted()
+    assert drv.rebuilds == rebuilds + 1                                       # nothing to undo: no rebuild
 
 
 def test_the_other_line_search_serves_one_attempt_then_the_step_is_cut():
