@@ -301,6 +301,12 @@ def test_a_design_scene_that_cannot_work_is_refused_in_one_line():
                             ({"probe": "top", "position": [0.1, 0, 0], "about": [0, 1, 0]},
                              r"^design.target\[0\]: `from` and `about` belong to an `angle`")):
         cases.append(({"design": dict(d["design"], target=[target])}, message))
+    cases += [({"design": dict(d["design"], target=[dict(turn, axes=["z"])])},
+               r"^design.target\[0\].axes: belongs to a `position` target"),
+              ({"design": dict(d["design"], target=[turn, dict(turn, angle=20.0)])},
+               r"^design.target\[1\]: a second target for 'bottom->top' \(the first is design.target\[0\]"),
+              ({"design": dict(d["design"], target=[d["design"]["target"][0]] * 2)},
+               r"^design.target\[1\]: a second target for 'top'")]
     for change, message in cases:
         with pytest.raises(InputError, match=message):
             Scene.from_dict(dict(d, **change))

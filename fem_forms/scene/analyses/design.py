@@ -50,9 +50,19 @@ def _rules(s, t: Table) -> None:
     if not s.target:
         raise InputError(f"{t.key('target')}: give at least one [[design.target]] (a probe and its position, or an "
                          "angle)")
+    written = t.data.get("target") or []
+    seen: dict = {}
     for i, target in enumerate(s.target):
         where = f"{t.key('target')}[{i}]"
         given = {k for k, v in target.items() if v is not None}
+        if "angle" in given and i < len(written) and "axes" in written[i]:
+            raise InputError(f"{where}.axes: belongs to a `position` target (an angle target counts its turn about "
+                             "`about`)")
+        name = f"{target.get('from')}->{target['probe']}" if "angle" in given else target["probe"]
+        if name in seen:                                 # results.json reports each target under this name
+            raise InputError(f"{where}: a second target for {name!r} (the first is {t.key('target')}[{seen[name]}]"
+                             "; give one target per probe, one angle per segment)")
+        seen[name] = i
         if ("position" in given) == ("angle" in given):
             raise InputError(f"{where}: give either `position` (where the probe should be) or `angle` (how far the "
                              "segment from `from` to the probe should turn), not both or neither")
