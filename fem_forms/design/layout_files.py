@@ -8,7 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
-from fem_forms.design.rest_shape import boundary_faces, triangles, write_volume_mesh
+from fem_forms.design.rest_shape import write_volume_mesh
+from fem_forms.meshes.cell_faces import boundary_faces, triangles
 from fem_forms.output.fields import gather_mesh
 from fem_forms.output.stl import write_stl
 

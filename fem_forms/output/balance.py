@@ -9,25 +9,9 @@ from mpi4py import MPI
 import numpy as np
 
 from fem_forms.frames import ground_frame
+from fem_forms.meshes.cell_faces import surface_triangles
 from fem_forms.output.fields import cell_function, gather_mesh, write_fields
 from fem_forms.output.stl import write_stl
-
-# faces of a tetrahedron and of a VTK-ordered hexahedron, outward for a positively oriented cell
-TET_FACES = [(1, 2, 3), (0, 3, 2), (0, 1, 3), (0, 2, 1)]
-HEX_FACES = [(0, 3, 2, 1), (4, 5, 6, 7), (0, 1, 5, 4), (1, 2, 6, 5), (2, 3, 7, 6), (3, 0, 4, 7)]
-
-
-def boundary_faces(cells: np.ndarray) -> np.ndarray:
-    """Triangles of the faces that belong to exactly one of the cells (the closed surface of the set)."""
-    faces = TET_FACES if cells.shape[1] == 4 else HEX_FACES
-    allf = np.concatenate([cells[:, list(f)] for f in faces])
-    key = np.sort(allf, axis=1)
-    _, inv, cnt = np.unique(key, axis=0, return_inverse=True, return_counts=True)
-    once = allf[cnt[inv.ravel()] == 1]
-    if once.shape[1] == 4:
-        once = np.vstack([once[:, [0, 1, 2]], once[:, [0, 2, 3]]])
-    return once
-
 
 def write_outputs(out: Path, mesh, density: np.ndarray, carved: np.ndarray, shift=None) -> dict:
     """void.stl, outer.stl (rank 0, from the gathered mesh), density.xdmf, and when cells were carved
@@ -39,8 +23,8 @@ def write_outputs(out: Path, mesh, density: np.ndarray, carved: np.ndarray, shif
     if mesh.comm.rank == 0:
         points, cells, _ = g
         carved_all = np.concatenate(flags)
-        write_stl(out / "outer.stl", points, boundary_faces(cells), "outer surface")
-        void = boundary_faces(cells[carved_all]) if carved_all.any() else np.empty((0, 3), dtype=np.int64)
+        write_stl(out / "outer.stl", points, surface_triangles(cells), "outer surface")
+        void = surface_triangles(cells[carved_all]) if carved_all.any() else np.empty((0, 3), dtype=np.int64)
         # the void's faces, turned to point into the void (outward normals of the solid that remains)
         write_stl(out / "void.stl", points, void[:, ::-1], "carved void")
         if any_carved:
@@ -114,9 +98,9 @@ def picture(path: Path, mesh, carved: np.ndarray, before: dict, after: dict, tit
 
     up = np.array([0.0, 0.0, 1.0]) if up is None else np.asarray(up, dtype=float)
     points, cells, _ = g
-    outer = boundary_faces(cells)
+    outer = surface_triangles(cells)
     carved_all = np.concatenate(flags)
-    void = boundary_faces(cells[carved_all]) if carved_all.any() else None
+    void = surface_triangles(cells[carved_all]) if carved_all.any() else None
     panels = [("solid", before, False, points), ("carved", after, True, points)]
     if gs is not None:
         panels = [(labels[0], after, True, points), (labels[1], after["deformed"], True, gs[0])]

@@ -33,8 +33,9 @@ from fem_forms.design.balance.evaluate import evaluate, unmet
 from fem_forms.design.parameters import InverseResult
 from fem_forms.errors import SolveError
 from fem_forms.meshes import LoadedMesh
+from fem_forms.meshes.cell_faces import surface_triangles
 from fem_forms.output import fields
-from fem_forms.output.balance import boundary_faces, picture
+from fem_forms.output.balance import picture
 from fem_forms.output.stl import write_stl
 from fem_forms.physics import quadrature
 from fem_forms.scene import Scene
@@ -138,7 +139,7 @@ class Carving:
         problem = None
         if mesh.comm.rank == 0:
             points, cells, _ = gathered
-            void = boundary_faces(cells[flags]) if flags.any() else np.empty((0, 3), dtype=np.int64)
+            void = surface_triangles(cells[flags]) if flags.any() else np.empty((0, 3), dtype=np.int64)
             try:
                 write_stl(out / "void.stl", points, void[:, ::-1], "carved void")
             except OSError as e:

@@ -10,6 +10,7 @@ from scipy.spatial import cKDTree
 
 from fem_forms.analyses.inverse import forward
 from fem_forms.design import rest_shape
+from fem_forms.meshes import cell_faces
 from fem_forms.design.parameters import InverseResult
 from fem_forms.errors import InputError
 from fem_forms.meshes import MeshArrays, check_cells, from_arrays, mesh_size
@@ -81,12 +82,12 @@ def _write_and_inspect(scene: Scene, out: Path, gathered, target, groups, size: 
     plane or intersect itself? Returns (problems, what the picture draws)."""
     problems = []
     points, cells, ctype = gathered
-    faces = rest_shape.boundary_faces(cells, ctype)
+    faces = cell_faces.boundary_faces(cells, ctype)
     drawn = (target[0], points, faces)
     write_ok = True
     try:
         rest_shape.write_volume_mesh(out / "rest_shape.msh", points, cells, ctype, groups, cell_groups)
-        tris = rest_shape.triangles(faces)
+        tris = cell_faces.triangles(faces)
         write_stl(out / "rest_shape.stl", points, tris, "rest_shape", ascii=True)
     except OSError as e:
         write_ok = False
@@ -199,7 +200,7 @@ def picture(path: Path, res: InverseResult, check: ForwardCheck, title: str, up=
     if fwd is not None:
         kind = check.solve.kind if check.solve is not None else ""
         panels.append((f"forward check, {kind} (mismatch {check.mismatch_max:.2g} m)", fwd[0],
-                       rest_shape.boundary_faces(fwd[1], fwd[2]), (0.17, 0.63, 0.17, 0.75)))
+                       cell_faces.boundary_faces(fwd[1], fwd[2]), (0.17, 0.63, 0.17, 0.75)))
     view = pictures.view_axes(up=up)                 # up: against gravity, drawn vertical
     everything = np.vstack([pts for _, pts, _, _ in panels]) @ view[0].T
     canvas = pictures.Canvas(500 * len(panels), 320)
