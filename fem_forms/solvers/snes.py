@@ -22,6 +22,7 @@ from fem_forms.solvers import bounds as vi, linear, pc_matrix, pmultigrid, polis
 from fem_forms.solvers.linear import roundoff_floor  # noqa: F401 (snes.roundoff_floor, used by the inverse check)
 from fem_forms.solvers.array_terms import ArrayTerms
 from fem_forms.solvers.bordered import Bordered
+from fem_forms.solvers.energy_memo import EnergyMemo
 from fem_forms.solvers import preconditioner_reuse
 from fem_forms.solvers.preconditioner_reuse import PreconditionerReuse
 from fem_forms.solvers.reports import SolveReport, StepRecord  # noqa: F401 (snes.SolveReport: the drivers' reports)
@@ -82,6 +83,7 @@ class SNESDriver:
         self.L, self.a = as_compiled(problem.residual), as_compiled(problem.jacobian)
         # global scalars (Lagrange multipliers) make a saddle point: no energy line search
         self.E = as_compiled(problem.energy) if problem.energy is not None and not problem.scalars else None
+        self.energy_memo = EnergyMemo(self.comm)      # the line search's f(x_k), evaluated by the last one
         self.arrays = ArrayTerms(problem.array_terms, problem.u.function_space, problem.bcs, self.a)
         self.bounds = vi.Bounds(problem.u, problem.bounds, problem.bcs) if problem.bounds is not None else None
         self.b = fpetsc.create_vector(self.L)
@@ -214,12 +216,16 @@ class SNESDriver:
         return self._objective(None, x)
 
     def _objective(self, snes, x) -> float:
+        memo = self.energy_memo if snes is not None and not self.arrays.terms else None   # array terms: not kept
+        if memo is not None and (kept := memo.lookup(snes, x)) is not None:
+            return kept
         t = time.perf_counter()
         self.set_state(x)
         value = self.comm.allreduce(fem.assemble_scalar(self.E), op=MPI.SUM)
         value += self.arrays.energy(x)
         self.assembly_time += time.perf_counter() - t
-        return value if math.isfinite(value) else 1e300   # NaN (e.g. ln J, J<0): reject the step
+        value = value if math.isfinite(value) else 1e300   # NaN (e.g. ln J, J<0): reject the step
+        return memo.keep(snes, x, value) if memo is not None else value
 
     def _monitor(self, snes, it, fnorm) -> None:
         """Record the residual; from the first Newton step on, converge also at the round-off floor
@@ -389,7 +395,6 @@ class SNESDriver:
                 preconditioner_reuse.set_lag(self.snes, int(self.options["snes_lag_preconditioner"]))
 
     def stale_preconditioner_failed(self) -> bool:
-        """Whether the last linear solve ran with a kept preconditioner (its failure is no reason
-        to give up the iterative solver: the retry builds a fresh one)."""
+        """Whether the last linear solve ran with a kept preconditioner (its failure: the retry builds a fresh one)."""
         return self.pc_reuse is not None and self.pc_reuse.last_solve_reused
 
