@@ -84,12 +84,13 @@ def _rows(value: Callable, x, n: int) -> np.ndarray:
 @dataclass(frozen=True)
 class Ogden(Isochoric):
     """Ogden (1972): W = sum_i mu_i / alpha_i (l1^alpha_i + l2^alpha_i + l3^alpha_i - 3) of the isochoric
-    principal stretches: the closed-form eigenvalues of C_bar (kinematics.principal_values: a repeated stretch, as in
-    uniaxial tension, keeps the stress exact). Its residual and tangent assemble 3.4-3.7x neo-Hookean's
-    (benchmarks/rubber_cost.md; 9-10x differentiated on F). Tried and left: the stretch powers' sums as functions of I1_bar and I2_bar (Cardano on
-    two scalars, a Taylor series near isotropy): 0.33 s against 0.61 s for the P2 tangent, but the branches'
-    round-off (1/p near isotropy, 1/sqrt(1 - r^2) near a double stretch) left residuals of 1e-5 of the load's
-    that Newton could not reduce on a bent beam. Initial shear modulus sum_i mu_i alpha_i / 2."""
+    principal stretches, from the closed-form eigenvalues of C (kinematics.principal_values: a repeated stretch, as
+    in uniaxial tension, keeps the stress exact). Its residual and tangent assemble 2.2-2.5x neo-Hookean's, a
+    Newton iteration costs 1.46-1.51x (benchmarks/rubber_cost.md). Tried and left: the stretch powers' sums as
+    functions of I1_bar and I2_bar (Cardano on two scalars, a Taylor series near isotropy): 0.33 s against 0.61 s
+    for the P2 tangent, but the branches' round-off (1/p near isotropy, 1/sqrt(1 - r^2) near a double stretch) left
+    residuals of 1e-5 of the load's that Newton could not reduce on a bent beam. Initial shear modulus
+    sum_i mu_i alpha_i / 2."""
     mu: tuple = ()
     alpha: tuple = ()
 
