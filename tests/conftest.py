@@ -1,4 +1,4 @@
-"""Shared test setup: quiet JIT logs, collect PETSc objects between tests so that collective
+"""Shared test setup: quiet JIT logs; under mpirun, collect PETSc objects between tests so that collective
 destructors run at the same point on every rank.
 
 Layout: tests/unit holds closed forms and small pieces, tests/system whole solves against analytic
@@ -41,6 +41,10 @@ fem_forms.quiet_jit()
 
 @pytest.fixture(autouse=True)
 def _collect():
+    """Under mpirun (pytest on several ranks), a collection after each test, so that PETSc's collective
+    destructors run at the same point on every rank. On one rank (pytest's workers) Python's own collector does
+    it: a full collection after every test took 0.15 s, 176 s of the cold suite's 2,205 worker seconds."""
     yield
-    gc.collect()
-    MPI.COMM_WORLD.barrier()
+    if MPI.COMM_WORLD.size > 1:
+        gc.collect()
+        MPI.COMM_WORLD.barrier()
