@@ -119,7 +119,7 @@ class Ogden(Isochoric):
     def psi_of_moments(self, q, dd, det_d, J):
         """psi from C's deviator moments (kinematics.deviator_moments) and J. C_bar = J^(-2/3) C has C's
         eigenvectors, so ln lbar_a^2 = ln c_a - 2/3 ln J with c_a C's own closed-form eigenvalues: no J^(-2/3)
-        inside the closed form, whose tangent then reads 40 % fewer values (benchmarks/rubber_cost.md)."""
+        inside the closed form (8 % fewer values in the P2 tangent's kernel)."""
         lnJ = ufl.ln(J)
         eigenvalues = principal_values_of(q, dd, det_d, floor=1e-6)     # the floor: kinematics.principal_values_of
         return self.stretch_energy([ufl.ln(c) - 2.0 / 3.0 * lnJ for c in eigenvalues]) + 0.5 * self.bulk * lnJ ** 2
