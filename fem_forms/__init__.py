@@ -19,7 +19,7 @@ from fem_forms.analyses.modal import write_modal_outputs
 from fem_forms.analyses.static import write_static_outputs
 from fem_forms.analyses.static.solve import StaticResult, solve_static
 from fem_forms.errors import InputError, SolveError
-from fem_forms.logs import patient_jit, quiet_jit, wrap_form_compiles
+from fem_forms.logs import fast_cache_hits, patient_jit, quiet_jit, wrap_form_compiles
 from fem_forms.materials import (Corotated, LinearElastic, MooneyRivlin, NeoHookean, StVenantKirchhoff,
                                  UserMaterial)
 from fem_forms.materials.hyperelastic import make_material
@@ -38,3 +38,4 @@ threads.pin_loaded_blas()
 quiet_jit()
 patient_jit()
 wrap_form_compiles()
+fast_cache_hits()
