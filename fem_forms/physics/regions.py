@@ -9,6 +9,7 @@ import ufl
 
 from fem_forms.errors import InputError
 from fem_forms.meshes import LoadedMesh
+from fem_forms.physics import quadrature
 
 
 class MaterialRegions:
@@ -108,7 +109,7 @@ class MaterialRegions:
         """name, cells, volume (m^3) and mass (kg) of each material (reference configuration, all ranks)."""
         comm = self.mesh.comm
         dx = ufl.Measure("dx", domain=self.mesh, subdomain_data=self.tags(),
-                         metadata={"quadrature_degree": quadrature_degree})
+                         metadata=quadrature.metadata(self.mesh.topology.cell_name(), quadrature_degree))
         out = []
         for i, m in enumerate(self.materials):
             one = fem.Constant(self.mesh, 1.0)

@@ -28,6 +28,20 @@ def test_rules_are_positive_at_every_degree(cell):
     assert [quadrature.rule_name("tetrahedron", q) for q in DEGREES].count("Gauss-Jacobi") == 3   # 3, 7, 8
 
 
+@pytest.mark.parametrize("cell", ["hexahedron", "prism"])
+def test_tensor_cells_name_each_rule_once(cell):
+    """On hexahedra and prisms degrees 2k and 2k + 1 are one basix rule: the forms name it by one degree (one
+    compile), and the points are basix's own rule of the degree asked for; simplices keep every degree."""
+    import basix
+    for q in range(0, 11):
+        same = quadrature.metadata(cell, q) == quadrature.metadata(cell, q + 1)
+        assert same == (q % 2 == 0), (cell, q)
+        points, weights = quadrature.points(cell, q)
+        asked = basix.make_quadrature(getattr(basix.CellType, cell), max(q, 1))
+        assert np.array_equal(points, asked[0]) and np.array_equal(weights, asked[1]), (cell, q)
+    assert [quadrature.metadata("tetrahedron", q)["quadrature_degree"] for q in (4, 5)] == [4, 5]
+
+
 def test_ffcx_uses_the_positive_rule():
     """An integral FFCx's default degree-3 rule and Gauss-Jacobi give differently: the dx metadata
     selects Gauss-Jacobi, and the result is the integral over our own points and weights."""
