@@ -1,5 +1,6 @@
-"""Cache hits of FFCx's forms and elements (fem_forms.logs.fast_cache_hits): a finished entry is loaded by its file
-name, without the folder scan of ffcx 0.5; an entry another process has not finished still goes through FFCx."""
+"""FFCx's form cache and compiles: a finished entry is loaded by its file name, without the folder scan of ffcx 0.5
+(fem_forms.logs.fast_cache_hits), an entry another process has not finished still goes through FFCx; clang reads
+Python.h precompiled (fem_forms/python_header.py) into the same forms, and a damaged header is refused quietly."""
 import importlib.machinery
 
 import dolfinx.jit
@@ -10,6 +11,7 @@ import ufl
 from dolfinx import fem, mesh
 from mpi4py import MPI
 
+from fem_forms import logs, python_header
 from fem_forms.meshes.loader import settle_coordinate_element
 
 
@@ -45,3 +47,45 @@ def test_an_unfinished_entry_still_waits_in_ffcx(tmp_path):
     with pytest.raises(TimeoutError, match="JIT compilation timed out"):
         fj.get_cached_module("libffcx_forms_unfinished", ["form_x"], tmp_path, 1)
     assert getattr(fj.get_cached_module, "wrapped_by_fem_forms", False)
+
+
+def _energy_of_a_new_form(m, scale: float, volumetric_only: bool = False) -> float:
+    """A form compiled into the current cache (the literal makes its code new to this test)."""
+    V = fem.VectorFunctionSpace(m, ("Lagrange", 2))
+    u = fem.Function(V)
+    u.interpolate(lambda x: np.array([0.01 * x[1], 0.02 * x[2], 0.03 * x[0]]))
+    F = ufl.Identity(3) + ufl.grad(u)
+    J = ufl.det(F)
+    shear = 0 if volumetric_only else ufl.tr(F.T * F) - 3 - 2 * ufl.ln(J)
+    return fem.assemble_scalar(fem.form((shear + scale * (J - 1) ** 2) * ufl.dx))
+
+
+@pytest.mark.skipif(not logs._fast_compiler_free(), reason="clang is not installed (setup.sh installs it)")
+def test_the_precompiled_python_header_gives_the_same_forms(cache, monkeypatch):
+    """A form compiled with the precompiled Python.h (the default with clang) and the same form compiled without
+    it (the user's own CPPFLAGS turn it off) give the same number; the header was built once into the cache."""
+    m = mesh.create_unit_cube(MPI.COMM_SELF, 2, 1, 1)
+    settle_coordinate_element(m)
+    with_header = _energy_of_a_new_form(m, 7.25)
+    assert len(list(cache.glob("fem_forms_python_h_*.pch"))) == 1
+    monkeypatch.setitem(dolfinx.jit.DOLFINX_DEFAULT_JIT_PARAMETERS, "cache_dir", (cache.parent / "plain", "test"))
+    monkeypatch.setenv("CPPFLAGS", "")
+    without = _energy_of_a_new_form(m, 7.25)
+    assert not list((cache.parent / "plain").glob("fem_forms_python_h_*"))
+    assert with_header == without and np.isfinite(with_header)
+
+
+@pytest.mark.skipif(not logs._fast_compiler_free(), reason="clang is not installed (setup.sh installs it)")
+def test_a_damaged_precompiled_header_is_refused_quietly_and_rebuilt_next_time(cache, capfd):
+    """A header that is not one (a truncated write, another clang's): clang refuses it in the probe, the form
+    compiles without it and no complaint reaches the terminal; the file is deleted for the next run to rebuild."""
+    m = mesh.create_unit_cube(MPI.COMM_SELF, 2, 1, 1)
+    settle_coordinate_element(m)
+    first = _energy_of_a_new_form(m, 3.5)
+    pch, = cache.glob("fem_forms_python_h_*.pch")
+    pch.write_bytes(b"not a header")
+    python_header._CHECKED.discard(pch)                   # as in a new process
+    capfd.readouterr()
+    again = _energy_of_a_new_form(m, 4.5)
+    assert np.isclose(again - first, _energy_of_a_new_form(m, 1.0, volumetric_only=True), rtol=1e-9)
+    assert not pch.exists() and "error" not in capfd.readouterr().err
