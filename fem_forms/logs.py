@@ -20,6 +20,7 @@ import re
 import shutil
 import subprocess
 from pathlib import Path
+from typing import Callable
 
 _DISTUTILS_DIRS = (f"{os.sep}distutils{os.sep}", f"{os.sep}_distutils{os.sep}")
 
@@ -106,38 +107,40 @@ def _fast_compiler_free() -> bool:
 
 
 @contextlib.contextmanager
-def _c_compiler(cflags: str | None = None):
-    """CC = FAST_CC for one compile where _fast_compiler_free, and CFLAGS = cflags (the precompiled Python.h)."""
+def _c_compiler():
+    """CC = FAST_CC for one compile, where _fast_compiler_free."""
     if not _fast_compiler_free():
         yield
         return
-    env = {"CC": FAST_CC, **({"CFLAGS": cflags} if cflags else {})}
-    os.environ.update(env)
+    os.environ["CC"] = FAST_CC
     try:
         yield
     finally:
-        for key in env:
-            os.environ.pop(key, None)
+        os.environ.pop("CC", None)
 
 
-def _compile(call, cache_dir: Path, extra_args):
-    """call() with FAST_CC and its precompiled Python.h (python_header.py) where they serve; once more without the
-    header if the compile failed with it."""
+def _compile(compile_with: Callable[[list], object], cache_dir: Path, extra_args: list | None) -> object:
+    """compile_with(FFCx's extra compiler arguments) under FAST_CC, the arguments naming the precompiled Python.h
+    (python_header.py) where it serves (the compile step only: the module's name was hashed before); where the
+    C compile fails with it and succeeds without, it is not offered again in this process."""
+    import cffi
     from fem_forms import python_header
+    extra = list(extra_args or [])
     header = None
-    if _fast_compiler_free() and "CFLAGS" not in os.environ and "CPPFLAGS" not in os.environ:    # not the user's
+    if _fast_compiler_free() and not any(k in os.environ for k in ("CFLAGS", "CPPFLAGS")):   # not the user's
         try:
-            header = python_header.precompiled(FAST_CC, cache_dir, extra_args)
+            header = python_header.precompiled(FAST_CC, cache_dir.absolute(), extra)
         except (OSError, subprocess.SubprocessError, UnicodeError):
             header = None
-    if header is not None:
-        try:
-            with _c_compiler(python_header.cflags(header)):
-                return call()
-        except Exception:
-            python_header.refuse(header)
     with _c_compiler():
-        return call()
+        if header is None:
+            return compile_with(extra)
+        try:
+            return compile_with(extra + ["-include-pch", str(header)])
+        except cffi.VerificationError:                  # cffi's CompileError or LinkError
+            result = compile_with(extra)
+            python_header.refuse(header)
+            return result
 
 
 def wrap_form_compiles() -> None:
@@ -153,10 +156,14 @@ def wrap_form_compiles() -> None:
     original = fj._compile_objects
 
     def compile_objects(decl, ufl_objects, object_names, module_name, parameters, cache_dir, *args, **kwargs):
+        extra = args[0] if args else kwargs.pop("cffi_extra_compile_args", None)
+        rest = args[1:]
+
+        def compile_with(extra_args: list):
+            return original(decl, ufl_objects, object_names, module_name, parameters, cache_dir, extra_args,
+                            *rest, **kwargs)
         try:
-            return _compile(lambda: original(decl, ufl_objects, object_names, module_name, parameters, cache_dir,
-                                             *args, **kwargs),
-                            Path(cache_dir), args[0] if args else kwargs.get("cffi_extra_compile_args"))
+            return _compile(compile_with, Path(cache_dir), extra)
         except Exception:
             raise                                    # FFCx's own handler marks the entry failed
         except BaseException:

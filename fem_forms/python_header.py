@@ -7,8 +7,10 @@ same object files byte for byte; 30 new forms created and assembled from an empt
 (medians of 3). The header is cffi's own prefix (its _cffi_include.h up to and including `#include <Python.h>`),
 built once into the form cache folder under a name that hashes that prefix, the flags, clang's version and
 Python.h's time stamp, and tried once a process by a quiet probe compile (clang refuses a header whose flags or
-inputs changed; a form's own compile would print its complaint). A form whose compile still fails with it is
-compiled again without it, and the header is deleted for the next run to build afresh."""
+inputs changed, and a form's own compile would print its complaint): a refused header is deleted for the next
+run to build afresh. It is named in FFCx's extra compiler arguments, which reach the compile step only (not the
+link) after the module's name was hashed. A form whose C compile still fails with it and not without it is
+compiled without it, and the header is not offered again in that process."""
 from __future__ import annotations
 
 import contextlib
@@ -33,10 +35,11 @@ def prefix_source() -> str | None:
 
 @functools.lru_cache(maxsize=None)
 def _compiler_version(cc: str) -> str:
+    """`cc --version` (once a process): a header of another clang is not read."""
     return subprocess.run([cc, "--version"], capture_output=True, text=True, check=True).stdout
 
 
-def compile_flags(extra_args) -> list[str]:
+def compile_flags(extra_args: list) -> list[str]:
     """The flags distutils gives the compiler for a cffi module (Python's CFLAGS and CCSHARED, the include folders
     of FFCx and Python), then FFCx's extra arguments."""
     import ffcx.codegeneration
@@ -45,7 +48,7 @@ def compile_flags(extra_args) -> list[str]:
     return flags + includes + list(extra_args or [])
 
 
-def precompiled(cc: str, cache_dir: Path, extra_args) -> Path | None:
+def precompiled(cc: str, cache_dir: Path, extra_args: list) -> Path | None:
     """The precompiled header for compiles by `cc` with these FFCx arguments (built into cache_dir first if
     missing, and checked once a process), or None where there is none to offer."""
     source = prefix_source()
@@ -61,15 +64,10 @@ def precompiled(cc: str, cache_dir: Path, extra_args) -> Path | None:
     if not pch.exists() and not _build(cc, flags, source, header, pch):
         return None
     if pch not in _CHECKED and not _probe(cc, flags, source, pch):
-        refuse(pch)
+        refuse(pch, delete=True)
         return None
     _CHECKED.add(pch)
     return pch
-
-
-def cflags(pch: Path) -> str:
-    """CFLAGS that make clang read `pch` (distutils splits them as a shell would; the link step gets them too)."""
-    return f'-include-pch "{pch}" -Wno-unused-command-line-argument'
 
 
 def _probe(cc: str, flags: list[str], source: str, pch: Path) -> bool:
@@ -81,15 +79,16 @@ def _probe(cc: str, flags: list[str], source: str, pch: Path) -> bool:
 
 
 def _build(cc: str, flags: list[str], source: str, header: Path, pch: Path) -> bool:
-    """Write the prefix and precompile it, each through a file of this process renamed into place (two processes
-    may build the same header at once)."""
+    """Write the prefix (never replaced once there: clang checks its time stamp) and precompile it through a file
+    of this process renamed into place (two processes may build the same header at once)."""
     tmp = f".{os.getpid()}.tmp"
+    cache = header.parent
     try:
-        cache = header.parent
         cache.mkdir(parents=True, exist_ok=True)
         if not header.exists():
             (cache / (header.name + tmp)).write_text(source)
-            os.replace(cache / (header.name + tmp), header)
+            with contextlib.suppress(FileExistsError):
+                os.link(cache / (header.name + tmp), header)
         done = subprocess.run([cc, *flags, "-x", "c-header", str(header), "-o", str(cache / (pch.name + tmp))],
                               capture_output=True)
         if done.returncode != 0:
@@ -101,12 +100,15 @@ def _build(cc: str, flags: list[str], source: str, header: Path, pch: Path) -> b
         _REFUSED.add(pch)
         return False
     finally:
-        with contextlib.suppress(OSError):
-            (header.parent / (pch.name + tmp)).unlink()
+        for name in (header.name, pch.name):
+            with contextlib.suppress(OSError):
+                (cache / (name + tmp)).unlink()
 
 
-def refuse(pch: Path) -> None:
-    """The header failed: not offered again in this process, and deleted (the next run builds it afresh)."""
+def refuse(pch: Path, delete: bool = False) -> None:
+    """The header failed: not offered again in this process; with `delete` (clang refused it in the probe) also
+    deleted, for the next run to build afresh (a header another process uses is left to it otherwise)."""
     _REFUSED.add(pch)
-    with contextlib.suppress(OSError):
-        pch.unlink()
+    if delete:
+        with contextlib.suppress(OSError):
+            pch.unlink()
