@@ -2,7 +2,6 @@
 (fem_forms.logs.fast_cache_hits), an entry another process has not finished still goes through FFCx; clang reads
 Python.h precompiled (fem_forms/python_header.py) into the same forms, and a damaged header is refused quietly."""
 import importlib.machinery
-import os
 
 import dolfinx.jit
 import ffcx.codegeneration.jit as fj
@@ -61,12 +60,16 @@ def _energy_of_a_new_form(m, scale: float, volumetric_only: bool = False) -> flo
     return fem.assemble_scalar(fem.form((shear + scale * (J - 1) ** 2) * ufl.dx))
 
 
-HEADER_OFFERED = logs._fast_compiler_free() and not {"CFLAGS", "CPPFLAGS"} & set(os.environ)
-WHY_NOT = "clang is not installed (setup.sh installs it), or CC, CFLAGS or CPPFLAGS are the user's own"
+@pytest.fixture
+def clang_default(monkeypatch):
+    """The compile environment the header is made for: clang (setup.sh installs it), no CC, CFLAGS or CPPFLAGS of
+    the user's own."""
+    for key in ("CC", "CFLAGS", "CPPFLAGS"):
+        monkeypatch.delenv(key, raising=False)
+    assert logs._fast_compiler_free(), "clang is not installed: setup.sh installs it"
 
 
-@pytest.mark.skipif(not HEADER_OFFERED, reason=WHY_NOT)
-def test_the_precompiled_python_header_gives_the_same_forms(cache, monkeypatch):
+def test_the_precompiled_python_header_gives_the_same_forms(cache, monkeypatch, clang_default):
     """A form compiled with the precompiled Python.h (the default with clang) and the same form compiled without
     it (the user's own CPPFLAGS turn it off) give the same number; the header was built once into the cache."""
     m = mesh.create_unit_cube(MPI.COMM_SELF, 2, 1, 1)
@@ -80,8 +83,7 @@ def test_the_precompiled_python_header_gives_the_same_forms(cache, monkeypatch):
     assert with_header == without and np.isfinite(with_header)
 
 
-@pytest.mark.skipif(not HEADER_OFFERED, reason=WHY_NOT)
-def test_a_damaged_precompiled_header_is_refused_quietly_and_rebuilt_next_time(cache, capfd):
+def test_a_damaged_precompiled_header_is_refused_quietly_and_rebuilt_next_time(cache, capfd, clang_default):
     """A header that is not one (a truncated write, another clang's): clang refuses it in the probe, the form
     compiles without it and no complaint reaches the terminal; the file is deleted for the next run to rebuild."""
     m = mesh.create_unit_cube(MPI.COMM_SELF, 2, 1, 1)
@@ -96,8 +98,7 @@ def test_a_damaged_precompiled_header_is_refused_quietly_and_rebuilt_next_time(c
     assert not pch.exists() and "error" not in capfd.readouterr().err
 
 
-@pytest.mark.skipif(not HEADER_OFFERED, reason=WHY_NOT)
-def test_a_relative_cache_folder_takes_the_header_too(monkeypatch, tmp_path, capfd):
+def test_a_relative_cache_folder_takes_the_header_too(monkeypatch, tmp_path, capfd, clang_default):
     """dolfinx passes a relative cache folder on as it is, and cffi compiles from inside it: the header is named
     by its absolute path, so the form compiles with it, quietly."""
     monkeypatch.chdir(tmp_path)
