@@ -25,8 +25,10 @@ _REFUSED: set = set()          # headers that failed, in this process: not offer
 _CHECKED: set = set()          # headers a probe compile read without complaint, in this process
 
 
+@functools.lru_cache(maxsize=None)
 def prefix_source() -> str | None:
-    """The C cffi writes before and up to its `#include <Python.h>` in every module, or None if not found."""
+    """The C cffi writes before and up to its `#include <Python.h>` in every module, or None if not found (read
+    once a process)."""
     import cffi
     text = (Path(cffi.__file__).parent / "_cffi_include.h").read_text()
     head, found, _ = text.partition("#include <Python.h>")
