@@ -284,33 +284,9 @@ def checks(results: dict) -> list:
     return notes
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--quick", action="store_true", help="the two smaller sizes, 2 repeats")
-    ap.add_argument("--runs", type=int, default=None, help="repeats per configuration (default 3, quick 2)")
-    ap.add_argument("--out", default=str(ROOT / "benchmarks" / "dynamic_steps.md"), help="markdown ('' for none)")
-    ap.add_argument("--timeout", type=float, default=900.0, help="seconds allowed per subprocess")
-    ap.add_argument("--linear", action="store_true", help="also MUMPS against CG + GAMG (ours) at 95k and 266k dofs")
-    args = ap.parse_args()
-    sizes = SIZES[:2] if args.quick else SIZES
-    runs = args.runs or (2 if args.quick else 3)
-    t_start = time.perf_counter()
-    loads = [os.getloadavg()]
-    results: dict = {}
-    for cells in sizes:
-        for scheme in SCHEMES:
-            n = runs if cells != SIZES[-1] else min(runs, 2)      # the largest size: at most 2 (time)
-            rows = run_worker(args.timeout, "--worker", scheme, n, int(scheme == "newmark"), *cells)
-            results[(cells, scheme)] = rows
-            for r in rows:
-                print(f"  {r['dofs']:>7,} dofs {scheme:18s} {r['impl']:7s}: setup {r['setup']:.2f} s, first "
-                      f"{ms(r['first'])} ms, later {ms(r['later'])} ms, {r['newton']} Newton, {r['lu']} LU, "
-                      f"load {r['load']:.1f}", file=sys.stderr, flush=True)
-    linear_results = {(cells, scheme): run_worker(args.timeout, "--worker", scheme, min(runs, 2), 2, *cells)
-                      for cells in (LINEAR_SIZES if args.linear else []) for scheme in SCHEMES[:2]}
-    stable = {r["material"]: r["dt_stable"] for r in run_worker(args.timeout, "--pays", *sizes[-1])}
-    loads.append(os.getloadavg())
-    wall = time.perf_counter() - t_start
+def markdown(results: dict, linear_results: dict, stable: dict, sizes: list, runs: int, loads: list,
+             wall: float) -> str:
+    """The benchmark's page: the step, reuse, pays and linear tables with their explanations and the machine."""
     last = {s: next(r for r in results[(sizes[-1], s)] if r["impl"] == "ours") for s in SCHEMES}
     agg = {s: {k: med([r for r in results[(sizes[-1], s)] if r["impl"] == "ours"], k + "_cpu")
                for k in ("first", "later_full")} for s in SCHEMES}
@@ -364,7 +340,37 @@ def main() -> None:
           f"{tuple(round(x, 2) for x in loads[-1])} at the end, 1-minute load before each run {min(all_loads):.1f} to "
           f"{max(all_loads):.1f} (the benchmark itself accounts for 1; more means other jobs shared the 2 cores). "
           f"Benchmark wall time {wall / 60:.1f} min.", ""]
-    text = "\n".join(md)
+    return "\n".join(md)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--quick", action="store_true", help="the two smaller sizes, 2 repeats")
+    ap.add_argument("--runs", type=int, default=None, help="repeats per configuration (default 3, quick 2)")
+    ap.add_argument("--out", default=str(ROOT / "benchmarks" / "dynamic_steps.md"), help="markdown ('' for none)")
+    ap.add_argument("--timeout", type=float, default=900.0, help="seconds allowed per subprocess")
+    ap.add_argument("--linear", action="store_true", help="also MUMPS against CG + GAMG (ours) at 95k and 266k dofs")
+    args = ap.parse_args()
+    sizes = SIZES[:2] if args.quick else SIZES
+    runs = args.runs or (2 if args.quick else 3)
+    t_start = time.perf_counter()
+    loads = [os.getloadavg()]
+    results: dict = {}
+    for cells in sizes:
+        for scheme in SCHEMES:
+            n = runs if cells != SIZES[-1] else min(runs, 2)      # the largest size: at most 2 (time)
+            rows = run_worker(args.timeout, "--worker", scheme, n, int(scheme == "newmark"), *cells)
+            results[(cells, scheme)] = rows
+            for r in rows:
+                print(f"  {r['dofs']:>7,} dofs {scheme:18s} {r['impl']:7s}: setup {r['setup']:.2f} s, first "
+                      f"{ms(r['first'])} ms, later {ms(r['later'])} ms, {r['newton']} Newton, {r['lu']} LU, "
+                      f"load {r['load']:.1f}", file=sys.stderr, flush=True)
+    linear_results = {(cells, scheme): run_worker(args.timeout, "--worker", scheme, min(runs, 2), 2, *cells)
+                      for cells in (LINEAR_SIZES if args.linear else []) for scheme in SCHEMES[:2]}
+    stable = {r["material"]: r["dt_stable"] for r in run_worker(args.timeout, "--pays", *sizes[-1])}
+    loads.append(os.getloadavg())
+    wall = time.perf_counter() - t_start
+    text = markdown(results, linear_results, stable, sizes, runs, loads, wall)
     print(text)
     if args.out:
         Path(args.out).write_text(text)
