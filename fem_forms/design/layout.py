@@ -9,7 +9,9 @@ is J = 1/2 sum_p |x_p + u(x_p) - t_p|^2 / L^2 (L the part's size), plus 1/2 (the
 angle (a segment between two probes turned about an axis, radians: design/layout_targets.py); its gradient takes
 one adjoint solve K^T lambda = dJ/du at the equilibrium (1 + m transposed solves with m volume-controlled cavities:
 design/bordered_adjoint.py) and dJ/dw = -d/dw [R(u, w) . lambda], chained through the SIMP law, the
-projection and the filter's transpose (and the density, where the two materials' differ and gravity acts).
+projection and the filter's transpose (and the density, where the two materials' differ and gravity acts). The
+factor of K that solve leaves also starts the next layout's Newton from the first-order change of the equilibrium
+(design/layout_predictor.py).
 
 The design vector is global (every rank holds all cells, in an order of their own by centre): the filter and the
 optimizer see the same numbers on every rank count."""
@@ -27,6 +29,7 @@ import ufl
 
 from fem_forms.errors import SolveError
 from fem_forms.design.bordered_adjoint import Border
+from fem_forms.design.layout_predictor import LayoutPredictor
 from fem_forms.design.layout_targets import TargetPoints
 from fem_forms.solvers.linear import make_ksp
 
@@ -124,6 +127,8 @@ class LayoutGradient:
         self.K = fpetsc.create_matrix(model.compiled("jacobian"))
         self.ksp = make_ksp(None, "lu", "fem_forms_layout_", comm=model.mesh.comm)
         self.border = Border(model.global_scalars(), model.residual, model.u) if model.global_scalars() else None
+        self.predictor = None                             # made (its form compiled) at the first prediction
+        self._linearised = None                           # the layout at whose equilibrium K is factored
         self.evaluations = 0
 
     def projected(self, rho_f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -166,24 +171,51 @@ class LayoutGradient:
 
     def equilibrium(self, rho_bar: np.ndarray):
         """The model's equilibrium with layout rho_bar: `solve(model)` (from the state it has) where there is no
-        `near` solver or no layout solved yet; else `near(model)` from the last layout's equilibrium, and where
-        that fails through layouts between the two (halving the way, NEAR_HALVINGS times at most), and only then
-        `solve` from rest. A trial layout of the optimizer may lie far from the last one."""
+        `near` solver or no layout solved yet; else `near(model)` from the last layout's equilibrium moved by its
+        first-order change (predict), and where that fails through layouts between the two (halving the way,
+        NEAR_HALVINGS times at most, doubling it again after each success), and only then `solve` from rest. A
+        trial layout of the optimizer may lie far from the last one. Measured on the PneuNet layout demo (60
+        layouts, interleaved runs): its near solves 41.9, 41.1 s -> 36.1, 37.2 s (the prediction alone 39.3 s, the
+        doubling alone 39.5 s), the same design to the last digit."""
         if self.near is None or self._last is None:
             return self._solved(rho_bar, self.solve)
         start, t, step = self._last, 0.0, 1.0
         while step >= 0.5 ** NEAR_HALVINGS:           # each success moves >= 1/8 of the way, each failure halves
             saved = self._state()
-            report = self._solved(start + min(t + step, 1.0) * (rho_bar - start), self.near, keep_last=False)
+            to = start + min(t + step, 1.0) * (rho_bar - start)
+            if t == 0.0:
+                self.predict(to)
+            report = self._solved(to, self.near, keep_last=False)
             if report.converged:
                 t = min(t + step, 1.0)
                 if t == 1.0:
                     self._last = rho_bar
                     return report
+                step = min(2.0 * step, 1.0)
             else:
                 self._restore(saved)
                 step *= 0.5
         return self.from_rest(rho_bar)
+
+    def predict(self, rho_bar: np.ndarray) -> bool:
+        """Move the state, the last layout's equilibrium, by its first-order change towards layout rho_bar
+        (design/layout_predictor.py), where K is factored at that equilibrium (the gradient was taken there, as
+        at every step of the optimizer); whether it moved."""
+        if self._linearised is None or self._linearised is not self._last:
+            return False
+        if self.predictor is None:
+            self.predictor = LayoutPredictor(self.model, self.weight, self.density)
+        last, p = self._last, self.penalty
+        self.cells.fill(self.predictor.dw, rho_bar ** p - last ** p)
+        if self.predictor.dm is not None:
+            self.cells.fill(self.predictor.dm, (rho_bar - last) * (self.density.placed - self.density.body))
+        du, dp = self.predictor.move(self._solve, self.border)
+        u = self.model.unknown
+        u.x.array[:len(du.array)] += du.array
+        u.x.scatter_forward()
+        for scalar, change in zip(self.model.global_scalars(), dp):
+            scalar.value.value = float(scalar.value.value) + float(change)
+        return True
 
     def _solved(self, rho_bar: np.ndarray, solve, keep_last: bool = True):
         """`solve` with layout rho_bar; with `keep_last`, the last layout solved becomes this one, or none (and
@@ -223,18 +255,27 @@ class LayoutGradient:
         self.targets.gradient(model.u, rhs)
         lam = self._solve_transposed(rhs)
         if self.border is not None:
-            self.border.linearise(self._solve_transposed)
+            self.border.linearise(self._solve_transposed, self._solve)
             lam = self.border.adjoint(lam)[0]
         self.adjoint.x.array[:len(lam.array)] = lam.array
         self.adjoint.x.scatter_forward()
+        self._linearised = self._last
 
     def _solve_transposed(self, rhs: PETSc.Vec) -> PETSc.Vec:
         """K^T x = rhs with x = 0 on supported dofs (rhs zeroed there first)."""
+        return self._with_factor(rhs, self.ksp.solveTranspose)
+
+    def _solve(self, rhs: PETSc.Vec) -> PETSc.Vec:
+        """K x = rhs with x = 0 on supported dofs (rhs zeroed there first): the prediction's and the border's."""
+        return self._with_factor(rhs, self.ksp.solve)
+
+    def _with_factor(self, rhs: PETSc.Vec, solve) -> PETSc.Vec:
+        """`solve(rhs, x)` with K's factor, rhs zeroed on supported dofs first."""
         fpetsc.set_bc(rhs, self.model.bcs, scale=0.0)
         x = self.K.createVecRight()
-        self.ksp.solveTranspose(rhs, x)
+        solve(rhs, x)
         if self.ksp.getConvergedReason() < 0:
-            raise SolveError(f"layout design: the adjoint solve failed ({self.ksp.getConvergedReason()})")
+            raise SolveError(f"layout design: a solve with K's factor failed ({self.ksp.getConvergedReason()})")
         return x
 
     def _cellwise(self, form: fem.Form) -> np.ndarray:

@@ -80,13 +80,60 @@ def measure(case: str = "beam", mesh: str = "") -> dict:
     direction = rng.standard_normal(cells.size)
     J0 = design.value(rho)
     g = design.gradient(rho)
-    remainders = [abs(design.value(rho + h * direction) - J0 - h * g @ direction) for h in (0.02, 0.01, 0.005)]
+    steps = (0.02, 0.01, 0.005)
+    start = _state(model)
+    moves = [_predicted_move(design, model, rho + h * direction, start) for h in steps]
+    remainders, misses = [], []
+    for h, move in zip(steps, moves):
+        remainders.append(abs(design.value(rho + h * direction) - J0 - h * g @ direction))
+        exact = _state(model) - start
+        misses.append([_norm(model, exact - move), _norm(model, exact)])
     return {"J": J0, "g_dot_d": float(g @ direction), "g_norm": float(np.linalg.norm(g)), "remainders": remainders,
-            "cells": cells.size}
+            "cells": cells.size, "predicted_miss": [m[0] for m in misses], "unpredicted_miss": [m[1] for m in misses]}
+
+
+def _state(model) -> np.ndarray:
+    """The unknown's owned entries and the global scalars (a cavity's pressure), as one array."""
+    V = model.unknown.function_space
+    owned = V.dofmap.index_map.size_local * V.dofmap.index_map_bs
+    return np.concatenate([model.unknown.x.array[:owned], [float(s.value.value) for s in model.global_scalars()]])
+
+
+def _predicted_move(design, model, rho, start: np.ndarray) -> np.ndarray:
+    """The first-order move LayoutGradient.predict makes towards layout(rho) from the equilibrium `start`, which it
+    restores (ghosts and scalars included)."""
+    assert design.predict(design.layout(rho))
+    move = _state(model) - start
+    owned = len(start) - len(model.global_scalars())
+    model.unknown.x.array[:owned] = start[:owned]
+    model.unknown.x.scatter_forward()
+    for scalar, value in zip(model.global_scalars(), start[owned:]):
+        scalar.value.value = value
+    return move
+
+
+def _norm(model, x: np.ndarray) -> float:
+    """The 2-norm of a state difference over all ranks (displacement and pressure entries alike; every rank holds
+    the pressures, counted once)."""
+    from mpi4py import MPI
+    scalars = len(model.global_scalars())
+    field, pressures = x[:len(x) - scalars], x[len(x) - scalars:]
+    comm = model.unknown.function_space.mesh.comm
+    return float(np.sqrt(comm.allreduce(float(field @ field), op=MPI.SUM) + float(pressures @ pressures)))
 
 
 def _taylor_rates(r: dict) -> np.ndarray:
     return np.log2(np.array(r["remainders"][:-1]) / r["remainders"][1:])
+
+
+def _assert_the_prediction_is_first_order(r: dict) -> None:
+    """LayoutGradient.predict's start for a near layout (the last equilibrium moved by its first-order change,
+    design/layout_predictor.py) misses the new equilibrium by O(h^2), where the last equilibrium itself misses by
+    O(h): a wrong or missing term (dR/dw, the density's dR/dm, the cavity's pressure) leaves an O(h) miss."""
+    predicted, unpredicted = np.array(r["predicted_miss"]), np.array(r["unpredicted_miss"])
+    rates = np.log2(predicted[:-1] / predicted[1:])
+    assert np.all(np.abs(rates - 2.0) < 0.1), rates                          # measured 1.99-2.02
+    assert np.all(predicted < 0.15 * unpredicted), predicted / unpredicted   # measured 0.03-0.13 at h = 0.02
 
 
 def test_the_gradient_under_a_follower_pressure_passes_the_taylor_test():
@@ -95,6 +142,7 @@ def test_the_gradient_under_a_follower_pressure_passes_the_taylor_test():
     remainders stop falling)."""
     pressed = measure("pressed")
     assert np.all(np.abs(_taylor_rates(pressed) - 2.0) < 0.1), _taylor_rates(pressed)
+    _assert_the_prediction_is_first_order(pressed)      # the K solve the prediction needs, not K^T
 
 
 def test_the_gradient_of_a_target_angle_passes_the_taylor_test():
@@ -151,12 +199,14 @@ def test_the_gradient_under_volume_control_passes_the_taylor_test_on_one_and_two
     mesh = str(thick_sphere.build(tmp_path / "shell.msh", 1.0, 2.0, h=0.5))
     serial = measure("volume", mesh)
     assert np.all(np.abs(_taylor_rates(serial) - 2.0) < 0.2), _taylor_rates(serial)
+    _assert_the_prediction_is_first_order(serial)       # the pressure's change from the border's forward solve
     assert serial["remainders"][-1] < 0.1 * abs(0.005 * serial["g_dot_d"])      # measured 0.066
     p = mpirun([__file__, "volume", mesh])
     assert p.returncode == 0, p.stderr
     two = json.loads(p.stdout.strip().splitlines()[-1])
     assert abs(two["J"] - serial["J"]) < 1e-9 * serial["J"]
     assert abs(two["g_dot_d"] - serial["g_dot_d"]) < 1e-7 * abs(serial["g_dot_d"])
+    assert np.allclose(two["predicted_miss"], serial["predicted_miss"], rtol=1e-5, atol=0), two["predicted_miss"]
 
 
 def test_repeated_solves_leave_petsc_options_as_they_found_them(tmp_path):
@@ -188,6 +238,7 @@ def test_layout_gradient_passes_the_taylor_test_on_one_and_two_ranks():
     serial = measure()
     rates = _taylor_rates(serial)
     assert np.all(np.abs(rates - 2.0) < 0.1), rates                  # measured 1.99, 2.00
+    _assert_the_prediction_is_first_order(serial)       # the weight's and the density's changes
     assert serial["remainders"][-1] < 0.05 * abs(0.005 * serial["g_dot_d"])   # the linear term dominates
     p = mpirun([__file__])
     assert p.returncode == 0, p.stderr
@@ -196,6 +247,7 @@ def test_layout_gradient_passes_the_taylor_test_on_one_and_two_ranks():
     assert abs(two["J"] - serial["J"]) < 1e-10 * serial["J"]
     assert abs(two["g_dot_d"] - serial["g_dot_d"]) < 1e-8 * abs(serial["g_dot_d"])
     assert abs(two["g_norm"] - serial["g_norm"]) < 1e-8 * serial["g_norm"]
+    assert np.allclose(two["predicted_miss"], serial["predicted_miss"], rtol=1e-6, atol=0), two["predicted_miss"]
 
 
 if __name__ == "__main__":
