@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from helpers import MPIRUN
+from helpers import MPIRUN, ahead_of_the_other_worker
 
 SCRIPT = """
 from types import SimpleNamespace
@@ -50,7 +50,7 @@ def test_contact_blocks_after_a_widened_pattern_assemble_on_two_ranks():
     try:
         proc = subprocess.run([MPIRUN, "-n", "2", "--bind-to", "none", "--oversubscribe", sys.executable, "-c", SCRIPT],
                               capture_output=True, text=True, env=env, timeout=90,
-                              cwd=Path(__file__).resolve().parents[2])
+                              cwd=Path(__file__).resolve().parents[2], preexec_fn=ahead_of_the_other_worker)
     except subprocess.TimeoutExpired:
         pytest.fail("two ranks hung in MatAssemblyEnd after contact blocks were added")
     assert proc.returncode == 0, proc.stderr
