@@ -1,6 +1,6 @@
 """The linear solves of a bordered equilibrium for the designs' adjoints: a volume-controlled cavity's pressure is an
 unknown beside the displacement, so the adjoint has the bordered system's transpose (and the inverse design's
-Gauss-Newton products its forward solve)."""
+Gauss-Newton products and the layout design's start from a nearby layout its forward solve)."""
 from __future__ import annotations
 
 from dolfinx import fem
@@ -41,16 +41,14 @@ class Border:
 
     def linearise(self, solve_transposed, solve=None) -> None:
         """At the current equilibrium (K factored): the border vectors, c_p, b_i = K^-T c_u_i and the adjoint's m x m
-        matrix; with `solve` (K x = .) also z_j = K^-1 R_p_j and S for the forward solves. Once per linearisation,
-        not per solve: a Gauss-Newton step applies both in every CG iteration."""
+        matrix; with `solve` (K x = .) the forward solves' z_j = K^-1 R_p_j and S follow at the first forward solve.
+        Once per linearisation, not per solve: a Gauss-Newton step applies both in every CG iteration."""
         self.Rp = [self.vector(f) for f in self.R_p]
         self.cu = [self.vector(f) for f in self.c_u]
-        Cp = np.array([[self._number(c) for c in row] for row in self.c_p])
+        self.Cp = np.array([[self._number(c) for c in row] for row in self.c_p])
         self.b = [solve_transposed(cu.copy()) for cu in self.cu]
-        self.M = np.array([[rp.dot(b_i) for b_i in self.b] for rp in self.Rp]) - Cp.T
-        if solve is not None:
-            self.z = [solve(rp.copy()) for rp in self.Rp]
-            self.S = Cp - np.array([[cu.dot(z_j) for z_j in self.z] for cu in self.cu])
+        self.M = np.array([[rp.dot(b_i) for b_i in self.b] for rp in self.Rp]) - self.Cp.T
+        self._solve, self.z = solve, None
 
     def adjoint(self, a: PETSc.Vec) -> tuple[PETSc.Vec, np.ndarray]:
         """(lambda, mu) from a = K^-T g (a becomes lambda), at the last linearisation."""
@@ -62,6 +60,9 @@ class Border:
     def forward(self, x: PETSc.Vec, q: np.ndarray) -> tuple[PETSc.Vec, np.ndarray]:
         """(du, dp) of [K R_p; c_u c_p] [du; dp] = [r; q] from x = K^-1 r (x becomes du), at the last
         linearisation (taken with `solve`)."""
+        if self.z is None:
+            self.z = [self._solve(rp.copy()) for rp in self.Rp]
+            self.S = self.Cp - np.array([[cu.dot(z_j) for z_j in self.z] for cu in self.cu])
         dp = np.linalg.solve(self.S, np.asarray(q, dtype=float) - np.array([cu.dot(x) for cu in self.cu]))
         for z_j, dp_j in zip(self.z, dp):
             x.axpy(-dp_j, z_j)

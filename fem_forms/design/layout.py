@@ -7,8 +7,8 @@ between cell centres c and with cell volumes v (the density filter of Bruns & To
 of about r, no checkerboards), projected to rho_bar by a smoothed Heaviside (sharper stage by stage). The mismatch
 is J = 1/2 sum_p |x_p + u(x_p) - t_p|^2 / L^2 (L the part's size), plus 1/2 (theta - theta_t)^2 for each target
 angle (a segment between two probes turned about an axis, radians: design/layout_targets.py); its gradient takes
-one adjoint solve K^T lambda = dJ/du at the equilibrium (1 + m transposed solves with m volume-controlled cavities:
-design/bordered_adjoint.py) and dJ/dw = -d/dw [R(u, w) . lambda], chained through the SIMP law, the
+one adjoint solve K^T lambda = dJ/du at the equilibrium (1 + m transposed solves with m volume-controlled cavities,
+and m forward ones for the start below: design/bordered_adjoint.py) and dJ/dw = -d/dw [R(u, w) . lambda], chained through the SIMP law, the
 projection and the filter's transpose (and the density, where the two materials' differ and gravity acts). The
 factor of K that solve leaves also starts the next layout's Newton from the first-order change of the equilibrium
 (design/layout_predictor.py).
@@ -29,7 +29,7 @@ import ufl
 
 from fem_forms.errors import SolveError
 from fem_forms.design.bordered_adjoint import Border
-from fem_forms.design.layout_predictor import LayoutPredictor
+from fem_forms.design.layout_predictor import LayoutPredictor, by_density
 from fem_forms.design.layout_targets import TargetPoints
 from fem_forms.solvers.linear import make_ksp
 
@@ -96,7 +96,7 @@ class PlacedDensity:
     placed: float
 
 
-NEAR_HALVINGS = 3      # a layout the near solve misses is approached in steps of 1/2, 1/4, 1/8 of the way
+NEAR_HALVINGS = 3      # a layout the near solve misses is approached in steps of at least 1/2^3 of the way
 
 
 class LayoutGradient:
@@ -120,15 +120,13 @@ class LayoutGradient:
         work = ufl.replace(model.residual, {ufl.TestFunction(model.V): lam})
         q = ufl.TestFunction(weight.function_space)
         self.dwork_dw = fem.form(ufl.derivative(work, weight, q))
-        self.dwork_dm = None
-        if density is not None and density.placed != density.body:
-            dm = ufl.algorithms.expand_derivatives(ufl.derivative(work, density.field, q))
-            self.dwork_dm = None if dm.empty() else fem.form(dm)
+        dm = by_density(work, density, q)
+        self.dwork_dm = None if dm is None else fem.form(dm)
         self.K = fpetsc.create_matrix(model.compiled("jacobian"))
         self.ksp = make_ksp(None, "lu", "fem_forms_layout_", comm=model.mesh.comm)
         self.border = Border(model.global_scalars(), model.residual, model.u) if model.global_scalars() else None
         self.predictor = None                             # made (its form compiled) at the first prediction
-        self._linearised = None                           # the layout at whose equilibrium K is factored
+        self._factored_here = False                       # K is factored at the state the model holds
         self.evaluations = 0
 
     def projected(self, rho_f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -151,11 +149,17 @@ class LayoutGradient:
         return float(v @ rho_bar), self.filter.T @ (v * slope)
 
     def set_layout(self, rho_bar: np.ndarray) -> None:
-        """The model's weight (rho_bar^p) and density fields for a layout."""
-        self.cells.fill(self.weight, rho_bar ** self.penalty)
-        if self.density is not None:
-            d = self.density
-            self.cells.fill(d.field, d.body + rho_bar * (d.placed - d.body))
+        """The model's weight and density fields for a layout."""
+        w, m = self.fields(rho_bar)
+        self.cells.fill(self.weight, w)
+        if m is not None:
+            self.cells.fill(self.density.field, m)
+
+    def fields(self, rho_bar: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+        """The weight rho_bar^p and the density rho_body + rho_bar (rho_placed - rho_body) (None without a density
+        field) per cell of a layout."""
+        d = self.density
+        return rho_bar ** self.penalty, None if d is None else d.body + rho_bar * (d.placed - d.body)
 
     def value(self, rho: np.ndarray) -> float:
         """J at rho (the equilibrium solved from the last state)."""
@@ -172,55 +176,54 @@ class LayoutGradient:
     def equilibrium(self, rho_bar: np.ndarray):
         """The model's equilibrium with layout rho_bar: `solve(model)` (from the state it has) where there is no
         `near` solver or no layout solved yet; else `near(model)` from the last layout's equilibrium moved by its
-        first-order change (predict), and where that fails through layouts between the two (halving the way,
-        NEAR_HALVINGS times at most, doubling it again after each success), and only then `solve` from rest. A
-        trial layout of the optimizer may lie far from the last one. Measured on the PneuNet layout demo (60
-        layouts, interleaved runs): its near solves 41.9, 41.1 s -> 36.1, 37.2 s (the prediction alone 39.3 s, the
-        doubling alone 39.5 s), the same design to the last digit."""
+        first-order change (predict), and where that fails through layouts between the two (each failure halves the
+        step, each success doubles it again, never below 1/2^NEAR_HALVINGS of the way), and only then `solve` from
+        rest. A trial layout of the optimizer may lie far from the last one (measured: docs/analyses/design.md)."""
         if self.near is None or self._last is None:
             return self._solved(rho_bar, self.solve)
         start, t, step = self._last, 0.0, 1.0
-        while step >= 0.5 ** NEAR_HALVINGS:           # each success moves >= 1/8 of the way, each failure halves
+        while step >= 0.5 ** NEAR_HALVINGS:           # t and step stay multiples of the smallest step
             saved = self._state()
-            to = start + min(t + step, 1.0) * (rho_bar - start)
-            if t == 0.0:
-                self.predict(to)
+            to = rho_bar if t + step >= 1.0 else start + (t + step) * (rho_bar - start)
+            self.predict(to)                             # from the factored equilibrium only: t = 0
             report = self._solved(to, self.near, keep_last=False)
             if report.converged:
-                t = min(t + step, 1.0)
-                if t == 1.0:
+                t += step
+                if t >= 1.0:
                     self._last = rho_bar
                     return report
-                step = min(2.0 * step, 1.0)
+                step = min(2.0 * step, 1.0 - t)
             else:
                 self._restore(saved)
                 step *= 0.5
         return self.from_rest(rho_bar)
 
     def predict(self, rho_bar: np.ndarray) -> bool:
-        """Move the state, the last layout's equilibrium, by its first-order change towards layout rho_bar
-        (design/layout_predictor.py), where K is factored at that equilibrium (the gradient was taken there, as
-        at every step of the optimizer); whether it moved."""
-        if self._linearised is None or self._linearised is not self._last:
+        """Move the state by its first-order change towards layout rho_bar (design/layout_predictor.py) where K is
+        factored at that very state (the gradient was taken there and nothing solved since: the optimizer takes
+        one at every layout); whether it moved."""
+        if not self._factored_here:
             return False
         if self.predictor is None:
             self.predictor = LayoutPredictor(self.model, self.weight, self.density)
-        last, p = self._last, self.penalty
-        self.cells.fill(self.predictor.dw, rho_bar ** p - last ** p)
+        (w, m), (w0, m0) = self.fields(rho_bar), self.fields(self._last)
+        self.cells.fill(self.predictor.dw, w - w0)
         if self.predictor.dm is not None:
-            self.cells.fill(self.predictor.dm, (rho_bar - last) * (self.density.placed - self.density.body))
+            self.cells.fill(self.predictor.dm, m - m0)
         du, dp = self.predictor.move(self._solve, self.border)
         u = self.model.unknown
         u.x.array[:len(du.array)] += du.array
         u.x.scatter_forward()
         for scalar, change in zip(self.model.global_scalars(), dp):
             scalar.value.value = float(scalar.value.value) + float(change)
+        self._factored_here = False
         return True
 
     def _solved(self, rho_bar: np.ndarray, solve, keep_last: bool = True):
         """`solve` with layout rho_bar; with `keep_last`, the last layout solved becomes this one, or none (and
         the state rest) where it failed: no later near solve starts from a state that is no layout's."""
         self.set_layout(rho_bar)
+        self._factored_here = False
         report = solve(self.model)
         if keep_last:
             self._last = rho_bar if report.converged else None
@@ -234,19 +237,24 @@ class LayoutGradient:
         return self._solved(rho_bar, self.solve)
 
     def _rest(self) -> tuple:
-        return np.zeros_like(self.model.unknown.x.array), [0.0] * len(self.model.global_scalars())
+        return np.zeros_like(self.model.unknown.x.array), [0.0] * len(self.model.global_scalars()), False
 
     def _state(self) -> tuple:
-        return self.model.unknown.x.array.copy(), [float(s.value.value) for s in self.model.global_scalars()]
+        """The unknown, the global scalars and whether K is factored there."""
+        return (self.model.unknown.x.array.copy(), [float(s.value.value) for s in self.model.global_scalars()],
+                self._factored_here)
 
     def _restore(self, state: tuple) -> None:
         self.model.unknown.x.array[:] = state[0]
         for scalar, value in zip(self.model.global_scalars(), state[1]):
             scalar.value.value = value
+        self._factored_here = state[2]
 
     def _adjoint(self) -> None:
-        """K^T lambda = dJ/du at the current equilibrium (lambda = 0 on supported dofs)."""
+        """K^T lambda = dJ/du at the current equilibrium (lambda = 0 on supported dofs); K's factor stays for the
+        next layout's start (predict)."""
         model = self.model
+        self._factored_here = False
         self.K.zeroEntries()
         fpetsc.assemble_matrix(self.K, model.compiled("jacobian"), bcs=model.bcs)
         self.K.assemble()
@@ -259,7 +267,7 @@ class LayoutGradient:
             lam = self.border.adjoint(lam)[0]
         self.adjoint.x.array[:len(lam.array)] = lam.array
         self.adjoint.x.scatter_forward()
-        self._linearised = self._last
+        self._factored_here = self._last is not None
 
     def _solve_transposed(self, rhs: PETSc.Vec) -> PETSc.Vec:
         """K^T x = rhs with x = 0 on supported dofs (rhs zeroed there first)."""

@@ -16,6 +16,15 @@ from petsc4py import PETSc
 import ufl
 
 
+def by_density(form: ufl.Form, density, direction) -> ufl.Form | None:
+    """d(form)/d(placed density field) along `direction`, or None where the two materials' densities are one or
+    the form does not depend on it (no gravity)."""
+    if density is None or density.placed == density.body:
+        return None
+    derivative = ufl.algorithms.expand_derivatives(ufl.derivative(form, density.field, direction))
+    return None if derivative.empty() else derivative
+
+
 class LayoutPredictor:
     """The form dR/dw[dw] + dR/dm[dm] of one layout model (dw, dm: DG0 Functions holding the changes) and the
     move it gives with a factored K."""
@@ -24,13 +33,10 @@ class LayoutPredictor:
         self.model = model
         self.dw = fem.Function(weight.function_space, name="weight_change")
         change = ufl.derivative(model.residual, weight, self.dw)
-        self.dm = None
-        if density is not None and density.placed != density.body:
-            dm = fem.Function(weight.function_space, name="density_change")
-            by_density = ufl.algorithms.expand_derivatives(ufl.derivative(model.residual, density.field, dm))
-            if not by_density.empty():
-                self.dm, change = dm, change + by_density
-        self.form = fem.form(change)
+        dm = fem.Function(weight.function_space, name="density_change")
+        with_density = by_density(model.residual, density, dm)
+        self.dm = None if with_density is None else dm
+        self.form = fem.form(change if with_density is None else change + with_density)
         self.rhs = fpetsc.create_vector(self.form)
 
     def move(self, solve, border=None) -> tuple[PETSc.Vec, np.ndarray]:

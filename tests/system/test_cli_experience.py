@@ -26,7 +26,7 @@ from fem_forms.cli import default_out, main
 from fem_forms.output import results
 from fem_forms.output.progress_line import CLEAR, ProgressLine
 from fem_forms.study import Run, write_report
-from helpers import toml_dumps
+from helpers import ahead_of_the_other_worker, toml_dumps
 
 ROOT = Path(__file__).resolve().parents[2]
 PYTHON = sys.executable
@@ -198,6 +198,8 @@ def start_and_interrupt(cmd: list, sig: int, out: Path) -> tuple[subprocess.Comp
     """Start a run, wait for its first step's progress line (a load step was solved: we are mid-solve) and for that
     step's row in probes.csv (written just after the line), then send sig."""
     p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV, cwd=ROOT)
+    if Path(cmd[0]).name == "mpirun":
+        ahead_of_the_other_worker(p.pid)
     first = p.stderr.readline()
     while " boundary facets" in first:              # what each selector took, said as solving starts
         first = p.stderr.readline()

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from helpers import MPIRUN, ahead_of_the_other_worker
+from helpers import MPIRUN, run_ahead
 
 SCRIPT = """
 from types import SimpleNamespace
@@ -48,9 +48,8 @@ if comm.rank == 0:
 def test_contact_blocks_after_a_widened_pattern_assemble_on_two_ranks():
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1")
     try:
-        proc = subprocess.run([MPIRUN, "-n", "2", "--bind-to", "none", "--oversubscribe", sys.executable, "-c", SCRIPT],
-                              capture_output=True, text=True, env=env, timeout=90,
-                              cwd=Path(__file__).resolve().parents[2], preexec_fn=ahead_of_the_other_worker)
+        proc = run_ahead([MPIRUN, "-n", "2", "--bind-to", "none", "--oversubscribe", sys.executable, "-c", SCRIPT],
+                         90, env=env, cwd=Path(__file__).resolve().parents[2])
     except subprocess.TimeoutExpired:
         pytest.fail("two ranks hung in MatAssemblyEnd after contact blocks were added")
     assert proc.returncode == 0, proc.stderr

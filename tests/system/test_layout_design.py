@@ -35,13 +35,9 @@ def shell_scene(mesh: str) -> dict:
             "solver": {"steps": 2}, "output": {"picture": False, "fields": False}}
 
 
-def measure(case: str = "beam", mesh: str = "") -> dict:
-    """J, the gradient along a random direction and the Taylor remainders at h = 0.02, 0.01, 0.005 (a random
-    layout between 0.3 and 0.7, the projection at beta 4, a filter of 1.5 cells). beam: under its weight, the
-    placed material allowed in its first 70 mm, two densities; pressed: the same beam bent by a follower pressure
-    on its top face (free edges: a tangent that is not symmetric); angle: the beam under its weight with a target
-    angle instead of a point (the end's bottom-to-top edge turned by 20 degrees about y); volume: shell_scene(mesh)
-    with a target on its outer wall (the bordered adjoint: its cavity's pressure an unknown)."""
+def design_of(case: str = "beam", mesh: str = "", near=None):
+    """(LayoutGradient, its model) of a case (see measure), the projection at beta 4 and a filter of 1.5 cells;
+    `near(scene)` makes its near solver (None: none)."""
     from dolfinx import fem
     from mpi4py import MPI
     import fem_forms as ff
@@ -73,8 +69,22 @@ def measure(case: str = "beam", mesh: str = "") -> dict:
         targets = TargetPoints(model.V, end, end, part_length(model), np.zeros((2, 3)),
                                angles=[TargetAngle(0, 1, np.radians(20.0), np.array([0.0, 1.0, 0.0]))])
     design = LayoutGradient(model, weight, cells, targets, radius=0.015, penalty=3.0,
-                            solve=lambda m: solve_static(scene, model=m).report, domain=domain, density=density)
+                            solve=lambda m: solve_static(scene, model=m).report, domain=domain, density=density,
+                            near=None if near is None else near(scene))
     design.beta = 4.0                                      # the projection's slope in the chain too
+    return design, model
+
+
+def measure(case: str = "beam", mesh: str = "") -> dict:
+    """J, the gradient along a random direction and the Taylor remainders at h = 0.02, 0.01, 0.005 (a random
+    layout between 0.3 and 0.7), and the misses of the predicted start (predict) and of the last equilibrium. beam:
+    under its weight, the placed material allowed in its first 70 mm, two densities; pressed: the same beam bent by
+    a follower pressure on its top face (free edges: a tangent that is not symmetric); angle: the beam under its
+    weight with a target angle instead of a point (the end's bottom-to-top edge turned by 20 degrees about y);
+    volume: shell_scene(mesh) with a target on its outer wall (the bordered adjoint: its cavity's pressure an
+    unknown)."""
+    design, model = design_of(case, mesh)
+    cells = design.cells
     rng = np.random.default_rng(1)
     rho = 0.3 + 0.4 * rng.random(cells.size)
     direction = rng.standard_normal(cells.size)
@@ -100,15 +110,13 @@ def _state(model) -> np.ndarray:
 
 
 def _predicted_move(design, model, rho, start: np.ndarray) -> np.ndarray:
-    """The first-order move LayoutGradient.predict makes towards layout(rho) from the equilibrium `start`, which it
-    restores (ghosts and scalars included)."""
+    """The first-order move LayoutGradient.predict makes towards layout(rho) from the equilibrium `start`, which the
+    design's own state restore puts back (the factor's validity included)."""
+    saved = design._state()
     assert design.predict(design.layout(rho))
     move = _state(model) - start
-    owned = len(start) - len(model.global_scalars())
-    model.unknown.x.array[:owned] = start[:owned]
-    model.unknown.x.scatter_forward()
-    for scalar, value in zip(model.global_scalars(), start[owned:]):
-        scalar.value.value = value
+    assert not design.predict(design.layout(rho))          # moved off the factored state: no second move
+    design._restore(saved)
     return move
 
 
@@ -136,6 +144,58 @@ def _assert_the_prediction_is_first_order(r: dict) -> None:
     assert np.all(predicted < 0.15 * unpredicted), predicted / unpredicted   # measured 0.03-0.13 at h = 0.02
 
 
+def test_a_near_layout_starts_predicted_then_halves_and_doubles_its_way():
+    """LayoutGradient.equilibrium with a near solver that fails its first two attempts (and leaves a garbled state
+    behind, which the design must undo): the whole way and half of it start from the last equilibrium moved by
+    their own first-order change, a quarter succeeds from its predicted start, then the step doubles (3/4 of the
+    way) and the rest follows (the whole way), each from the state the last attempt reached: five attempts (six
+    without the doubling), and the end is the layout's equilibrium."""
+    import math
+    from fem_forms.analyses.design import near_solver
+    from fem_forms.solvers.reports import SolveReport
+    attempts = []
+
+    def failing_twice(scene):
+        solve = near_solver(scene)
+
+        def near(model):
+            start = _state(model)
+            w = design.cells.gather(design.weight.x.array[:design.cells.n_owned])
+            if len(attempts) < 2:
+                model.unknown.x.array[:] += 1e-3                   # a failed solve leaves its iterate behind
+                attempts.append((start, w, None))
+                return SolveReport(False, 0.0, 1, math.nan, message="told to fail")
+            report = solve(model)
+            attempts.append((start, w, _state(model)))
+            return report
+        return near
+
+    design, model = design_of("beam", near=failing_twice)
+    rng = np.random.default_rng(2)
+    rho = 0.3 + 0.4 * rng.random(design.cells.size)
+    target = np.clip(rho + 0.3 * rng.standard_normal(design.cells.size), 0.0, 1.0)
+    design.value(rho)
+    design.gradient(rho)                                          # K factored at this equilibrium
+    equilibrium = _state(model)
+    first, last = design.layout(rho), design.layout(target)
+    expected = {}
+    for f in (1.0, 0.5, 0.25):                                    # the starts predict gives, computed beforehand
+        saved = design._state()
+        design.predict(first + f * (last - first))
+        expected[f] = _state(model)
+        design._restore(saved)
+    report = design.equilibrium(last)
+    assert report.converged and len(attempts) == 5, [a[1][:2] for a in attempts]
+    for (start, w, _), f in zip(attempts, (1.0, 0.5, 0.25, 0.75, 1.0)):
+        np.testing.assert_allclose(w, (first + f * (last - first)) ** 3, rtol=1e-12, atol=1e-15)
+    for k, f in enumerate((1.0, 0.5, 0.25)):
+        np.testing.assert_allclose(attempts[k][0], expected[f], rtol=0, atol=1e-14)
+        assert np.abs(attempts[k][0] - equilibrium).max() > 1e-6           # moved by the prediction
+    np.testing.assert_array_equal(attempts[3][0], attempts[2][2])       # from the quarter's equilibrium
+    np.testing.assert_array_equal(attempts[4][0], attempts[3][2])
+    assert design._last is last and not design.predict(last)         # solved since: K is not factored there
+
+
 def test_the_gradient_under_a_follower_pressure_passes_the_taylor_test():
     """A follower pressure on the beam's top face (its edges free): the residual's tangent is not symmetric, so the
     adjoint must solve with K^T (measured: with a K solve the gradient along the direction is 2.8 % off and the
@@ -151,6 +211,7 @@ def test_the_gradient_of_a_target_angle_passes_the_taylor_test():
     2.03, 2.02; with the slope's sign flipped at one probe 0.98, 0.99)."""
     turned = measure("angle")
     assert np.all(np.abs(_taylor_rates(turned) - 2.0) < 0.1), _taylor_rates(turned)
+    _assert_the_prediction_is_first_order(turned)
     assert turned["remainders"][-1] < 0.05 * abs(0.005 * turned["g_dot_d"])
     p = mpirun([__file__, "angle"])
     assert p.returncode == 0, p.stderr

@@ -8,7 +8,6 @@ shear and rotary inertia shift the second bending mode by only -0.25 %).
 import json
 import math
 import os
-import subprocess
 import wave
 
 import numpy as np
@@ -16,7 +15,7 @@ import pytest
 from scipy.integrate import quad
 from scipy.optimize import brentq
 
-from helpers import MODAL_E, MODAL_L, MODAL_RHO, MODAL_T, ROOT, ahead_of_the_other_worker, to_toml
+from helpers import MODAL_E, MODAL_L, MODAL_RHO, MODAL_T, ROOT, run_ahead, to_toml
 from helpers import modal_beam as beam
 from fem_forms import Scene
 from fem_forms.analyses.modal import write_modal_outputs
@@ -162,8 +161,7 @@ def test_two_ranks_give_the_same_frequencies(tmp_path):
         cmd = ["mpirun", "-n", str(n), "--bind-to", "none"] if n > 1 else []
         cmd += [PYTHON, "-m", "fem_forms", "run", str(tmp_path / "scene.toml"),
                 "--out", str(tmp_path / f"np{n}")]
-        p = subprocess.run(cmd, env=env, cwd=ROOT, capture_output=True, text=True, timeout=300,
-                           preexec_fn=ahead_of_the_other_worker if n > 1 else None)
+        p = run_ahead(cmd, 300, env=env, cwd=ROOT)
         assert p.returncode == 0, p.stderr
         runs[n] = json.loads((tmp_path / f"np{n}" / "results.json").read_text())
     assert runs[2]["mpi_ranks"] == 2 and runs[1]["dofs"] == runs[2]["dofs"]
